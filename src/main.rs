@@ -1,0 +1,4 @@
+fn main() {
+    let p = hapticlab::profile::LoadedProfile::thesis();
+    println!("{}", p.profile.name);
+}
