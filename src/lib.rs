@@ -6,3 +6,4 @@
 //! ends over it.
 
 pub mod profile;
+pub mod recording;

@@ -1,0 +1,332 @@
+//! Writing a recording row by row during a scan: the format line, the
+//! metadata and the header when created, a row per sample, then the trailer
+//! (finished) or an `aborted` line (interrupted). A row costs no allocation;
+//! the writer never writes anything the reader would refuse.
+
+use std::fs::{self, File};
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use super::{
+    ABORTED_KEY, FORMAT_LINE, RecordingError, TRAILER_KEY, check_columns, is_bare_key, quote,
+};
+
+/// The longest value the writer formats, with its comma: `-f64::MAX` has 309
+/// digits before the point, and 6 after. Reserving this per column means a
+/// row never grows the line buffer.
+const MAX_VALUE_BYTES: usize = 320;
+
+/// Decimals written for a column: 6 for seconds and metres, 3 for newtons, 6 otherwise.
+pub fn decimals_for(column: &str) -> usize {
+    if column.ends_with("_n") { 3 } else { 6 }
+}
+
+/// Writes one scan as it happens, row by row.
+#[derive(Debug)]
+pub struct RecordingWriter {
+    path: PathBuf,
+    /// `None` only once finished or aborted.
+    out: Option<BufWriter<File>>,
+    decimals: Vec<usize>,
+    /// The row being formatted, reused so rows cost no allocation.
+    line: Vec<u8>,
+    rows: usize,
+}
+
+impl RecordingWriter {
+    /// Creates the file (and parent folders), replacing any file of that
+    /// name, writes the format line, the metadata and the header, and flushes.
+    pub fn create(
+        path: &Path,
+        meta: &[(String, toml::Value)],
+        columns: &[&str],
+    ) -> Result<Self, RecordingError> {
+        Self::open(path, meta, columns, false)
+    }
+
+    /// Like `create`, but fails if the file already exists, so an earlier
+    /// scan is never overwritten.
+    pub fn create_new(
+        path: &Path,
+        meta: &[(String, toml::Value)],
+        columns: &[&str],
+    ) -> Result<Self, RecordingError> {
+        Self::open(path, meta, columns, true)
+    }
+
+    fn open(
+        path: &Path,
+        meta: &[(String, toml::Value)],
+        columns: &[&str],
+        new: bool,
+    ) -> Result<Self, RecordingError> {
+        let misuse = |reason: String| RecordingError::Write {
+            path: path.to_path_buf(),
+            reason,
+        };
+        let io_error = |source| RecordingError::Io {
+            path: path.to_path_buf(),
+            source,
+        };
+        if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("gz"))
+        {
+            return Err(misuse(
+                "the writer writes plain text: write a .csv and compress it once finished".into(),
+            ));
+        }
+        check_columns(columns).map_err(misuse)?;
+        let mut head = String::with_capacity(256);
+        head.push_str(FORMAT_LINE);
+        head.push('\n');
+        for (i, (key, value)) in meta.iter().enumerate() {
+            if !is_bare_key(key) {
+                return Err(misuse(format!(
+                    "metadata key {} must be letters, digits, _ and -",
+                    quote(key)
+                )));
+            }
+            if key == ABORTED_KEY {
+                return Err(misuse(format!(
+                    "metadata key `{ABORTED_KEY}` is kept for abort()"
+                )));
+            }
+            if meta[..i].iter().any(|(k, _)| k == key) {
+                return Err(misuse(format!("metadata key `{key}` is given twice")));
+            }
+            head.push_str("# ");
+            head.push_str(key);
+            head.push_str(" = ");
+            write_inline_toml(&mut head, value);
+            head.push('\n');
+        }
+        head.push_str(&columns.join(","));
+        head.push('\n');
+
+        if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+            fs::create_dir_all(parent).map_err(|source| RecordingError::Io {
+                path: parent.to_path_buf(),
+                source,
+            })?;
+        }
+        let file = if new {
+            File::create_new(path)
+        } else {
+            File::create(path)
+        }
+        .map_err(io_error)?;
+        let mut out = BufWriter::with_capacity(64 * 1024, file);
+        out.write_all(head.as_bytes()).map_err(io_error)?;
+        out.flush().map_err(io_error)?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            out: Some(out),
+            decimals: columns.iter().map(|c| decimals_for(c)).collect(),
+            line: Vec::with_capacity(MAX_VALUE_BYTES * columns.len()),
+            rows: 0,
+        })
+    }
+
+    fn io_error(&self, source: io::Error) -> RecordingError {
+        RecordingError::Io {
+            path: self.path.clone(),
+            source,
+        }
+    }
+
+    fn closed(&self) -> RecordingError {
+        RecordingError::Write {
+            path: self.path.clone(),
+            reason: "the recording is already closed".into(),
+        }
+    }
+
+    /// Appends one row, a value per column; non-finite values are written as `nan`.
+    pub fn write_row(&mut self, row: &[f64]) -> Result<(), RecordingError> {
+        if row.len() != self.decimals.len() {
+            return Err(RecordingError::Write {
+                path: self.path.clone(),
+                reason: format!(
+                    "row has {} values, the header has {}",
+                    row.len(),
+                    self.decimals.len()
+                ),
+            });
+        }
+        self.line.clear();
+        for (i, (&value, &decimals)) in row.iter().zip(&self.decimals).enumerate() {
+            if i > 0 {
+                self.line.push(b',');
+            }
+            if value.is_finite() {
+                // Writing into a Vec cannot fail; float formatting uses the stack.
+                let _ = write!(self.line, "{value:.decimals$}");
+            } else {
+                self.line.extend_from_slice(b"nan");
+            }
+        }
+        self.line.push(b'\n');
+        // One write per row: the buffer only ever hands whole rows to the OS.
+        let result = match self.out.as_mut() {
+            Some(out) => out.write_all(&self.line),
+            None => return Err(self.closed()),
+        };
+        result.map_err(|e| self.io_error(e))?;
+        self.rows += 1;
+        Ok(())
+    }
+
+    /// Hands buffered rows to the OS, so an interrupted scan leaves them on disk.
+    pub fn flush(&mut self) -> Result<(), RecordingError> {
+        let result = match self.out.as_mut() {
+            Some(out) => out.flush(),
+            None => return Err(self.closed()),
+        };
+        result.map_err(|e| self.io_error(e))
+    }
+
+    /// Writes the trailer `# end samples = N`, flushes and syncs; the row count.
+    pub fn finish(mut self) -> Result<usize, RecordingError> {
+        let trailer = format!("# {TRAILER_KEY} = {}\n", self.rows);
+        self.close(&trailer)
+    }
+
+    /// Marks the scan incomplete with `# aborted = "reason"` (no trailer),
+    /// flushes and syncs; the row count.
+    pub fn abort(mut self, reason: &str) -> Result<usize, RecordingError> {
+        let mut line = format!("# {ABORTED_KEY} = ");
+        write_inline_toml(&mut line, &toml::Value::String(reason.to_string()));
+        line.push('\n');
+        self.close(&line)
+    }
+
+    fn close(&mut self, last_line: &str) -> Result<usize, RecordingError> {
+        let Some(mut out) = self.out.take() else {
+            return Err(self.closed());
+        };
+        out.write_all(last_line.as_bytes())
+            .and_then(|()| out.flush())
+            .and_then(|()| out.get_ref().sync_all())
+            .map_err(|e| self.io_error(e))?;
+        Ok(self.rows)
+    }
+
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl Drop for RecordingWriter {
+    /// Keeps what was written (without a trailer: the scan reads as incomplete).
+    fn drop(&mut self) {
+        if let Some(out) = self.out.as_mut() {
+            let _ = out.flush();
+        }
+    }
+}
+
+/// Writes a TOML value on one line (toml's own writer may use multi-line strings).
+fn write_inline_toml(out: &mut String, value: &toml::Value) {
+    use std::fmt::Write as _;
+    match value {
+        toml::Value::String(s) => write_toml_string(out, s),
+        toml::Value::Integer(i) => {
+            let _ = write!(out, "{i}");
+        }
+        toml::Value::Float(f) if f.is_nan() => out.push_str("nan"),
+        toml::Value::Float(f) if f.is_infinite() => {
+            out.push_str(if *f > 0.0 { "inf" } else { "-inf" })
+        }
+        // Debug keeps a `.0` or an exponent, which TOML needs to see a float.
+        toml::Value::Float(f) => {
+            let _ = write!(out, "{f:?}");
+        }
+        toml::Value::Boolean(b) => {
+            let _ = write!(out, "{b}");
+        }
+        toml::Value::Datetime(d) => {
+            let _ = write!(out, "{d}");
+        }
+        toml::Value::Array(items) => {
+            out.push('[');
+            for (i, item) in items.iter().enumerate() {
+                if i > 0 {
+                    out.push_str(", ");
+                }
+                write_inline_toml(out, item);
+            }
+            out.push(']');
+        }
+        toml::Value::Table(table) => {
+            out.push('{');
+            for (i, (key, item)) in table.iter().enumerate() {
+                out.push_str(if i > 0 { ", " } else { " " });
+                if is_bare_key(key) {
+                    out.push_str(key);
+                } else {
+                    write_toml_string(out, key);
+                }
+                out.push_str(" = ");
+                write_inline_toml(out, item);
+            }
+            out.push_str(if table.is_empty() { "}" } else { " }" });
+        }
+    }
+}
+
+fn write_toml_string(out: &mut String, s: &str) {
+    use std::fmt::Write as _;
+    out.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            '\n' => out.push_str("\\n"),
+            '\r' => out.push_str("\\r"),
+            '\t' => out.push_str("\\t"),
+            c if c.is_control() => {
+                let _ = write!(out, "\\u{:04X}", c as u32);
+            }
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn metadata_values_are_written_on_one_line_and_read_back() {
+        let mut table = toml::Table::new();
+        table.insert("bare".into(), toml::Value::Integer(-3));
+        table.insert("not bare".into(), toml::Value::Array(vec![]));
+        let values = [
+            toml::Value::String("line\nbreak \"q\" \\ \u{7f}\u{1} tab\t é".into()),
+            toml::Value::Float(1000.0),
+            toml::Value::Float(1e300),
+            toml::Value::Float(-2.5e-7),
+            toml::Value::Float(f64::INFINITY),
+            toml::Value::Integer(i64::MIN),
+            toml::Value::Boolean(false),
+            toml::Value::Datetime("2026-11-21T22:00:00.5+01:00".parse().unwrap()),
+            toml::Value::Table(table),
+            toml::Value::Table(toml::Table::new()),
+        ];
+        for value in values {
+            let mut line = "k = ".to_string();
+            write_inline_toml(&mut line, &value);
+            assert!(!line.contains('\n'), "{line}");
+            let back: toml::Table = toml::from_str(&line).unwrap_or_else(|e| panic!("{line}: {e}"));
+            assert_eq!(back["k"], value, "{line}");
+        }
+        let mut line = String::new();
+        write_inline_toml(&mut line, &toml::Value::Float(f64::NAN));
+        assert_eq!(line, "nan");
+    }
+}
