@@ -5,5 +5,8 @@
 //! nothing of any user interface; the command line and the console are front
 //! ends over it.
 
+pub mod analysis;
+pub mod classify;
+pub mod evaluate;
 pub mod profile;
 pub mod recording;

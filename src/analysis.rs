@@ -1,0 +1,425 @@
+//! Analysis: from one scan's samples to the feature vector the classifier uses.
+//!
+//! This module owns the thesis's preprocessing and feature extraction
+//! (sections 3.1.5 and 3.3.3): take the signal channel (the probe's height
+//! `y_m`) along the resampling axis (`x_m`, the stroke), cut it to the
+//! window, resample it every `spacing`, remove its trend, take the DFT and
+//! keep the magnitudes of the chosen bins.
+//!
+//! It works on plain slices (`axis`, `signal`), never on a recording type or
+//! a file: whoever reads recordings picks the two columns and hands them in.
+//! After the first call it never allocates: the FFT is planned once in
+//! [`FeatureExtractor::new`] and every buffer is reused.
+//!
+//! # Resampling
+//! The axis is measured from the scan's first sample, along the direction of
+//! travel: `d_j = s · (axis[j] − axis[0])` with `s` the sign of
+//! `axis[last] − axis[0]` (so a scan in −x works like one in +x). The grid is
+//! `g_i = window[0] + i · spacing` for `i = 0..n`, `n = settings.points()`.
+//!
+//! 1. Each sample goes to its nearest grid point,
+//!    `i = round((d_j − window[0]) / spacing)`; samples outside `0 ≤ i < n`
+//!    are dropped.
+//! 2. Each non-empty bin is replaced by its centroid (mean `d`, mean signal).
+//!    This averaging is the thesis's "filtering" (Fig. 3.12). Because samples
+//!    are binned by position, not ordered by time, a probe that moves back
+//!    and forth (stick-slip) is handled: every pass over a spot counts once
+//!    per sample.
+//! 3. The value at `g_i` is the linear interpolation over the sequence of
+//!    bin centroids (which is increasing in `d`), extrapolated linearly from
+//!    the two nearest centroids beyond the first or last one. A signal that
+//!    is a straight line in `d` is therefore resampled exactly.
+//!
+//! The scan must reach the window ([`AnalysisError::WindowNotCovered`]),
+//! at most a quarter of the bins may be empty ([`AnalysisError::TooSparse`]),
+//! the first and last grid points' bins must hold samples
+//! ([`AnalysisError::EdgeGap`], so that nothing is extrapolated by more than
+//! half a spacing), and at least two bins must hold samples. A time axis (`t_s`) works the same way, in seconds.
+//!
+//! # Spectrum
+//! After the detrend (none, mean, or least-squares line) the window's DFT is
+//! taken unnormalised, as Matlab's `fft` gives it (the thesis's Eq. 3.4):
+//! `X_k = Σ_j x_j e^{−2πi jk/n}`. The features are `|X_k|` for
+//! `k = bins[0]..=bins[1]`.
+
+mod resample;
+mod spectrum;
+
+use std::fmt;
+
+use thiserror::Error;
+
+use crate::profile::Analysis;
+use resample::Resampler;
+use spectrum::MagnitudeSpectrum;
+
+pub use spectrum::detrend;
+
+/// Why a scan gives no features.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum AnalysisError {
+    #[error("the analysis settings cannot be used: {0}")]
+    Settings(String),
+    #[error("the scan has no samples")]
+    Empty,
+    #[error("the axis has {axis} samples but the signal has {signal}")]
+    LengthMismatch { axis: usize, signal: usize },
+    #[error("the {what} is not a finite number at sample {index} (value {value})")]
+    NonFinite {
+        what: &'static str,
+        index: usize,
+        value: f64,
+    },
+    #[error("{}", not_covered_message(.axis, .covered, .window))]
+    WindowNotCovered {
+        /// The axis name (`x_m`, `t_s`, …), for the message's unit.
+        axis: String,
+        /// The scan's extent, as distance along the direction of travel from its first sample.
+        covered: (f64, f64),
+        window: [f64; 2],
+    },
+    #[error(
+        "the scan is too sparse along {axis}: {empty} of the {points} grid points \
+         ({spacing} apart) in the window have no sample nearby, and at most a quarter may",
+        spacing = show(.axis, *.spacing)
+    )]
+    TooSparse {
+        axis: String,
+        empty: usize,
+        points: usize,
+        spacing: f64,
+    },
+    #[error(
+        "no sample of the scan lies within half a spacing ({half}) of the window's {edge} at {at} along {axis}",
+        half = show(.axis, .spacing / 2.0),
+        at = show(.axis, *.at)
+    )]
+    EdgeGap {
+        axis: String,
+        edge: &'static str,
+        at: f64,
+        spacing: f64,
+    },
+    #[error("only {filled} grid point(s) along {axis} have samples; at least 2 are needed")]
+    TooFewPoints { axis: String, filled: usize },
+}
+
+/// How an axis value is shown to people: metres as mm, seconds as s.
+fn show(axis: &str, value: f64) -> String {
+    if axis.ends_with("_m") {
+        format!("{:.1} mm", value * 1000.0)
+    } else if axis.ends_with("_s") {
+        format!("{value:.3} s")
+    } else {
+        format!("{value}")
+    }
+}
+
+/// A range of axis values, unit once at the end: "60.0–89.7 mm".
+fn show_range(axis: &str, lo: f64, hi: f64) -> String {
+    let lo = show(axis, lo);
+    let hi = show(axis, hi);
+    match lo.split_once(' ') {
+        Some((num, unit)) if hi.ends_with(unit) => format!("{num}–{hi}"),
+        _ => format!("{lo}–{hi}"),
+    }
+}
+
+fn not_covered_message(axis: &str, covered: &(f64, f64), window: &[f64; 2]) -> String {
+    format!(
+        "the scan covers {} along {axis} but the window needs {}",
+        show_range(axis, covered.0, covered.1),
+        show_range(axis, window[0], window[1]),
+    )
+}
+
+/// Checks the analysis settings the extractor depends on (the same bounds
+/// the profile's `validate()` applies), so that a model file's settings can
+/// be checked too. The reason names the key.
+pub fn check_settings(settings: &Analysis) -> Result<(), String> {
+    if settings.axis.is_empty() {
+        return Err("analysis.axis must name a column".into());
+    }
+    if !(settings.spacing.is_finite() && settings.spacing > 0.0) {
+        return Err(format!(
+            "analysis.spacing must be a positive number, got {}",
+            settings.spacing
+        ));
+    }
+    let [w0, w1] = settings.window;
+    if !(w0.is_finite() && w1.is_finite() && w0 >= 0.0 && w1 > w0) {
+        return Err(format!(
+            "analysis.window must be [start, end] with 0 <= start < end, got {:?}",
+            settings.window
+        ));
+    }
+    if (w1 - w0) / settings.spacing > (1u64 << 20) as f64 {
+        return Err("analysis.spacing leaves more than 1048576 points in the window".into());
+    }
+    let n = settings.points();
+    if n < 4 {
+        return Err(format!(
+            "analysis.spacing leaves only {n} points in the window (need 4)"
+        ));
+    }
+    let [a, b] = settings.bins;
+    if a > b || b > n / 2 {
+        return Err(format!(
+            "analysis.bins must be [first, last] with first <= last <= {}, got {:?}",
+            n / 2,
+            settings.bins
+        ));
+    }
+    Ok(())
+}
+
+/// Turns one scan's (axis, signal) samples into features, reusing its FFT
+/// plan and buffers from call to call.
+#[derive(Clone)]
+pub struct FeatureExtractor {
+    settings: Analysis,
+    resampler: Resampler,
+    resampled: Vec<f64>,
+    detrended: Vec<f64>,
+    spectrum: MagnitudeSpectrum,
+    /// One-sided magnitudes, bins 0..=n/2.
+    magnitudes: Vec<f64>,
+    has_spectrum: bool,
+}
+
+impl fmt::Debug for FeatureExtractor {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("FeatureExtractor")
+            .field("settings", &self.settings)
+            .field("points", &self.resampled.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl FeatureExtractor {
+    /// An extractor for validated settings (a loaded profile's or a loaded
+    /// model's).
+    ///
+    /// # Panics
+    /// When the settings fail [`check_settings`]; use [`Self::try_new`] for
+    /// settings that have not been validated.
+    pub fn new(settings: &Analysis) -> Self {
+        match Self::try_new(settings) {
+            Ok(x) => x,
+            Err(e) => panic!("{e}"),
+        }
+    }
+
+    pub fn try_new(settings: &Analysis) -> Result<Self, AnalysisError> {
+        check_settings(settings).map_err(AnalysisError::Settings)?;
+        let n = settings.points();
+        Ok(FeatureExtractor {
+            settings: settings.clone(),
+            resampler: Resampler::new(n, settings.window[0], settings.spacing),
+            resampled: vec![0.0; n],
+            detrended: vec![0.0; n],
+            spectrum: MagnitudeSpectrum::new(n),
+            magnitudes: vec![0.0; n / 2 + 1],
+            has_spectrum: false,
+        })
+    }
+
+    pub fn settings(&self) -> &Analysis {
+        &self.settings
+    }
+
+    /// Number of resampled points in the window.
+    pub fn points(&self) -> usize {
+        self.resampled.len()
+    }
+
+    /// Resample `signal` along `axis` onto the window's grid (see the module
+    /// documentation). `axis[j]` and `signal[j]` are one sample; the order of
+    /// samples does not matter except that the first sample is the scan's
+    /// origin and the last gives its direction.
+    pub fn resample(&mut self, axis: &[f64], signal: &[f64]) -> Result<&[f64], AnalysisError> {
+        self.resampler
+            .run(&self.settings.axis, axis, signal, &mut self.resampled)?;
+        Ok(&self.resampled)
+    }
+
+    /// Resample, detrend, FFT, and return `|X_k|` for `k` in
+    /// `bins[0]..=bins[1]` (`settings.feature_count()` values).
+    pub fn features(&mut self, axis: &[f64], signal: &[f64]) -> Result<&[f64], AnalysisError> {
+        self.resampler
+            .run(&self.settings.axis, axis, signal, &mut self.resampled)?;
+        self.detrended.copy_from_slice(&self.resampled);
+        detrend(self.settings.detrend, &mut self.detrended);
+        self.spectrum.compute(&self.detrended, &mut self.magnitudes);
+        self.has_spectrum = true;
+        let [a, b] = self.settings.bins;
+        Ok(&self.magnitudes[a..=b])
+    }
+
+    /// The last window resampled (by [`Self::resample`] or
+    /// [`Self::features`]), before the detrend; empty before the first.
+    pub fn resampled(&self) -> &[f64] {
+        if self.has_spectrum || self.resampler.has_run() {
+            &self.resampled
+        } else {
+            &[]
+        }
+    }
+
+    /// The window [`Self::features`] last transformed, after the detrend;
+    /// empty before the first.
+    pub fn detrended(&self) -> &[f64] {
+        if self.has_spectrum {
+            &self.detrended
+        } else {
+            &[]
+        }
+    }
+
+    /// The full one-sided magnitude spectrum, bins `0..=n/2`, of the window
+    /// [`Self::features`] last transformed, for display; empty before the
+    /// first. The features are `spectrum()[bins[0]..=bins[1]]`.
+    pub fn spectrum(&self) -> &[f64] {
+        if self.has_spectrum {
+            &self.magnitudes
+        } else {
+            &[]
+        }
+    }
+
+    /// Position of grid point `i` along the axis, from the scan's start.
+    pub fn grid_position(&self, i: usize) -> f64 {
+        self.settings.window[0] + i as f64 * self.settings.spacing
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::profile::{Detrend, SpectrumKind};
+
+    fn thesis() -> Analysis {
+        Analysis {
+            channel: "y_m".into(),
+            axis: "x_m".into(),
+            window: [0.060, 0.0897],
+            spacing: 0.0003,
+            detrend: Detrend::Mean,
+            spectrum: SpectrumKind::Magnitude,
+            bins: [1, 49],
+        }
+    }
+
+    /// A scan from 0 to `len` along x in `samples` even steps.
+    fn ramp(len: f64, samples: usize) -> Vec<f64> {
+        (0..samples)
+            .map(|j| len * j as f64 / (samples - 1) as f64)
+            .collect()
+    }
+
+    #[test]
+    fn thesis_window_has_100_points_and_49_features() {
+        let mut fx = FeatureExtractor::new(&thesis());
+        assert_eq!(fx.points(), 100);
+        assert!(fx.spectrum().is_empty());
+        let x = ramp(0.0897, 9000);
+        let y: Vec<f64> = x.iter().map(|x| (x * 2000.0).sin() * 1e-3).collect();
+        assert_eq!(fx.features(&x, &y).unwrap().len(), 49);
+        assert_eq!(fx.spectrum().len(), 51);
+        assert_eq!(fx.detrended().len(), 100);
+    }
+
+    #[test]
+    fn window_not_covered_names_the_extent_in_mm() {
+        let mut fx = FeatureExtractor::new(&thesis());
+        let x = ramp(0.0852, 8000);
+        let y = vec![0.0; x.len()];
+        let err = fx.features(&x, &y).unwrap_err();
+        assert!(
+            matches!(err, AnalysisError::WindowNotCovered { .. }),
+            "{err:?}"
+        );
+        assert_eq!(
+            err.to_string(),
+            "the scan covers 0.0–85.2 mm along x_m but the window needs 60.0–89.7 mm"
+        );
+    }
+
+    #[test]
+    fn time_axis_messages_use_seconds() {
+        let mut s = thesis();
+        s.axis = "t_s".into();
+        s.window = [6.0, 8.97];
+        s.spacing = 0.03;
+        let mut fx = FeatureExtractor::new(&s);
+        let t = ramp(5.0, 5000);
+        let err = fx.resample(&t, &vec![0.0; t.len()]).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "the scan covers 0.000–5.000 s along t_s but the window needs 6.000–8.970 s"
+        );
+    }
+
+    #[test]
+    fn bad_input_is_an_error_not_a_panic() {
+        let mut fx = FeatureExtractor::new(&thesis());
+        assert_eq!(fx.features(&[], &[]).unwrap_err(), AnalysisError::Empty);
+        assert_eq!(
+            fx.features(&[0.0, 1.0], &[0.0]).unwrap_err(),
+            AnalysisError::LengthMismatch { axis: 2, signal: 1 }
+        );
+        let x = ramp(0.0897, 9000);
+        let mut y = vec![0.0; x.len()];
+        y[17] = f64::NAN;
+        let err = fx.features(&x, &y).unwrap_err();
+        assert!(
+            matches!(
+                err,
+                AnalysisError::NonFinite {
+                    what: "signal",
+                    index: 17,
+                    ..
+                }
+            ),
+            "{err:?}"
+        );
+        // A stationary probe covers nothing.
+        let still = vec![0.01; 100];
+        assert!(fx.features(&still, &still).is_err());
+    }
+
+    #[test]
+    fn sparse_scans_are_rejected() {
+        let mut fx = FeatureExtractor::new(&thesis());
+        // One sample every 0.6 mm: every other grid point is empty.
+        let x = ramp(0.0897, 150);
+        let err = fx.features(&x, &vec![0.0; x.len()]).unwrap_err();
+        assert!(matches!(err, AnalysisError::TooSparse { .. }), "{err:?}");
+        assert!(err.to_string().contains("0.3 mm apart"), "{err}");
+        // Dense, but with a hole at the window's start.
+        let x: Vec<f64> = ramp(0.0897, 9000)
+            .into_iter()
+            .filter(|x| (x - 0.060).abs() > 0.0002)
+            .collect();
+        let err = fx.features(&x, &vec![0.0; x.len()]).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "no sample of the scan lies within half a spacing (0.1 mm) of the window's start at 60.0 mm along x_m"
+        );
+    }
+
+    #[test]
+    fn invalid_settings_are_refused() {
+        let mut s = thesis();
+        s.bins = [1, 51];
+        assert!(matches!(
+            FeatureExtractor::try_new(&s),
+            Err(AnalysisError::Settings(_))
+        ));
+        s.bins = [1, 49];
+        s.spacing = 0.0;
+        assert!(FeatureExtractor::try_new(&s).is_err());
+        s.spacing = 1e-12;
+        assert!(FeatureExtractor::try_new(&s).is_err());
+    }
+}

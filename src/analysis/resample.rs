@@ -1,0 +1,216 @@
+//! Resampling onto the window's even grid: bin by nearest grid point, take
+//! each bin's centroid, interpolate linearly between centroids (the method is
+//! described in the parent module's documentation). Owns only its buffers;
+//! never allocates after construction.
+
+use super::AnalysisError;
+
+#[derive(Debug, Clone)]
+pub(crate) struct Resampler {
+    n: usize,
+    start: f64,
+    spacing: f64,
+    /// Per grid point: sample count, sum of positions (in grid units from
+    /// the window's start), sum of signal values.
+    count: Vec<u32>,
+    sum_u: Vec<f64>,
+    sum_v: Vec<f64>,
+    /// The non-empty bins' centroids, in grid order (increasing position).
+    centroid_u: Vec<f64>,
+    centroid_v: Vec<f64>,
+    has_run: bool,
+}
+
+impl Resampler {
+    pub(crate) fn new(n: usize, start: f64, spacing: f64) -> Self {
+        Resampler {
+            n,
+            start,
+            spacing,
+            count: vec![0; n],
+            sum_u: vec![0.0; n],
+            sum_v: vec![0.0; n],
+            centroid_u: Vec::with_capacity(n),
+            centroid_v: Vec::with_capacity(n),
+            has_run: false,
+        }
+    }
+
+    /// Whether a resampling has succeeded since construction.
+    pub(crate) fn has_run(&self) -> bool {
+        self.has_run
+    }
+
+    /// Resample into `out` (length `n`); `out` is untouched on error.
+    pub(crate) fn run(
+        &mut self,
+        axis_name: &str,
+        axis: &[f64],
+        signal: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), AnalysisError> {
+        debug_assert_eq!(out.len(), self.n);
+        if axis.len() != signal.len() {
+            return Err(AnalysisError::LengthMismatch {
+                axis: axis.len(),
+                signal: signal.len(),
+            });
+        }
+        let (Some(&origin), Some(&last)) = (axis.first(), axis.last()) else {
+            return Err(AnalysisError::Empty);
+        };
+        // Distance along the direction of travel (NaN ends are caught below).
+        let direction = if last >= origin { 1.0 } else { -1.0 };
+
+        self.count.fill(0);
+        self.sum_u.fill(0.0);
+        self.sum_v.fill(0.0);
+        let inv_spacing = 1.0 / self.spacing;
+        let upper = self.n as f64 - 0.5;
+        // Scans arrive mostly in order, so consecutive samples share a bin:
+        // summing a run in registers and storing it once avoids a chain of
+        // store-to-load round trips through the bin arrays.
+        let mut run_bin = 0;
+        let (mut run_n, mut run_u, mut run_v) = (0u32, 0.0, 0.0);
+        let mut finite = true;
+        for (&a, &v) in axis.iter().zip(signal) {
+            // One flag for the whole loop keeps it branch-light; the rare
+            // failure is located afterwards.
+            finite &= a.is_finite() & v.is_finite();
+            let u = (direction * (a - origin) - self.start) * inv_spacing;
+            // Nearest grid point: bin i holds u in [i − ½, i + ½). The cast
+            // truncates, which is the floor here since u + ½ ≥ 0.
+            if !(-0.5..upper).contains(&u) {
+                continue;
+            }
+            let i = (u + 0.5) as usize;
+            // `upper` is exclusive, but rounding in `u + 0.5` can still reach n.
+            if i >= self.n {
+                continue;
+            }
+            if i != run_bin {
+                self.count[run_bin] += run_n;
+                self.sum_u[run_bin] += run_u;
+                self.sum_v[run_bin] += run_v;
+                (run_bin, run_n, run_u, run_v) = (i, 0, 0.0, 0.0);
+            }
+            run_n += 1;
+            run_u += u;
+            run_v += v;
+        }
+        self.count[run_bin] += run_n;
+        self.sum_u[run_bin] += run_u;
+        self.sum_v[run_bin] += run_v;
+        if !finite {
+            return Err(first_non_finite(axis, signal));
+        }
+
+        self.centroid_u.clear();
+        self.centroid_v.clear();
+        let mut first = None;
+        let mut last_bin = 0;
+        for i in 0..self.n {
+            let c = self.count[i];
+            if c > 0 {
+                first.get_or_insert(i);
+                last_bin = i;
+                let c = f64::from(c);
+                self.centroid_u.push(self.sum_u[i] / c);
+                self.centroid_v.push(self.sum_v[i] / c);
+            }
+        }
+        let filled = self.centroid_u.len();
+        let end = self.start + (self.n - 1) as f64 * self.spacing;
+        let first_gap = first != Some(0);
+        let last_gap = last_bin != self.n - 1;
+        // The extent costs a pass over the samples: only when it decides.
+        let (lo, hi) = if first_gap || last_gap {
+            extent(axis, origin, direction)
+        } else {
+            (0.0, 0.0)
+        };
+        let half = 0.5 * self.spacing;
+        // An empty end bin with no data beyond it: the scan stops short.
+        if (first_gap && lo > self.start - half) || (last_gap && hi < end + half) {
+            return Err(AnalysisError::WindowNotCovered {
+                axis: axis_name.to_string(),
+                covered: (lo, hi),
+                window: [self.start, end],
+            });
+        }
+        let empty = self.n - filled;
+        if empty * 4 > self.n {
+            return Err(AnalysisError::TooSparse {
+                axis: axis_name.to_string(),
+                empty,
+                points: self.n,
+                spacing: self.spacing,
+            });
+        }
+        // An empty end bin the scan passed over: nothing to anchor the end.
+        if first_gap || last_gap {
+            return Err(AnalysisError::EdgeGap {
+                axis: axis_name.to_string(),
+                edge: if first_gap { "start" } else { "end" },
+                at: if first_gap { self.start } else { end },
+                spacing: self.spacing,
+            });
+        }
+        if filled < 2 {
+            return Err(AnalysisError::TooFewPoints {
+                axis: axis_name.to_string(),
+                filled,
+            });
+        }
+
+        // Walk the grid and the centroids together; segment m runs from
+        // centroid m to m + 1, and the first and last segments extend
+        // outwards to extrapolate.
+        let (cu, cv) = (&self.centroid_u, &self.centroid_v);
+        let mut m = 0;
+        for (i, slot) in out.iter_mut().enumerate() {
+            let g = i as f64;
+            while m + 2 < filled && cu[m + 1] < g {
+                m += 1;
+            }
+            let du = cu[m + 1] - cu[m];
+            *slot = if du > 0.0 {
+                cv[m] + (g - cu[m]) * (cv[m + 1] - cv[m]) / du
+            } else {
+                0.5 * (cv[m] + cv[m + 1])
+            };
+        }
+        self.has_run = true;
+        Ok(())
+    }
+}
+
+/// The least and greatest distance travelled from the first sample.
+fn extent(axis: &[f64], origin: f64, direction: f64) -> (f64, f64) {
+    axis.iter()
+        .map(|&a| direction * (a - origin))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| {
+            (lo.min(d), hi.max(d))
+        })
+}
+
+/// The first sample that is not a finite number (one is known to exist).
+fn first_non_finite(axis: &[f64], signal: &[f64]) -> AnalysisError {
+    for (index, (&a, &v)) in axis.iter().zip(signal).enumerate() {
+        if !a.is_finite() {
+            return AnalysisError::NonFinite {
+                what: "axis",
+                index,
+                value: a,
+            };
+        }
+        if !v.is_finite() {
+            return AnalysisError::NonFinite {
+                what: "signal",
+                index,
+                value: v,
+            };
+        }
+    }
+    unreachable!("called only when a sample is not finite")
+}

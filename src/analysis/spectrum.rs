@@ -1,0 +1,138 @@
+//! Detrending and the magnitude spectrum of a resampled window. Owns the
+//! FFT plan and its buffers (made once); never allocates per call.
+
+use std::sync::Arc;
+
+use rustfft::num_complex::Complex;
+use rustfft::{Fft, FftPlanner};
+
+use crate::profile::Detrend;
+
+/// Remove the window's trend in place: nothing, its mean, or its
+/// least-squares straight line (against the sample index, which is the
+/// grid position up to scale).
+pub fn detrend(kind: Detrend, x: &mut [f64]) {
+    let n = x.len();
+    if n == 0 {
+        return;
+    }
+    match kind {
+        Detrend::None => {}
+        Detrend::Mean => {
+            let mean = x.iter().sum::<f64>() / n as f64;
+            x.iter_mut().for_each(|v| *v -= mean);
+        }
+        Detrend::Linear => {
+            // With t centred on the window, the intercept is the mean and the
+            // slope is Σ t·x / Σ t².
+            let mean = x.iter().sum::<f64>() / n as f64;
+            let centre = (n as f64 - 1.0) / 2.0;
+            let (mut stx, mut stt) = (0.0, 0.0);
+            for (j, &v) in x.iter().enumerate() {
+                let t = j as f64 - centre;
+                stx += t * v;
+                stt += t * t;
+            }
+            let slope = if stt > 0.0 { stx / stt } else { 0.0 };
+            for (j, v) in x.iter_mut().enumerate() {
+                *v -= mean + slope * (j as f64 - centre);
+            }
+        }
+    }
+}
+
+/// `|X_k|`, `k = 0..=n/2`, of a real window of `n` points, unnormalised
+/// (Matlab's `fft`: `X_k = Σ_j x_j e^{−2πi jk/n}`).
+#[derive(Clone)]
+pub(crate) struct MagnitudeSpectrum {
+    fft: Arc<dyn Fft<f64>>,
+    buffer: Vec<Complex<f64>>,
+    scratch: Vec<Complex<f64>>,
+}
+
+impl MagnitudeSpectrum {
+    pub(crate) fn new(n: usize) -> Self {
+        let fft = FftPlanner::new().plan_fft_forward(n);
+        let scratch = vec![Complex::default(); fft.get_inplace_scratch_len()];
+        MagnitudeSpectrum {
+            fft,
+            buffer: vec![Complex::default(); n],
+            scratch,
+        }
+    }
+
+    /// `x` has `n` values, `out` has `n/2 + 1`.
+    pub(crate) fn compute(&mut self, x: &[f64], out: &mut [f64]) {
+        debug_assert_eq!(x.len(), self.buffer.len());
+        debug_assert_eq!(out.len(), self.buffer.len() / 2 + 1);
+        for (b, &v) in self.buffer.iter_mut().zip(x) {
+            *b = Complex::new(v, 0.0);
+        }
+        self.fft
+            .process_with_scratch(&mut self.buffer, &mut self.scratch);
+        for (o, b) in out.iter_mut().zip(&self.buffer) {
+            *o = b.norm();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn mean_detrend_removes_the_mean_only() {
+        let mut x = vec![1.0, 2.0, 3.0, 10.0];
+        detrend(Detrend::Mean, &mut x);
+        assert_eq!(x, vec![-3.0, -2.0, -1.0, 6.0]);
+    }
+
+    #[test]
+    fn linear_detrend_removes_a_line_and_keeps_the_rest() {
+        // A line plus a zig-zag that is orthogonal to both the constant and
+        // the ramp (symmetric about the centre, zero sum): only the line goes.
+        let zig = [1.0, -1.0, -1.0, 1.0, 1.0, -1.0, -1.0, 1.0];
+        let mut x: Vec<f64> = zig
+            .iter()
+            .enumerate()
+            .map(|(j, z)| 3.0 - 0.5 * j as f64 + z)
+            .collect();
+        detrend(Detrend::Linear, &mut x);
+        for (a, b) in x.iter().zip(zig) {
+            assert!((a - b).abs() < 1e-12, "{x:?}");
+        }
+        let mut line: Vec<f64> = (0..7).map(|j| 2.0 * j as f64 - 4.0).collect();
+        detrend(Detrend::Linear, &mut line);
+        assert!(line.iter().all(|v| v.abs() < 1e-12), "{line:?}");
+    }
+
+    #[test]
+    fn no_detrend_and_degenerate_windows() {
+        let mut x = vec![5.0, 6.0];
+        detrend(Detrend::None, &mut x);
+        assert_eq!(x, vec![5.0, 6.0]);
+        let mut one = vec![4.0];
+        detrend(Detrend::Linear, &mut one);
+        assert_eq!(one, vec![0.0]);
+        detrend(Detrend::Linear, &mut []);
+    }
+
+    #[test]
+    fn magnitudes_match_a_naive_dft() {
+        for n in [4, 5, 100, 101] {
+            let x: Vec<f64> = (0..n).map(|j| ((j * 7919) % 13) as f64 - 6.0).collect();
+            let mut s = MagnitudeSpectrum::new(n);
+            let mut out = vec![0.0; n / 2 + 1];
+            s.compute(&x, &mut out);
+            for (k, &got) in out.iter().enumerate() {
+                let (mut re, mut im) = (0.0, 0.0);
+                for (j, &v) in x.iter().enumerate() {
+                    let a = -2.0 * std::f64::consts::PI * (j * k) as f64 / n as f64;
+                    re += v * a.cos();
+                    im += v * a.sin();
+                }
+                assert!((got - re.hypot(im)).abs() < 1e-9, "n {n} k {k}");
+            }
+        }
+    }
+}

@@ -1,0 +1,272 @@
+//! Evaluation: the per-class train/test split, the confusion matrix, the
+//! success and error rates (section 4.5, Table 4.1) and their reports as
+//! JSON (`evaluate --json`) and as plain text.
+//!
+//! This module classifies with a [`Model`] and counts; it never reads
+//! recordings or extracts features, and never prints.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+use rand::SeedableRng;
+use rand::seq::SliceRandom;
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+use thiserror::Error;
+
+use crate::classify::{ClassifyError, Model, TrainingExample};
+use crate::profile::Evaluation;
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Split {
+    pub train: Vec<TrainingExample>,
+    pub test: Vec<TrainingExample>,
+}
+
+#[derive(Debug, Error)]
+pub enum EvaluateError {
+    #[error("there are no examples to split")]
+    NoExamples,
+    #[error(
+        "class {label:?} has {have} example(s) but the split needs {needed} \
+         ({train} to train and {test} to test)",
+        needed = train + test
+    )]
+    NotEnough {
+        label: String,
+        have: usize,
+        train: usize,
+        test: usize,
+    },
+    #[error("there are no test examples")]
+    NoTest,
+    #[error(transparent)]
+    Classify(#[from] ClassifyError),
+}
+
+/// The seed of one class's shuffle: the evaluation seed mixed with the
+/// label (FNV-1a), so a class's split does not depend on which other
+/// classes there are.
+fn class_seed(seed: u64, label: &str) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in label.bytes() {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    seed ^ h
+}
+
+/// Split the examples per class (label): in the order given (callers sort
+/// by file name), or shuffled when `shuffle_seed` is set (each class by its
+/// own ChaCha8 generator seeded with the seed and the label), the first
+/// `train_per_class` go to training and the next `test_per_class` to test;
+/// any more are left out. Classes come out in label order.
+pub fn split(examples: Vec<TrainingExample>, eval: &Evaluation) -> Result<Split, EvaluateError> {
+    if examples.is_empty() {
+        return Err(EvaluateError::NoExamples);
+    }
+    let mut by_class: BTreeMap<String, Vec<TrainingExample>> = BTreeMap::new();
+    for ex in examples {
+        by_class.entry(ex.label.clone()).or_default().push(ex);
+    }
+    let (n_train, n_test) = (eval.train_per_class, eval.test_per_class);
+    let mut out = Split {
+        train: Vec::with_capacity(n_train * by_class.len()),
+        test: Vec::with_capacity(n_test * by_class.len()),
+    };
+    for (label, mut class) in by_class {
+        if class.len() < n_train + n_test {
+            return Err(EvaluateError::NotEnough {
+                label,
+                have: class.len(),
+                train: n_train,
+                test: n_test,
+            });
+        }
+        if let Some(seed) = eval.shuffle_seed {
+            class.shuffle(&mut ChaCha8Rng::seed_from_u64(class_seed(seed, &label)));
+        }
+        let mut rest = class.into_iter();
+        out.train.extend(rest.by_ref().take(n_train));
+        out.test.extend(rest.take(n_test));
+    }
+    Ok(out)
+}
+
+/// An evaluation's result; its JSON is the `evaluate --json` contract.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Report {
+    /// The union of the training and test labels, sorted.
+    pub labels: Vec<String>,
+    /// `confusion[true][classified as]`, indexed like `labels`.
+    pub confusion: Vec<Vec<usize>>,
+    /// Correct / tested, 0..1.
+    pub accuracy: f64,
+    pub per_class: Vec<ClassRate>,
+    /// The training files, in the model's order.
+    pub train: Vec<String>,
+    /// The test files, in the order tested.
+    pub test: Vec<String>,
+    pub predictions: Vec<PredictionRow>,
+}
+
+/// One class's row of Table 4.1's SR and ER, as fractions 0..1. A class with
+/// no test example (`n = 0`) has no rate: NaN, written as `null` in JSON.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ClassRate {
+    pub label: String,
+    /// Test examples of this class.
+    pub n: usize,
+    pub success_rate: f64,
+    pub error_rate: f64,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PredictionRow {
+    pub file: String,
+    pub label: String,
+    pub predicted: String,
+    /// Every class with its votes, most first, as `[["S2", 9], ["S3", 1], …]`
+    /// (a list of pairs keeps the order; Python's `dict(votes)` reads it).
+    pub votes: Vec<(String, usize)>,
+}
+
+/// Classify every test example and count.
+pub fn evaluate(model: &Model, test: &[TrainingExample]) -> Result<Report, EvaluateError> {
+    if test.is_empty() {
+        return Err(EvaluateError::NoTest);
+    }
+    let mut labels: Vec<String> = model
+        .labels
+        .iter()
+        .chain(test.iter().map(|t| &t.label))
+        .cloned()
+        .collect();
+    labels.sort();
+    labels.dedup();
+    let index = |label: &str| labels.binary_search_by(|l| l.as_str().cmp(label));
+
+    let mut confusion = vec![vec![0usize; labels.len()]; labels.len()];
+    let mut predictions = Vec::with_capacity(test.len());
+    for ex in test {
+        let p = model.classify(&ex.features)?;
+        // Both labels are in `labels` by construction.
+        if let (Ok(t), Ok(c)) = (index(&ex.label), index(&p.label)) {
+            confusion[t][c] += 1;
+        }
+        predictions.push(PredictionRow {
+            file: ex.file.clone(),
+            label: ex.label.clone(),
+            predicted: p.label,
+            votes: p.votes,
+        });
+    }
+    let correct: usize = (0..labels.len()).map(|i| confusion[i][i]).sum();
+    let per_class = labels
+        .iter()
+        .enumerate()
+        .map(|(i, label)| {
+            let n: usize = confusion[i].iter().sum();
+            let success_rate = if n > 0 {
+                confusion[i][i] as f64 / n as f64
+            } else {
+                f64::NAN
+            };
+            ClassRate {
+                label: label.clone(),
+                n,
+                success_rate,
+                error_rate: 1.0 - success_rate,
+            }
+        })
+        .collect();
+    Ok(Report {
+        accuracy: correct as f64 / test.len() as f64,
+        confusion,
+        per_class,
+        train: model.examples.iter().map(|e| e.file.clone()).collect(),
+        test: test.iter().map(|e| e.file.clone()).collect(),
+        predictions,
+        labels,
+    })
+}
+
+impl Report {
+    /// Test examples classified correctly.
+    pub fn correct(&self) -> usize {
+        (0..self.labels.len()).map(|i| self.confusion[i][i]).sum()
+    }
+
+    /// Test examples in all.
+    pub fn tested(&self) -> usize {
+        self.confusion.iter().flatten().sum()
+    }
+
+    /// The confusion matrix in Table 4.1's layout: one row per true class,
+    /// one column per class classified as, then the SR and ER rows in
+    /// percent ("-" for a class with no test example) and the accuracy.
+    pub fn table(&self) -> String {
+        let percent = |r: f64| {
+            if r.is_finite() {
+                format!("{:.1}", 100.0 * r)
+            } else {
+                "-".to_string()
+            }
+        };
+        let sr: Vec<String> = self
+            .per_class
+            .iter()
+            .map(|c| percent(c.success_rate))
+            .collect();
+        let er: Vec<String> = self
+            .per_class
+            .iter()
+            .map(|c| percent(c.error_rate))
+            .collect();
+        let head = "Classified as";
+        let first = self
+            .labels
+            .iter()
+            .map(|l| l.chars().count())
+            .chain([head.len(), "SR(%)".len()])
+            .max()
+            .unwrap_or(0);
+        // All columns as wide as the widest entry, two spaces apart.
+        let width = self
+            .labels
+            .iter()
+            .map(|l| l.chars().count())
+            .chain(self.confusion.iter().flatten().map(|c| c.to_string().len()))
+            .chain(sr.iter().chain(&er).map(String::len))
+            .max()
+            .unwrap_or(0);
+        let mut out = String::new();
+        let mut row = |name: &str, cells: &mut dyn Iterator<Item = String>| {
+            let mut line = format!("{name:<first$}");
+            for cell in cells {
+                let _ = write!(line, "  {cell:>width$}");
+            }
+            out.push_str(line.trim_end());
+            out.push('\n');
+        };
+        row(head, &mut self.labels.iter().cloned());
+        for (label, counts) in self.labels.iter().zip(&self.confusion) {
+            row(label, &mut counts.iter().map(|c| c.to_string()));
+        }
+        row("SR(%)", &mut sr.into_iter());
+        row("ER(%)", &mut er.into_iter());
+        let tested = self.tested();
+        let _ = writeln!(
+            out,
+            "accuracy: {}/{} ({} %)",
+            self.correct(),
+            tested,
+            percent(if tested > 0 {
+                self.correct() as f64 / tested as f64
+            } else {
+                f64::NAN
+            })
+        );
+        out
+    }
+}
