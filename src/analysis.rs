@@ -30,11 +30,15 @@
 //!    the two nearest centroids beyond the first or last one. A signal that
 //!    is a straight line in `d` is therefore resampled exactly.
 //!
-//! The scan must reach the window ([`AnalysisError::WindowNotCovered`]),
-//! at most a quarter of the bins may be empty ([`AnalysisError::TooSparse`]),
-//! the first and last grid points' bins must hold samples
-//! ([`AnalysisError::EdgeGap`], so that nothing is extrapolated by more than
-//! half a spacing), and at least two bins must hold samples. A time axis (`t_s`) works the same way, in seconds.
+//! The scan must reach the window, give or take [`resample::END_SLACK`]
+//! spacings at either end ([`AnalysisError::WindowNotCovered`]): a probe held
+//! by friction on a flank stops a fraction of a millimetre short of the last
+//! waypoint, and the thesis's window runs to the very end of the stroke, so
+//! the grid points it did not reach are extrapolated from the last two bins.
+//! At most a quarter of the bins may be empty ([`AnalysisError::TooSparse`]);
+//! an end bin the scan passed over without a sample in it is an error
+//! ([`AnalysisError::EdgeGap`]); and at least two bins must hold samples. A
+//! time axis (`t_s`) works the same way, in seconds.
 //!
 //! # Spectrum
 //! After the detrend (none, mean, or least-squares line) the window's DFT is

@@ -1,4 +1,25 @@
+//! hapticlab's entry point: parse the command line, dispatch, map errors to
+//! exit codes (0 ok, 1 runtime failure, 2 bad input).
+
+use clap::Parser;
+
 fn main() {
-    let p = hapticlab::profile::LoadedProfile::thesis();
-    println!("{}", p.profile.name);
+    let cli = match hapticlab::cli::Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            // Help and version are not errors; bad arguments are bad input.
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let _ = e.print();
+            std::process::exit(code);
+        }
+    };
+    let Some(command) = cli.command else {
+        // The console is the default; until it exists, show what there is.
+        let _ = <hapticlab::cli::Cli as clap::CommandFactory>::command().print_long_help();
+        return;
+    };
+    if let Err(f) = hapticlab::commands::run(command) {
+        eprintln!("hapticlab: error: {}", f.message());
+        std::process::exit(f.exit_code());
+    }
 }

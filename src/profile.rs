@@ -224,7 +224,9 @@ pub enum Surface {
     },
     /// Heights against x from a CSV file with columns `x_m,height_m`
     /// (path relative to the profile's folder).
-    Csv { path: PathBuf },
+    Csv {
+        path: PathBuf,
+    },
 }
 
 impl Surface {
@@ -267,10 +269,10 @@ pub struct Simulator {
     /// Encoder resolution (the Falcon's 400 dpi ≈ 0.0635 mm).
     pub encoder_resolution_m: f64,
     pub position_noise_m: f64,
-    pub force_noise_n: f64,
-    /// Per-tick chance that the USB exchange slips by one extra period fraction.
+    /// Per-tick chance that the USB exchange slips by up to a quarter period
+    /// (the thesis's loop ran at 800–1000 Hz); virtual time only.
     pub period_jitter_fraction: f64,
-    /// Standard deviation of the ordinary tick-time jitter.
+    /// Standard deviation of the ordinary tick-time jitter; virtual time only.
     pub period_jitter_s: f64,
     /// Physics sub-steps per servo tick.
     pub substeps: u32,
@@ -292,7 +294,6 @@ impl Default for Simulator {
             friction_coefficient: 0.3,
             encoder_resolution_m: 0.0000635,
             position_noise_m: 0.00001,
-            force_noise_n: 0.005,
             period_jitter_fraction: 0.1,
             period_jitter_s: 0.000_02,
             substeps: 4,
@@ -369,7 +370,11 @@ impl LoadedProfile {
         Self::from_str(&text, &origin, &base)
     }
 
-    pub fn from_str(text: &str, origin: &str, base_dir: &Path) -> Result<LoadedProfile, ProfileError> {
+    pub fn from_str(
+        text: &str,
+        origin: &str,
+        base_dir: &Path,
+    ) -> Result<LoadedProfile, ProfileError> {
         let profile: Profile = toml::from_str(text).map_err(|e| {
             let (line, column) = match e.span() {
                 Some(span) => line_col(text, span.start),
@@ -467,7 +472,10 @@ impl Profile {
         // device
         let d = &self.device;
         if !(d.rate_hz.is_finite() && (10.0..=10_000.0).contains(&d.rate_hz)) {
-            return bad("device.rate_hz", format!("must be between 10 and 10000 Hz, got {}", d.rate_hz));
+            return bad(
+                "device.rate_hz",
+                format!("must be between 10 and 10000 Hz, got {}", d.rate_hz),
+            );
         }
         if d.missed_deadline_streak == 0 {
             return bad("device.missed_deadline_streak", "must be at least 1");
@@ -478,14 +486,23 @@ impl Profile {
         // controller
         let c = &self.controller;
         for i in 0..3 {
-            finite_nonneg(&format!("controller.stiffness_n_per_m[{i}]"), c.stiffness_n_per_m[i])?;
-            finite_nonneg(&format!("controller.damping_n_s_per_m[{i}]"), c.damping_n_s_per_m[i])?;
+            finite_nonneg(
+                &format!("controller.stiffness_n_per_m[{i}]"),
+                c.stiffness_n_per_m[i],
+            )?;
+            finite_nonneg(
+                &format!("controller.damping_n_s_per_m[{i}]"),
+                c.damping_n_s_per_m[i],
+            )?;
         }
         finite_pos("controller.force_limit_n", c.force_limit_n)?;
         if c.force_limit_n > DEVICE_MAX_FORCE_N {
             return bad(
                 "controller.force_limit_n",
-                format!("{} N exceeds the device's {} N", c.force_limit_n, DEVICE_MAX_FORCE_N),
+                format!(
+                    "{} N exceeds the device's {} N",
+                    c.force_limit_n, DEVICE_MAX_FORCE_N
+                ),
             );
         }
         // path
@@ -513,12 +530,18 @@ impl Profile {
             }
         }
         if !(p.speed_m_per_s.is_finite() && p.speed_m_per_s > 0.0 && p.speed_m_per_s <= 0.5) {
-            return bad("path.speed_m_per_s", format!("must be in (0, 0.5] m/s, got {}", p.speed_m_per_s));
+            return bad(
+                "path.speed_m_per_s",
+                format!("must be in (0, 0.5] m/s, got {}", p.speed_m_per_s),
+            );
         }
-        if let Some(v) = p.transit_speed_m_per_s {
-            if !(v.is_finite() && v > 0.0 && v <= 0.5) {
-                return bad("path.transit_speed_m_per_s", format!("must be in (0, 0.5] m/s, got {v}"));
-            }
+        if let Some(v) = p.transit_speed_m_per_s
+            && !(v.is_finite() && v > 0.0 && v <= 0.5)
+        {
+            return bad(
+                "path.transit_speed_m_per_s",
+                format!("must be in (0, 0.5] m/s, got {v}"),
+            );
         }
         if p.scan_leg == 0 || p.scan_leg >= p.waypoints_m.len() {
             return bad(
@@ -552,13 +575,23 @@ impl Profile {
             }
         };
         if an.channel.is_empty() || an.channel == an.axis {
-            return bad("analysis.channel", "must name a signal column other than the axis");
+            return bad(
+                "analysis.channel",
+                "must name a signal column other than the axis",
+            );
         }
         finite_pos("analysis.spacing", an.spacing)?;
-        if !(an.window[0].is_finite() && an.window[1].is_finite() && an.window[0] >= 0.0 && an.window[1] > an.window[0]) {
+        if !(an.window[0].is_finite()
+            && an.window[1].is_finite()
+            && an.window[0] >= 0.0
+            && an.window[1] > an.window[0])
+        {
             return bad(
                 "analysis.window",
-                format!("must be [start, end] with 0 <= start < end, got {:?}", an.window),
+                format!(
+                    "must be [start, end] with 0 <= start < end, got {:?}",
+                    an.window
+                ),
             );
         }
         let leg_extent = match axis_index {
@@ -566,7 +599,10 @@ impl Profile {
             None => leg_len / p.speed_m_per_s + p.dwell_s,
         };
         if axis_index.is_some() && leg_extent <= 0.0 {
-            return bad("analysis.axis", "the scan leg does not move along this axis");
+            return bad(
+                "analysis.axis",
+                "the scan leg does not move along this axis",
+            );
         }
         if an.window[1] > leg_extent + 1e-9 {
             return bad(
@@ -579,10 +615,16 @@ impl Profile {
         }
         let n = an.points();
         if n < 4 {
-            return bad("analysis.spacing", format!("leaves only {n} points in the window (need 4)"));
+            return bad(
+                "analysis.spacing",
+                format!("leaves only {n} points in the window (need 4)"),
+            );
         }
         if n > 1 << 20 {
-            return bad("analysis.spacing", format!("leaves {n} points in the window (at most 1048576)"));
+            return bad(
+                "analysis.spacing",
+                format!("leaves {n} points in the window (at most 1048576)"),
+            );
         }
         if an.bins[0] > an.bins[1] || an.bins[1] > n / 2 {
             return bad(
@@ -619,7 +661,10 @@ impl Profile {
                 return bad(format!("{key}.label"), reason);
             }
             if !seen.insert(t.label.clone()) {
-                return bad(format!("{key}.label"), format!("label {:?} appears twice", t.label));
+                return bad(
+                    format!("{key}.label"),
+                    format!("label {:?} appears twice", t.label),
+                );
             }
             let sk = format!("{key}.surface");
             match &t.surface {
@@ -643,7 +688,10 @@ impl Profile {
                     finite_nonneg(&format!("{sk}.flank_m"), *flank_m)?;
                     finite_nonneg(&format!("{sk}.roughness_rms_m"), *roughness_rms_m)?;
                     if crest_m + trough_m + 2.0 * flank_m < 1e-4 {
-                        return bad(sk, "the period (crest + trough + 2 flanks) must be at least 0.1 mm");
+                        return bad(
+                            sk,
+                            "the period (crest + trough + 2 flanks) must be at least 0.1 mm",
+                        );
                     }
                 }
                 Surface::Sine {
@@ -666,7 +714,10 @@ impl Profile {
         let s = &self.simulator;
         finite_pos("simulator.mass_kg", s.mass_kg)?;
         finite_nonneg("simulator.unbalanced_weight_n", s.unbalanced_weight_n)?;
-        finite_nonneg("simulator.mechanism_damping_n_s_per_m", s.mechanism_damping_n_s_per_m)?;
+        finite_nonneg(
+            "simulator.mechanism_damping_n_s_per_m",
+            s.mechanism_damping_n_s_per_m,
+        )?;
         finite_pos("simulator.probe_diameter_m", s.probe_diameter_m)?;
         if s.probe_diameter_m > 0.02 {
             return bad("simulator.probe_diameter_m", "must be at most 20 mm");
@@ -678,21 +729,29 @@ impl Profile {
             return bad("simulator.surface_origin_x_m", "must be a number");
         }
         finite_nonneg("simulator.placement_jitter_m", s.placement_jitter_m)?;
-        finite_pos("simulator.contact_stiffness_n_per_m", s.contact_stiffness_n_per_m)?;
-        finite_nonneg("simulator.contact_damping_n_s_per_m", s.contact_damping_n_s_per_m)?;
+        finite_pos(
+            "simulator.contact_stiffness_n_per_m",
+            s.contact_stiffness_n_per_m,
+        )?;
+        finite_nonneg(
+            "simulator.contact_damping_n_s_per_m",
+            s.contact_damping_n_s_per_m,
+        )?;
         finite_nonneg("simulator.friction_coefficient", s.friction_coefficient)?;
         if s.friction_coefficient > 2.0 {
             return bad("simulator.friction_coefficient", "must be at most 2");
         }
         finite_nonneg("simulator.encoder_resolution_m", s.encoder_resolution_m)?;
         finite_nonneg("simulator.position_noise_m", s.position_noise_m)?;
-        finite_nonneg("simulator.force_noise_n", s.force_noise_n)?;
         if !(0.0..=1.0).contains(&s.period_jitter_fraction) {
             return bad("simulator.period_jitter_fraction", "must be in [0, 1]");
         }
         finite_nonneg("simulator.period_jitter_s", s.period_jitter_s)?;
         if s.period_jitter_s * d.rate_hz > 0.2 {
-            return bad("simulator.period_jitter_s", "must be under a fifth of the servo period");
+            return bad(
+                "simulator.period_jitter_s",
+                "must be under a fifth of the servo period",
+            );
         }
         if !(1..=64).contains(&s.substeps) {
             return bad("simulator.substeps", "must be from 1 to 64");
@@ -747,9 +806,16 @@ pub fn locate_key(text: &str, key: &str) -> (Option<usize>, Option<usize>) {
     let mut current_idx: Vec<Option<usize>> = Vec::new();
     let want_idx: Vec<Option<usize>> = table.iter().map(|(_, i)| *i).collect();
     let mut fallback: (Option<usize>, Option<usize>) = (None, None);
+    // Open brackets of a multi-line value being skipped.
+    let mut depth: i64 = 0;
     for (ln, raw) in text.lines().enumerate() {
         let line = raw.trim_start();
         let indent = raw.len() - line.len();
+        let code = line.split('#').next().unwrap_or("");
+        if depth > 0 {
+            depth += code.matches('[').count() as i64 - code.matches(']').count() as i64;
+            continue;
+        }
         if let Some(rest) = line.strip_prefix("[[") {
             let name = rest.split("]]").next().unwrap_or("").trim().to_string();
             let c = counters.entry(name.clone()).or_insert(0);
@@ -778,6 +844,8 @@ pub fn locate_key(text: &str, key: &str) -> (Option<usize>, Option<usize>) {
         }
         // key = value, possibly a dotted key or an inline table.
         let Some(eq) = line.find('=') else { continue };
+        let value = code.get(eq + 1..).unwrap_or("");
+        depth = value.matches('[').count() as i64 - value.matches(']').count() as i64;
         let k = line[..eq].trim();
         let mut path: Vec<String> = current.clone();
         let mut pidx = current_idx.clone();
@@ -787,19 +855,49 @@ pub fn locate_key(text: &str, key: &str) -> (Option<usize>, Option<usize>) {
         }
         let names_match = |upto: usize| -> bool {
             path.len() >= upto
-                && path[..upto].iter().map(String::as_str).eq(table_names.iter().copied())
+                && path[..upto]
+                    .iter()
+                    .map(String::as_str)
+                    .eq(table_names.iter().copied())
                 && pidx[..upto]
                     .iter()
                     .zip(want_idx.iter())
                     .all(|(have, want)| want.is_none() || have == want)
         };
         let col = indent + 1;
-        if names_match(table_names.len()) && path.len() == table_names.len() + 1 && path.last().map(String::as_str) == Some(last.0.as_str()) {
+        if names_match(table_names.len())
+            && path.len() == table_names.len() + 1
+            && path.last().map(String::as_str) == Some(last.0.as_str())
+        {
+            // An element of a multi-line array: the Nth line after the key that opens an element.
+            if let Some(index) = last.1 {
+                let rest = line[eq + 1..].trim();
+                if rest == "[" {
+                    let mut seen = 0;
+                    for (j, next) in text.lines().enumerate().skip(ln + 1) {
+                        let t = next.trim_start();
+                        if t.starts_with(']') {
+                            break;
+                        }
+                        if t.starts_with('[')
+                            || t.starts_with(|c: char| c.is_ascii_digit() || c == '-' || c == '"')
+                        {
+                            if seen == index {
+                                return (Some(j + 1), Some(next.len() - t.len() + 1));
+                            }
+                            seen += 1;
+                        }
+                    }
+                }
+            }
             return (Some(ln + 1), Some(col));
         }
         // An inline table holding the key: `surface = { kind = ..., depth_m = ... }`.
         if table_names.len() == path.len() && names_match(path.len()) {
-            if let Some(pos) = line.find(&format!("{} ", last.0)).or_else(|| line.find(&format!("{}=", last.0))) {
+            if let Some(pos) = line
+                .find(&format!("{} ", last.0))
+                .or_else(|| line.find(&format!("{}=", last.0)))
+            {
                 return (Some(ln + 1), Some(indent + pos + 1));
             }
             fallback = (Some(ln + 1), Some(col));

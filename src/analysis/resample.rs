@@ -5,6 +5,10 @@
 
 use super::AnalysisError;
 
+/// Grid points at either end of the window that a scan stopping short may
+/// leave empty; they are extrapolated from the nearest two bins.
+pub const END_SLACK: usize = 2;
+
 #[derive(Debug, Clone)]
 pub(crate) struct Resampler {
     n: usize,
@@ -130,8 +134,9 @@ impl Resampler {
             (0.0, 0.0)
         };
         let half = 0.5 * self.spacing;
-        // An empty end bin with no data beyond it: the scan stops short.
-        if (first_gap && lo > self.start - half) || (last_gap && hi < end + half) {
+        let slack = END_SLACK as f64 * self.spacing;
+        // The scan stops short of the window by more than the slack.
+        if (first_gap && lo > self.start + slack) || (last_gap && hi < end - slack) {
             return Err(AnalysisError::WindowNotCovered {
                 axis: axis_name.to_string(),
                 covered: (lo, hi),
@@ -148,6 +153,10 @@ impl Resampler {
             });
         }
         // An empty end bin the scan passed over: nothing to anchor the end.
+        let (first_gap, last_gap) = (
+            first_gap && lo < self.start - half,
+            last_gap && hi > end + half,
+        );
         if first_gap || last_gap {
             return Err(AnalysisError::EdgeGap {
                 axis: axis_name.to_string(),

@@ -31,6 +31,8 @@ pub struct RecordingWriter {
     /// The row being formatted, reused so rows cost no allocation.
     line: Vec<u8>,
     rows: usize,
+    /// fsync when finished or aborted (off for batches synced as a whole).
+    sync: bool,
 }
 
 impl RecordingWriter {
@@ -125,6 +127,7 @@ impl RecordingWriter {
             decimals: columns.iter().map(|c| decimals_for(c)).collect(),
             line: Vec::with_capacity(MAX_VALUE_BYTES * columns.len()),
             rows: 0,
+            sync: true,
         })
     }
 
@@ -207,9 +210,21 @@ impl RecordingWriter {
         };
         out.write_all(last_line.as_bytes())
             .and_then(|()| out.flush())
-            .and_then(|()| out.get_ref().sync_all())
+            .and_then(|()| {
+                if self.sync {
+                    out.get_ref().sync_all()
+                } else {
+                    Ok(())
+                }
+            })
             .map_err(|e| self.io_error(e))?;
         Ok(self.rows)
+    }
+
+    /// Leave the fsync at the end to the caller, who syncs a whole batch of
+    /// recordings at once (see [`sync_folder`]).
+    pub fn defer_sync(&mut self) {
+        self.sync = false;
     }
 
     pub fn rows(&self) -> usize {
@@ -295,6 +310,32 @@ fn write_toml_string(out: &mut String, s: &str) {
         }
     }
     out.push('"');
+}
+
+/// Flush everything written under `dir` to stable storage: one `syncfs` for a
+/// whole batch of recordings instead of an fsync per file.
+pub fn sync_folder(dir: &Path) -> Result<(), RecordingError> {
+    let f = File::open(dir).map_err(|source| RecordingError::Io {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::fd::AsRawFd;
+        // SAFETY: syncfs takes a valid open descriptor, which `f` owns.
+        if unsafe { libc::syncfs(f.as_raw_fd()) } != 0 {
+            return Err(RecordingError::Io {
+                path: dir.to_path_buf(),
+                source: std::io::Error::last_os_error(),
+            });
+        }
+        Ok(())
+    }
+    #[cfg(not(target_os = "linux"))]
+    f.sync_all().map_err(|source| RecordingError::Io {
+        path: dir.to_path_buf(),
+        source,
+    })
 }
 
 #[cfg(test)]

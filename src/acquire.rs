@@ -1,0 +1,438 @@
+//! Acquiring scans: datasets in virtual time (`simulate`) and live scans in
+//! real time (`scan`), both through the one servo loop.
+//!
+//! This module builds each scan's metadata and file name, makes the device
+//! the profile names, and drives the loop; it prints nothing (callers report
+//! progress through a callback).
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Duration;
+
+use crate::device::HapticDevice;
+use crate::device::sim::{SimDevice, SimError};
+use crate::profile::{DeviceKind, LoadedProfile, check_label};
+use crate::recorder::SavedScan;
+use crate::servo::clock::VirtualClock;
+use crate::servo::stats::LoopStats;
+use crate::servo::{Command, Links, ServoEvent, ServoLoop};
+
+#[derive(Debug, thiserror::Error)]
+pub enum AcquireError {
+    #[error("{0}")]
+    BadInput(String),
+    #[error(transparent)]
+    Sim(#[from] SimError),
+    #[error("{0}")]
+    Runtime(String),
+}
+
+impl AcquireError {
+    /// Bad input (exit code 2) rather than a runtime failure (1).
+    pub fn is_bad_input(&self) -> bool {
+        matches!(
+            self,
+            AcquireError::BadInput(_) | AcquireError::Sim(SimError::UnknownTexture { .. })
+        ) || matches!(self, AcquireError::Sim(SimError::Surface(_)))
+    }
+}
+
+/// The metadata every recording carries.
+pub fn scan_metadata(
+    lp: &LoadedProfile,
+    label: &str,
+    device: &str,
+    extra: &[(&str, toml::Value)],
+) -> Vec<(String, toml::Value)> {
+    use toml::Value;
+    let p = &lp.profile;
+    let arr = |v: [f64; 3]| Value::Array(v.iter().map(|&x| Value::Float(x)).collect());
+    let mut meta = vec![
+        ("label".to_string(), Value::String(label.into())),
+        ("profile".to_string(), Value::String(p.name.clone())),
+        (
+            "profile_sha256".to_string(),
+            Value::String(lp.sha256.clone()),
+        ),
+        ("device".to_string(), Value::String(device.into())),
+        ("rate_hz".to_string(), Value::Float(p.device.rate_hz)),
+        (
+            "software".to_string(),
+            Value::String(format!("hapticlab {}", env!("CARGO_PKG_VERSION"))),
+        ),
+        (
+            "stiffness_n_per_m".to_string(),
+            arr(p.controller.stiffness_n_per_m),
+        ),
+        (
+            "damping_n_s_per_m".to_string(),
+            arr(p.controller.damping_n_s_per_m),
+        ),
+        (
+            "speed_m_per_s".to_string(),
+            Value::Float(p.path.speed_m_per_s),
+        ),
+        (
+            "scan_from_m".to_string(),
+            arr(p.path.waypoints_m[p.path.scan_leg - 1]),
+        ),
+        (
+            "scan_to_m".to_string(),
+            arr(p.path.waypoints_m[p.path.scan_leg]),
+        ),
+    ];
+    for (k, v) in extra {
+        meta.push((k.to_string(), v.clone()));
+    }
+    meta
+}
+
+/// A seed per scan, from the dataset's seed, the label and the scan's index.
+pub fn scan_seed(seed: u64, label: &str, index: usize) -> u64 {
+    // FNV-1a over the parts: stable across platforms and versions.
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in seed
+        .to_le_bytes()
+        .iter()
+        .chain(label.as_bytes())
+        .chain((index as u64).to_le_bytes().iter())
+    {
+        h ^= u64::from(*b);
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    h
+}
+
+/// `DIR/<label>/<label>_<NNN>.csv`.
+pub fn scan_file(dir: &Path, label: &str, index: usize) -> PathBuf {
+    dir.join(label).join(format!("{label}_{index:03}.csv"))
+}
+
+/// The first index from 1 whose file does not exist yet in `DIR/<label>/`.
+pub fn next_free_index(dir: &Path, label: &str) -> usize {
+    (1..)
+        .find(|&i| {
+            let p = scan_file(dir, label, i);
+            !p.exists() && !p.with_extension("csv.gz").exists()
+        })
+        .expect("an unbounded range has a free index")
+}
+
+pub struct SimulateOptions {
+    pub out: PathBuf,
+    pub per_class: usize,
+    pub seed: u64,
+    pub threads: usize,
+}
+
+/// One simulated scan in virtual time: the whole path from rest at the first
+/// waypoint, the scan leg recorded to `path`. The file is not fsynced: the
+/// caller syncs the batch ([`crate::recording::sync_folder`]).
+pub fn simulate_one(
+    lp: &LoadedProfile,
+    label: &str,
+    seed: u64,
+    path: &Path,
+) -> Result<(SavedScan, LoopStats), AcquireError> {
+    let p = &lp.profile;
+    let device = SimDevice::new(p, &lp.base_dir, Some(label), seed)?;
+    let clock = VirtualClock::new(
+        p.device.rate_hz,
+        p.simulator.period_jitter_s,
+        p.simulator.period_jitter_fraction,
+        seed,
+    );
+    let meta = scan_metadata(
+        lp,
+        label,
+        device.kind(),
+        &[
+            ("texture", toml::Value::String(label.into())),
+            ("seed", toml::Value::String(seed.to_string())),
+            ("clock", toml::Value::String("virtual".into())),
+        ],
+    );
+    let (recorder, sink) = crate::recorder::start_batch();
+    let (ev_tx, ev_rx) = crossbeam_channel::bounded(64);
+    let links = Links {
+        events: Some(ev_tx),
+        ..Links::default()
+    };
+    let mut servo = ServoLoop::new(device, clock, p, sink, links);
+    servo.apply(Command::StartScan {
+        path: path.to_path_buf(),
+        meta,
+    });
+    // The whole path can take at most this long in virtual time.
+    let limit = path_duration_s(lp) * 3.0 + 10.0;
+    let max_ticks = (limit * p.device.rate_hz) as u64;
+    let mut stats = LoopStats::default();
+    let mut ticks = 0u64;
+    while servo.scan_pending() && ticks < max_ticks {
+        if let Err(h) = servo.tick() {
+            return Err(AcquireError::Runtime(format!(
+                "the simulated scan stopped: {h}"
+            )));
+        }
+        ticks += 1;
+    }
+    if servo.scan_pending() {
+        servo.stop_motion("the scan did not finish in time");
+    }
+    drop(servo);
+    for e in ev_rx.try_iter() {
+        if let ServoEvent::ScanEnded { stats: s, .. } = e {
+            stats = s;
+        }
+    }
+    let saved = recorder.join().pop().ok_or_else(|| {
+        AcquireError::Runtime(format!("{}: the recorder reported nothing", path.display()))
+    })?;
+    if let Some(e) = &saved.error {
+        return Err(AcquireError::Runtime(format!("{}: {e}", path.display())));
+    }
+    Ok((saved, stats))
+}
+
+/// Seconds the path takes at the profile's speeds (from the first waypoint).
+pub fn path_duration_s(lp: &LoadedProfile) -> f64 {
+    let p = &lp.profile.path;
+    let transit = p.transit_speed_m_per_s.unwrap_or(p.speed_m_per_s);
+    p.waypoints_m
+        .windows(2)
+        .enumerate()
+        .map(|(i, w)| {
+            let d = crate::profile::dist(w[0], w[1]);
+            if i + 1 == p.scan_leg {
+                d / p.speed_m_per_s + p.dwell_s
+            } else {
+                d / transit
+            }
+        })
+        .sum()
+}
+
+/// `per_class` scans of every texture in the profile, written under
+/// `out/<label>/`, in virtual time on `threads` workers. `progress` is called
+/// after each scan with (done, total).
+pub fn simulate_dataset(
+    lp: &LoadedProfile,
+    opts: &SimulateOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Vec<SavedScan>, AcquireError> {
+    if lp.profile.textures.is_empty() {
+        return Err(AcquireError::BadInput(format!(
+            "{}: the profile has no [[textures]] to simulate",
+            lp.origin
+        )));
+    }
+    if opts.per_class == 0 {
+        return Err(AcquireError::BadInput(
+            "--per-class must be at least 1".into(),
+        ));
+    }
+    let jobs: Vec<(String, usize)> = lp
+        .profile
+        .textures
+        .iter()
+        .flat_map(|t| (1..=opts.per_class).map(move |i| (t.label.clone(), i)))
+        .collect();
+    for t in &lp.profile.textures {
+        check_label(&t.label).map_err(AcquireError::BadInput)?;
+    }
+    let next = AtomicUsize::new(0);
+    let done = AtomicUsize::new(0);
+    let total = jobs.len();
+    let results: Vec<Result<Vec<(usize, SavedScan)>, AcquireError>> = std::thread::scope(|s| {
+        let workers: Vec<_> = (0..opts.threads.max(1))
+            .map(|_| {
+                s.spawn(|| {
+                    let mut mine = Vec::new();
+                    loop {
+                        let j = next.fetch_add(1, Ordering::Relaxed);
+                        let Some((label, i)) = jobs.get(j) else { break };
+                        let path = scan_file(&opts.out, label, *i);
+                        let seed = scan_seed(opts.seed, label, *i);
+                        let (saved, _) = simulate_one(lp, label, seed, &path)?;
+                        mine.push((j, saved));
+                        progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
+                    }
+                    Ok(mine)
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .map(|w| {
+                w.join()
+                    .unwrap_or_else(|p| Err(AcquireError::Runtime(crate::servo::panic_message(&p))))
+            })
+            .collect()
+    });
+    let mut all = Vec::with_capacity(total);
+    for r in results {
+        all.extend(r?);
+    }
+    crate::recording::sync_folder(&opts.out).map_err(|e| AcquireError::Runtime(e.to_string()))?;
+    all.sort_by_key(|(j, _)| *j);
+    Ok(all.into_iter().map(|(_, s)| s).collect())
+}
+
+/// What `scan` reports per scan.
+#[derive(Debug, Clone)]
+pub struct ScanReport {
+    pub saved: SavedScan,
+    pub stats: LoopStats,
+}
+
+/// What `scan` asks for.
+pub struct LiveScans {
+    pub label: String,
+    /// Simulator only: the texture under the probe (default: the label).
+    pub texture: Option<String>,
+    pub count: usize,
+    pub out: PathBuf,
+    pub seed: u64,
+}
+
+/// Live scans in real time on the profile's device: `count` runs of the path,
+/// each recorded to the next free `out/<label>/<label>_NNN.csv`. `texture`
+/// picks the simulated texture (default: the label). Stops early, keeping
+/// what was recorded, when `stop` is raised (signals).
+pub fn scan_live(
+    lp: &LoadedProfile,
+    req: &LiveScans,
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    on_scan: &mut dyn FnMut(&ScanReport),
+) -> Result<Vec<ScanReport>, AcquireError> {
+    let LiveScans {
+        label,
+        texture,
+        count,
+        out,
+        seed,
+    } = req;
+    let (label, texture, count, out, seed) = (
+        label.as_str(),
+        texture.as_deref(),
+        *count,
+        out.as_path(),
+        *seed,
+    );
+    check_label(label).map_err(AcquireError::BadInput)?;
+    let p = &lp.profile;
+    let device: Box<dyn HapticDevice> = match p.device.kind {
+        DeviceKind::Sim => {
+            let tex = texture.unwrap_or(label);
+            Box::new(SimDevice::new(p, &lp.base_dir, Some(tex), seed)?)
+        }
+        other => {
+            return Err(AcquireError::Runtime(format!(
+                "device kind {:?} is not available in this build yet; use kind = \"sim\"",
+                other.name()
+            )));
+        }
+    };
+    let kind = device.kind();
+    let handle = crate::servo::spawn(p, move || device)
+        .map_err(|e| AcquireError::Runtime(format!("cannot start the servo thread: {e}")))?;
+    // Signals raise the loop's own stop flag too.
+    let servo_stop = handle.stop.clone();
+    let mut reports = Vec::new();
+    let per_scan_limit = Duration::from_secs_f64(path_duration_s(lp) * 2.0 + 30.0);
+    'scans: for _ in 0..count {
+        let index = next_free_index(out, label);
+        let path = scan_file(out, label, index);
+        let meta = scan_metadata(
+            lp,
+            label,
+            kind,
+            &[
+                (
+                    "texture",
+                    toml::Value::String(texture.unwrap_or(label).into()),
+                ),
+                ("seed", toml::Value::String(seed.to_string())),
+                ("clock", toml::Value::String("real".into())),
+            ],
+        );
+        handle.send(Command::StartScan {
+            path: path.clone(),
+            meta,
+        });
+        let started = std::time::Instant::now();
+        let stats;
+        loop {
+            if stop.load(Ordering::Relaxed) {
+                servo_stop.store(true, Ordering::Relaxed);
+            }
+            match handle.events.recv_timeout(Duration::from_millis(50)) {
+                Ok(ServoEvent::ScanEnded { stats: s, .. }) => {
+                    stats = s;
+                    break;
+                }
+                Ok(_) => {}
+                Err(crossbeam_channel::RecvTimeoutError::Timeout) => {
+                    if started.elapsed() > per_scan_limit {
+                        handle.send(Command::Abort);
+                    }
+                    if handle.is_finished() {
+                        break 'scans;
+                    }
+                }
+                Err(crossbeam_channel::RecvTimeoutError::Disconnected) => break 'scans,
+            }
+        }
+        // The recorder finishes the file just after the motion ends.
+        let saved = loop {
+            if let Some(s) = handle.saved().pop() {
+                break s;
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        };
+        let aborted = saved.aborted.is_some() || saved.error.is_some();
+        let r = ScanReport { saved, stats };
+        on_scan(&r);
+        reports.push(r);
+        if aborted {
+            break;
+        }
+    }
+    let (result, saved) = handle.shutdown();
+    for s in saved {
+        let r = ScanReport {
+            saved: s,
+            stats: LoopStats::default(),
+        };
+        on_scan(&r);
+        reports.push(r);
+    }
+    match result {
+        Ok(_) => Ok(reports),
+        Err(panic) => Err(AcquireError::Runtime(format!(
+            "the servo thread failed: {panic}"
+        ))),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn seeds_and_file_names_are_stable() {
+        assert_eq!(scan_seed(1, "S2", 3), scan_seed(1, "S2", 3));
+        assert_ne!(scan_seed(1, "S2", 3), scan_seed(1, "S2", 4));
+        assert_ne!(scan_seed(1, "S2", 3), scan_seed(2, "S2", 3));
+        assert_eq!(
+            scan_file(Path::new("d"), "S2", 7),
+            PathBuf::from("d/S2/S2_007.csv")
+        );
+    }
+
+    #[test]
+    fn the_thesis_path_takes_about_thirteen_seconds() {
+        let d = path_duration_s(&LoadedProfile::thesis());
+        assert!((d - (0.1009 / 0.03 + 8.97 + 0.3)).abs() < 0.01, "{d}");
+    }
+}

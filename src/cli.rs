@@ -1,0 +1,151 @@
+//! The command line (clap derive): what each command takes, with an example.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "hapticlab",
+    version,
+    about = "Haptic texture classification with a Novint Falcon (or its simulation)",
+    long_about = "Haptic texture classification with a Novint Falcon (or its physical simulation): \
+                  stroke a texture along a waypoint path, record the probe's trace, and name the \
+                  texture from its Fourier spectrum with k-NN.\n\n\
+                  Without a command, hapticlab opens the lab console on the built-in thesis profile \
+                  and the simulated Falcon.",
+    after_help = "Examples:\n  hapticlab simulate --out recordings/my-sim\n  hapticlab evaluate recordings/thesis-sim\n  hapticlab check profiles/thesis.toml"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+}
+
+#[derive(Debug, Args, Clone)]
+pub struct ProfileArg {
+    /// Experiment profile (TOML); `thesis` names the built-in thesis profile.
+    #[arg(long, short = 'p', default_value = "thesis", value_name = "PROFILE")]
+    pub profile: PathBuf,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Open the lab console (live position, force, traces, spectrum, prediction).
+    #[command(
+        after_help = "Example:\n  hapticlab console --profile profiles/thesis.toml --dataset recordings/session1"
+    )]
+    Console {
+        #[command(flatten)]
+        profile: ProfileArg,
+        /// Folder where stored scans go, one subfolder per label.
+        #[arg(long, value_name = "DIR")]
+        dataset: Option<PathBuf>,
+    },
+    /// Simulate a dataset in virtual time: N scans of every texture in the profile.
+    #[command(
+        after_help = "Example:\n  hapticlab simulate --out recordings/my-sim --per-class 30 --seed 7"
+    )]
+    Simulate {
+        #[command(flatten)]
+        profile: ProfileArg,
+        /// Output folder; scans go to OUT/<label>/<label>_NNN.csv.
+        #[arg(long, value_name = "DIR")]
+        out: PathBuf,
+        /// Scans per texture.
+        #[arg(long, default_value_t = 30, value_name = "N")]
+        per_class: usize,
+        /// Dataset seed (default: the profile's simulator.seed).
+        #[arg(long, value_name = "S")]
+        seed: Option<u64>,
+        /// Worker threads (default: the number of cores).
+        #[arg(long, value_name = "N")]
+        threads: Option<usize>,
+        /// Print the result as JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Acquire live scans in real time on the profile's device; prints loop statistics per scan.
+    #[command(
+        after_help = "Example:\n  hapticlab scan --label S2 --count 3 --out recordings/session1"
+    )]
+    Scan {
+        #[command(flatten)]
+        profile: ProfileArg,
+        /// The texture's label; scans go to OUT/<label>/.
+        #[arg(long, value_name = "LABEL")]
+        label: String,
+        /// Number of scans.
+        #[arg(long, default_value_t = 1, value_name = "N")]
+        count: usize,
+        #[arg(long, default_value = "recordings", value_name = "DIR")]
+        out: PathBuf,
+        /// Simulator only: the texture under the probe (default: the label).
+        #[arg(long, value_name = "LABEL")]
+        texture: Option<String>,
+        /// Simulator only: the seed.
+        #[arg(long, value_name = "S")]
+        seed: Option<u64>,
+    },
+    /// Compute the feature vector (spectrum bins) of each recording.
+    #[command(
+        after_help = "Example:\n  hapticlab features recordings/thesis-sim --out features.csv"
+    )]
+    Features {
+        #[command(flatten)]
+        profile: ProfileArg,
+        /// Recordings or folders of recordings.
+        #[arg(required = true, value_name = "PATH")]
+        paths: Vec<PathBuf>,
+        /// Write `file,label,f1,…,fN` rows here instead of standard output.
+        #[arg(long, value_name = "FILE")]
+        out: Option<PathBuf>,
+    },
+    /// Train a k-NN model on recordings and save it.
+    #[command(
+        after_help = "Example:\n  hapticlab train recordings/thesis-sim --out thesis.model.json"
+    )]
+    Train {
+        #[command(flatten)]
+        profile: ProfileArg,
+        #[arg(required = true, value_name = "PATH")]
+        paths: Vec<PathBuf>,
+        /// Model file to write (JSON).
+        #[arg(long, value_name = "MODEL")]
+        out: PathBuf,
+    },
+    /// Classify recordings with a trained model.
+    #[command(
+        after_help = "Example:\n  hapticlab classify --model thesis.model.json recordings/thesis-sim/S3/S3_025.csv"
+    )]
+    Classify {
+        #[arg(long, value_name = "MODEL")]
+        model: PathBuf,
+        #[arg(required = true, value_name = "FILE")]
+        files: Vec<PathBuf>,
+        /// Print JSON for scripts.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Train and test on a split of the recordings; print the confusion matrix (Table 4.1).
+    #[command(
+        after_help = "Example:\n  hapticlab evaluate recordings/thesis-sim --json > report.json"
+    )]
+    Evaluate {
+        #[command(flatten)]
+        profile: ProfileArg,
+        #[arg(required = true, value_name = "PATH")]
+        paths: Vec<PathBuf>,
+        /// Shuffle each class with this seed before the split (default: file-name order).
+        #[arg(long, value_name = "S")]
+        shuffle_seed: Option<u64>,
+        /// Print JSON for scripts.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Check profiles: parse and validate every value.
+    #[command(after_help = "Example:\n  hapticlab check profiles/*.toml")]
+    Check {
+        #[arg(required = true, value_name = "PROFILE")]
+        profiles: Vec<PathBuf>,
+    },
+}

@@ -1,0 +1,519 @@
+//! The headless commands: each turns parsed arguments into engine calls and
+//! prints the result for people (or JSON for scripts). Errors come back as
+//! [`Failure`], which `main` maps to an exit code.
+
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+use crate::acquire::{self, SimulateOptions};
+use crate::analysis::FeatureExtractor;
+use crate::classify::{Model, TrainingExample};
+use crate::cli::{Command, ProfileArg};
+use crate::evaluate;
+use crate::profile::LoadedProfile;
+use crate::recording::{self, Recording};
+
+/// A command that failed: bad input (exit 2) or a runtime failure (exit 1).
+#[derive(Debug)]
+pub enum Failure {
+    BadInput(String),
+    Runtime(String),
+}
+
+impl Failure {
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            Failure::BadInput(_) => 2,
+            Failure::Runtime(_) => 1,
+        }
+    }
+    pub fn message(&self) -> &str {
+        match self {
+            Failure::BadInput(m) | Failure::Runtime(m) => m,
+        }
+    }
+}
+
+fn bad(m: impl std::fmt::Display) -> Failure {
+    Failure::BadInput(m.to_string())
+}
+
+fn runtime(m: impl std::fmt::Display) -> Failure {
+    Failure::Runtime(m.to_string())
+}
+
+pub fn load_profile(arg: &ProfileArg) -> Result<LoadedProfile, Failure> {
+    LoadedProfile::load(&arg.profile).map_err(bad)
+}
+
+/// A progress bar on a terminal; nothing when standard error is piped.
+fn progress_bar(total: u64, what: &str) -> ProgressBar {
+    if !std::io::stderr().is_terminal() {
+        return ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden());
+    }
+    let pb = ProgressBar::new(total);
+    pb.set_style(
+        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} ({elapsed}, ETA {eta})")
+            .expect("a valid template")
+            .progress_chars("=> "),
+    );
+    pb.set_message(what.to_string());
+    pb
+}
+
+pub fn run(cmd: Command) -> Result<(), Failure> {
+    match cmd {
+        Command::Console { .. } => Err(bad(
+            "the console is not built yet; see `hapticlab --help` for the headless commands",
+        )),
+        Command::Simulate {
+            profile,
+            out,
+            per_class,
+            seed,
+            threads,
+            json,
+        } => simulate(&profile, out, per_class, seed, threads, json),
+        Command::Scan {
+            profile,
+            label,
+            count,
+            out,
+            texture,
+            seed,
+        } => scan(&profile, &label, count, &out, texture.as_deref(), seed),
+        Command::Features {
+            profile,
+            paths,
+            out,
+        } => features(&profile, &paths, out.as_deref()),
+        Command::Train {
+            profile,
+            paths,
+            out,
+        } => train(&profile, &paths, &out),
+        Command::Classify { model, files, json } => classify(&model, &files, json),
+        Command::Evaluate {
+            profile,
+            paths,
+            shuffle_seed,
+            json,
+        } => evaluate_cmd(&profile, &paths, shuffle_seed, json),
+        Command::Check { profiles } => check(&profiles),
+    }
+}
+
+fn simulate(
+    profile: &ProfileArg,
+    out: PathBuf,
+    per_class: usize,
+    seed: Option<u64>,
+    threads: Option<usize>,
+    json: bool,
+) -> Result<(), Failure> {
+    let lp = load_profile(profile)?;
+    let total = per_class * lp.profile.textures.len();
+    let pb = progress_bar(total as u64, "simulating");
+    let opts = SimulateOptions {
+        out: out.clone(),
+        per_class,
+        seed: seed.unwrap_or(lp.profile.simulator.seed),
+        threads: threads
+            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+    };
+    let started = std::time::Instant::now();
+    let saved = acquire::simulate_dataset(&lp, &opts, &|done, _| pb.set_position(done as u64))
+        .map_err(|e| if e.is_bad_input() { bad(e) } else { runtime(e) })?;
+    pb.finish_and_clear();
+    let secs = started.elapsed().as_secs_f64();
+    let samples: usize = saved.iter().map(|s| s.rows).sum();
+    let sim_s = samples as f64 / lp.profile.device.rate_hz;
+    if json {
+        let files: Vec<String> = saved.iter().map(|s| s.path.display().to_string()).collect();
+        let v = serde_json::json!({
+            "profile": lp.profile.name, "seed": opts.seed, "out": out.display().to_string(),
+            "scans": saved.len(), "samples": samples, "wall_s": secs, "files": files,
+        });
+        println!("{v}");
+    } else {
+        println!(
+            "simulated {} scans ({} per texture, {} samples) into {} in {:.2} s (seed {})",
+            saved.len(),
+            per_class,
+            samples,
+            out.display(),
+            secs,
+            opts.seed
+        );
+        println!(
+            "recorded scan time {:.0} s: {:.0}x real time",
+            sim_s,
+            sim_s / secs.max(1e-9)
+        );
+    }
+    Ok(())
+}
+
+fn scan(
+    profile: &ProfileArg,
+    label: &str,
+    count: usize,
+    out: &Path,
+    texture: Option<&str>,
+    seed: Option<u64>,
+) -> Result<(), Failure> {
+    let lp = load_profile(profile)?;
+    if count == 0 {
+        return Err(bad("--count must be at least 1"));
+    }
+    let stop = Arc::new(AtomicBool::new(false));
+    for sig in [
+        signal_hook::consts::SIGINT,
+        signal_hook::consts::SIGTERM,
+        signal_hook::consts::SIGHUP,
+    ] {
+        signal_hook::flag::register(sig, stop.clone()).map_err(runtime)?;
+    }
+    eprintln!(
+        "scanning {label} on the {} device: {count} scan(s) of about {:.0} s each; Ctrl-C stops safely",
+        lp.profile.device.kind.name(),
+        acquire::path_duration_s(&lp)
+    );
+    let mut n = 0;
+    let mut failed = None;
+    let req = acquire::LiveScans {
+        label: label.to_string(),
+        texture: texture.map(str::to_string),
+        count,
+        out: out.to_path_buf(),
+        seed: seed.unwrap_or(lp.profile.simulator.seed),
+    };
+    let reports = acquire::scan_live(&lp, &req, stop, &mut |r| {
+        n += 1;
+        let s = &r.saved;
+        let state = match (&s.aborted, &s.error) {
+            (_, Some(e)) => format!("NOT SAVED: {e}"),
+            (Some(reason), None) => format!("aborted ({reason}), samples kept, incomplete"),
+            (None, None) => "complete".into(),
+        };
+        println!(
+            "scan {n}: {} — {} samples, {state}",
+            s.path.display(),
+            s.rows
+        );
+        if r.stats.ticks > 0 {
+            println!("  loop: {}", r.stats.summary());
+        }
+        if s.aborted.is_some() || s.error.is_some() {
+            failed = Some(state);
+        }
+    })
+    .map_err(|e| if e.is_bad_input() { bad(e) } else { runtime(e) })?;
+    if let Some(state) = failed {
+        return Err(runtime(format!("the scan did not complete: {state}")));
+    }
+    if reports.len() < count {
+        return Err(runtime(format!(
+            "only {} of {count} scans ran",
+            reports.len()
+        )));
+    }
+    Ok(())
+}
+
+/// Recordings under `paths`, read and turned into feature vectors. Incomplete
+/// recordings are skipped with a warning; a malformed one is an error.
+pub fn load_examples(
+    paths: &[PathBuf],
+    extractor: &mut FeatureExtractor,
+) -> Result<Vec<TrainingExample>, Failure> {
+    let files = recording::collect_files(paths).map_err(bad)?;
+    if files.is_empty() {
+        return Err(bad(format!(
+            "no recordings (*.csv, *.csv.gz) found in {}",
+            paths
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )));
+    }
+    let pb = progress_bar(files.len() as u64, "reading");
+    let mut out = Vec::with_capacity(files.len());
+    for f in &files {
+        pb.inc(1);
+        let rec = recording::read(f).map_err(bad)?;
+        if !rec.is_complete() {
+            pb.suspend(|| {
+                eprintln!(
+                    "warning: {}: incomplete scan (no `# end samples` trailer), skipped",
+                    f.display()
+                )
+            });
+            continue;
+        }
+        out.push(example_of(&rec, f, extractor)?);
+    }
+    pb.finish_and_clear();
+    Ok(out)
+}
+
+/// The label of a recording: its `label` metadata, else its folder's name.
+pub fn label_of(rec: &Recording, file: &Path) -> Result<String, Failure> {
+    if let Some(l) = rec.label() {
+        return Ok(l.to_string());
+    }
+    file.parent()
+        .and_then(|p| p.file_name())
+        .map(|n| n.to_string_lossy().into_owned())
+        .ok_or_else(|| {
+            bad(format!(
+                "{}: no `label` in the metadata and no folder to name it",
+                file.display()
+            ))
+        })
+}
+
+pub fn example_of(
+    rec: &Recording,
+    file: &Path,
+    ex: &mut FeatureExtractor,
+) -> Result<TrainingExample, Failure> {
+    let features = features_of(rec, file, ex)?;
+    Ok(TrainingExample {
+        file: file.display().to_string(),
+        label: label_of(rec, file)?,
+        features,
+    })
+}
+
+/// The feature vector of one recording under the extractor's settings.
+pub fn features_of(
+    rec: &Recording,
+    file: &Path,
+    ex: &mut FeatureExtractor,
+) -> Result<Vec<f64>, Failure> {
+    let s = ex.settings();
+    let (axis_name, channel_name) = (s.axis.clone(), s.channel.clone());
+    let missing = |c: &str| {
+        bad(format!(
+            "{}: no column `{c}` (the recording has {})",
+            file.display(),
+            rec.columns.join(", ")
+        ))
+    };
+    let axis = rec.column(&axis_name).ok_or_else(|| missing(&axis_name))?;
+    let signal = rec
+        .column(&channel_name)
+        .ok_or_else(|| missing(&channel_name))?;
+    ex.features(axis, signal)
+        .map(|f| f.to_vec())
+        .map_err(|e| bad(format!("{}: {e}", file.display())))
+}
+
+fn features(profile: &ProfileArg, paths: &[PathBuf], out: Option<&Path>) -> Result<(), Failure> {
+    let lp = load_profile(profile)?;
+    let mut ex = FeatureExtractor::new(&lp.profile.analysis);
+    let examples = load_examples(paths, &mut ex)?;
+    let n = lp.profile.analysis.feature_count();
+    let mut text = String::from("file,label");
+    for i in 1..=n {
+        text.push_str(&format!(",f{i}"));
+    }
+    text.push('\n');
+    for e in &examples {
+        text.push_str(&csv_field(&e.file));
+        text.push(',');
+        text.push_str(&csv_field(&e.label));
+        for v in &e.features {
+            text.push_str(&format!(",{v:.9e}"));
+        }
+        text.push('\n');
+    }
+    match out {
+        Some(p) => {
+            write_atomically(p, text.as_bytes())?;
+            eprintln!(
+                "wrote {} feature rows ({} features each) to {}",
+                examples.len(),
+                n,
+                p.display()
+            );
+        }
+        None => std::io::stdout()
+            .write_all(text.as_bytes())
+            .map_err(runtime)?,
+    }
+    Ok(())
+}
+
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}
+
+/// Write to a temporary file beside `path`, then rename: never a half-written file.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), Failure> {
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir).map_err(|e| runtime(format!("{}: {e}", dir.display())))?;
+    let tmp = dir.join(format!(
+        ".{}.tmp",
+        path.file_name()
+            .map_or("out".into(), |n| n.to_string_lossy().into_owned())
+    ));
+    let write = || -> std::io::Result<()> {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    };
+    write().map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        runtime(format!("{}: cannot write: {e}", path.display()))
+    })
+}
+
+fn train(profile: &ProfileArg, paths: &[PathBuf], out: &Path) -> Result<(), Failure> {
+    let lp = load_profile(profile)?;
+    let mut ex = FeatureExtractor::new(&lp.profile.analysis);
+    let examples = load_examples(paths, &mut ex)?;
+    let n = examples.len();
+    let model = Model::train(
+        &lp.profile.name,
+        &lp.profile.analysis,
+        &lp.profile.classifier,
+        examples,
+    )
+    .map_err(bad)?;
+    model.save(out).map_err(runtime)?;
+    println!(
+        "trained k-NN (k = {}) on {} recordings of {} classes ({}); model saved to {}",
+        lp.profile.classifier.k,
+        n,
+        model.labels.len(),
+        model.labels.join(", "),
+        out.display()
+    );
+    Ok(())
+}
+
+fn classify(model_path: &Path, files: &[PathBuf], json: bool) -> Result<(), Failure> {
+    let model = Model::load(model_path).map_err(bad)?;
+    let mut ex = FeatureExtractor::new(&model.analysis);
+    let files = recording::collect_files(files).map_err(bad)?;
+    let mut rows = Vec::new();
+    for f in &files {
+        let rec = recording::read(f).map_err(bad)?;
+        if !rec.is_complete() {
+            eprintln!(
+                "warning: {}: incomplete scan, classified anyway",
+                f.display()
+            );
+        }
+        let feats = features_of(&rec, f, &mut ex)?;
+        let p = model.classify(&feats).map_err(bad)?;
+        if !json {
+            let votes: Vec<String> = p.votes.iter().map(|(l, v)| format!("{l}:{v}")).collect();
+            let truth = rec.label().map_or(String::new(), |l| {
+                format!(
+                    " (recorded as {l}{})",
+                    if l == p.label { ", right" } else { ", WRONG" }
+                )
+            });
+            println!(
+                "{}: {}{} — votes {}, nearest {:.3e}",
+                f.display(),
+                p.label,
+                truth,
+                votes.join(" "),
+                p.neighbours.first().map_or(f64::NAN, |n| n.distance)
+            );
+        }
+        rows.push(serde_json::json!({
+            "file": f.display().to_string(),
+            "label": rec.label(),
+            "predicted": p.label,
+            "votes": p.votes,
+            "neighbours": p.neighbours,
+        }));
+    }
+    if json {
+        println!("{}", serde_json::Value::Array(rows));
+    }
+    Ok(())
+}
+
+fn evaluate_cmd(
+    profile: &ProfileArg,
+    paths: &[PathBuf],
+    shuffle_seed: Option<u64>,
+    json: bool,
+) -> Result<(), Failure> {
+    let lp = load_profile(profile)?;
+    let mut ex = FeatureExtractor::new(&lp.profile.analysis);
+    let examples = load_examples(paths, &mut ex)?;
+    let mut eval = lp.profile.evaluation.clone();
+    if shuffle_seed.is_some() {
+        eval.shuffle_seed = shuffle_seed;
+    }
+    let split = evaluate::split(examples, &eval).map_err(bad)?;
+    let model = Model::train(
+        &lp.profile.name,
+        &lp.profile.analysis,
+        &lp.profile.classifier,
+        split.train,
+    )
+    .map_err(bad)?;
+    let report = evaluate::evaluate(&model, &split.test).map_err(bad)?;
+    if json {
+        println!("{}", serde_json::to_string(&report).map_err(runtime)?);
+    } else {
+        println!(
+            "profile {}: k-NN k = {}, {} training and {} test recordings per class{}",
+            lp.profile.name,
+            lp.profile.classifier.k,
+            eval.train_per_class,
+            eval.test_per_class,
+            eval.shuffle_seed
+                .map_or(" (file-name order)".into(), |s| format!(
+                    " (shuffled, seed {s})"
+                ))
+        );
+        print!("{}", report.table());
+    }
+    Ok(())
+}
+
+fn check(profiles: &[PathBuf]) -> Result<(), Failure> {
+    let mut errors = Vec::new();
+    for p in profiles {
+        match LoadedProfile::load(p) {
+            Ok(lp) => println!(
+                "{}: ok — profile {:?}, device {}, {} waypoints, {} textures, {} features, k = {}",
+                p.display(),
+                lp.profile.name,
+                lp.profile.device.kind.name(),
+                lp.profile.path.waypoints_m.len(),
+                lp.profile.textures.len(),
+                lp.profile.analysis.feature_count(),
+                lp.profile.classifier.k
+            ),
+            Err(e) => errors.push(e.to_string()),
+        }
+    }
+    if errors.is_empty() {
+        Ok(())
+    } else {
+        Err(bad(errors.join("\n")))
+    }
+}

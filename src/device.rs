@@ -1,0 +1,57 @@
+//! The haptic device as the servo loop sees it: read a position, command a
+//! force. The simulator, the emulated Falcon and the real Falcon implement
+//! [`HapticDevice`]; the servo loop is generic over it, so tests never need
+//! hardware. A device never decides forces: it applies what it is told.
+
+pub mod sim;
+pub mod surface;
+
+/// One reading of the end effector.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Reading {
+    /// Position of the probe's centre in the profile frame, metres.
+    pub pos_m: [f64; 3],
+    /// Grip buttons, one bit each.
+    pub buttons: u8,
+    /// Whether the device is homed (forces are only applied once it is).
+    pub homed: bool,
+}
+
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DeviceError {
+    #[error("the device is gone: {0}")]
+    Disconnected(String),
+    #[error("device I/O failed: {0}")]
+    Io(String),
+    #[error("the device returned an invalid reading: {0}")]
+    BadReading(String),
+}
+
+pub trait HapticDevice: Send {
+    /// The backend's name, as recorded in `device = "…"`.
+    fn kind(&self) -> &'static str;
+    /// Read the end effector at time `t_s` (seconds since the loop started).
+    /// A simulated device advances its physics to `t_s` under the force
+    /// last commanded.
+    fn read(&mut self, t_s: f64) -> Result<Reading, DeviceError>;
+    /// Command a force (newtons, profile frame). The caller guarantees it is
+    /// finite and within limits; it holds until the next command.
+    fn command(&mut self, force_n: [f64; 3]) -> Result<(), DeviceError>;
+    /// Zero the forces, best effort; must not panic. Called on every exit path.
+    fn make_safe(&mut self);
+}
+
+impl<D: HapticDevice + ?Sized> HapticDevice for Box<D> {
+    fn kind(&self) -> &'static str {
+        (**self).kind()
+    }
+    fn read(&mut self, t_s: f64) -> Result<Reading, DeviceError> {
+        (**self).read(t_s)
+    }
+    fn command(&mut self, force_n: [f64; 3]) -> Result<(), DeviceError> {
+        (**self).command(force_n)
+    }
+    fn make_safe(&mut self) {
+        (**self).make_safe()
+    }
+}

@@ -1,0 +1,62 @@
+//! The profile loader over `profiles/invalid/*.toml`: each file says what
+//! the message must contain (`# expect:`) and what the line it points at
+//! must contain (`# at:`).
+
+use std::path::Path;
+
+use hapticlab::profile::LoadedProfile;
+
+#[test]
+fn every_invalid_profile_is_refused_with_file_line_key_and_reason() {
+    let mut checked = 0;
+    let mut entries: Vec<_> = std::fs::read_dir("profiles/invalid")
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    entries.sort();
+    for path in entries {
+        let text = std::fs::read_to_string(&path).unwrap();
+        let expect = text
+            .lines()
+            .find_map(|l| l.strip_prefix("# expect: "))
+            .unwrap_or_else(|| panic!("{} has no `# expect:` line", path.display()));
+        let at = text
+            .lines()
+            .find_map(|l| l.strip_prefix("# at: "))
+            .unwrap_or("");
+        let err =
+            LoadedProfile::load(&path).expect_err(&format!("{} must be refused", path.display()));
+        let msg = err.to_string();
+        assert!(msg.starts_with(&path.display().to_string()), "{msg}");
+        assert!(
+            msg.contains(expect),
+            "{}: message {msg:?} lacks {expect:?}",
+            path.display()
+        );
+        let line = err.line.unwrap_or_else(|| panic!("{msg}: no line"));
+        assert!(err.column.is_some(), "{msg}: no column");
+        let pointed = text.lines().nth(line - 1).unwrap_or("");
+        assert!(
+            pointed.contains(at),
+            "{msg}: points at line {line} {pointed:?}, expected one containing {at:?}"
+        );
+        checked += 1;
+    }
+    assert!(checked >= 12, "only {checked} invalid profiles");
+}
+
+#[test]
+fn the_shipped_profiles_are_valid() {
+    for entry in std::fs::read_dir("profiles").unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "toml") {
+            LoadedProfile::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        }
+    }
+    // The built-in profile is the file on disk.
+    let builtin = LoadedProfile::thesis();
+    let disk = LoadedProfile::load(Path::new("profiles/thesis.toml")).unwrap();
+    assert_eq!(builtin.profile, disk.profile);
+    assert_eq!(builtin.sha256, disk.sha256);
+}
