@@ -7,7 +7,7 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use crate::device::HapticDevice;
 use crate::device::sim::{SimDevice, SimError};
@@ -123,6 +123,8 @@ pub struct SimulateOptions {
     pub per_class: usize,
     pub seed: u64,
     pub threads: usize,
+    /// Compress each finished recording to `.csv.gz`.
+    pub gzip: bool,
 }
 
 /// One simulated scan in virtual time: the whole path from rest at the first
@@ -253,7 +255,11 @@ pub fn simulate_dataset(
                         let Some((label, i)) = jobs.get(j) else { break };
                         let path = scan_file(&opts.out, label, *i);
                         let seed = scan_seed(opts.seed, label, *i);
-                        let (saved, _) = simulate_one(lp, label, seed, &path)?;
+                        let (mut saved, _) = simulate_one(lp, label, seed, &path)?;
+                        if opts.gzip {
+                            saved.path = crate::recording::compress(&saved.path)
+                                .map_err(|e| AcquireError::Runtime(e.to_string()))?;
+                        }
                         mine.push((j, saved));
                         progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
                     }
@@ -360,15 +366,22 @@ pub fn scan_live(
             path: path.clone(),
             meta,
         });
-        let started = std::time::Instant::now();
-        let stats;
+        let started = Instant::now();
+        let (stats, recorded, reason);
         loop {
             if stop.load(Ordering::Relaxed) {
                 servo_stop.store(true, Ordering::Relaxed);
             }
+            // Nobody displays telemetry here: drain it so none counts as dropped.
+            let _ = handle.telemetry.try_iter().count();
             match handle.events.recv_timeout(Duration::from_millis(50)) {
-                Ok(ServoEvent::ScanEnded { stats: s, .. }) => {
-                    stats = s;
+                Ok(ServoEvent::ScanEnded {
+                    stats: s,
+                    samples,
+                    aborted,
+                    ..
+                }) => {
+                    (stats, recorded, reason) = (s, samples > 0, aborted);
                     break;
                 }
                 Ok(_) => {}
@@ -383,12 +396,30 @@ pub fn scan_live(
                 Err(crossbeam_channel::RecvTimeoutError::Disconnected) => break 'scans,
             }
         }
-        // The recorder finishes the file just after the motion ends.
-        let saved = loop {
-            if let Some(s) = handle.saved().pop() {
-                break s;
+        // The recorder finishes the file just after the motion ends; a scan
+        // stopped before its leg began has no file.
+        let saved = if recorded {
+            let waited = Instant::now();
+            loop {
+                if let Some(s) = handle.saved().pop() {
+                    break s;
+                }
+                if waited.elapsed() > Duration::from_secs(60) {
+                    return Err(AcquireError::Runtime(format!(
+                        "{}: the recorder did not finish the file within a minute",
+                        path.display()
+                    )));
+                }
+                std::thread::sleep(Duration::from_millis(5));
             }
-            std::thread::sleep(Duration::from_millis(5));
+        } else {
+            SavedScan {
+                path: path.clone(),
+                rows: 0,
+                complete: false,
+                aborted: reason,
+                error: None,
+            }
         };
         let aborted = saved.aborted.is_some() || saved.error.is_some();
         let r = ScanReport { saved, stats };

@@ -60,6 +60,9 @@ pub enum Command {
         /// Worker threads (default: the number of cores).
         #[arg(long, value_name = "N")]
         threads: Option<usize>,
+        /// Compress each recording (Zopfli gzip, about a second per recording) to OUT/<label>/<label>_NNN.csv.gz.
+        #[arg(long)]
+        gzip: bool,
         /// Print the result as JSON.
         #[arg(long)]
         json: bool,

@@ -76,8 +76,20 @@ pub fn run(cmd: Command) -> Result<(), Failure> {
             per_class,
             seed,
             threads,
+            gzip,
             json,
-        } => simulate(&profile, out, per_class, seed, threads, json),
+        } => simulate(
+            &profile,
+            SimulateOptions {
+                out,
+                per_class,
+                seed: seed.unwrap_or(0),
+                threads: threads.unwrap_or(0),
+                gzip,
+            },
+            seed.is_some(),
+            json,
+        ),
         Command::Scan {
             profile,
             label,
@@ -107,24 +119,23 @@ pub fn run(cmd: Command) -> Result<(), Failure> {
     }
 }
 
+/// `opts.seed` counts only when `seed_given`; `opts.threads` 0 means one per core.
 fn simulate(
     profile: &ProfileArg,
-    out: PathBuf,
-    per_class: usize,
-    seed: Option<u64>,
-    threads: Option<usize>,
+    mut opts: SimulateOptions,
+    seed_given: bool,
     json: bool,
 ) -> Result<(), Failure> {
     let lp = load_profile(profile)?;
+    let (out, per_class) = (opts.out.clone(), opts.per_class);
     let total = per_class * lp.profile.textures.len();
     let pb = progress_bar(total as u64, "simulating");
-    let opts = SimulateOptions {
-        out: out.clone(),
-        per_class,
-        seed: seed.unwrap_or(lp.profile.simulator.seed),
-        threads: threads
-            .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
-    };
+    if !seed_given {
+        opts.seed = lp.profile.simulator.seed;
+    }
+    if opts.threads == 0 {
+        opts.threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    }
     let started = std::time::Instant::now();
     let saved = acquire::simulate_dataset(&lp, &opts, &|done, _| pb.set_position(done as u64))
         .map_err(|e| if e.is_bad_input() { bad(e) } else { runtime(e) })?;
@@ -170,6 +181,23 @@ fn scan(
     if count == 0 {
         return Err(bad("--count must be at least 1"));
     }
+    crate::profile::check_label(label).map_err(|e| bad(format!("--label: {e}")))?;
+    if lp.profile.device.kind == crate::profile::DeviceKind::Sim {
+        let tex = texture.unwrap_or(label);
+        if lp.profile.texture(tex).is_none() {
+            let known: Vec<&str> = lp
+                .profile
+                .textures
+                .iter()
+                .map(|t| t.label.as_str())
+                .collect();
+            return Err(bad(format!(
+                "the simulator has no texture {tex:?} to put under the probe; {} has {} (use --texture to pick one)",
+                lp.origin,
+                known.join(", ")
+            )));
+        }
+    }
     let stop = Arc::new(AtomicBool::new(false));
     for sig in [
         signal_hook::consts::SIGINT,
@@ -197,6 +225,9 @@ fn scan(
         let s = &r.saved;
         let state = match (&s.aborted, &s.error) {
             (_, Some(e)) => format!("NOT SAVED: {e}"),
+            (Some(reason), None) if s.rows == 0 => {
+                format!("aborted before the scan leg began ({reason}); nothing recorded")
+            }
             (Some(reason), None) => format!("aborted ({reason}), samples kept, incomplete"),
             (None, None) => "complete".into(),
         };
@@ -511,9 +542,14 @@ fn check(profiles: &[PathBuf]) -> Result<(), Failure> {
             Err(e) => errors.push(e.to_string()),
         }
     }
-    if errors.is_empty() {
-        Ok(())
-    } else {
-        Err(bad(errors.join("\n")))
+    // One line per invalid profile, each a whole message; the last is the failure.
+    match errors.split_last() {
+        None => Ok(()),
+        Some((last, rest)) => {
+            for e in rest {
+                eprintln!("hapticlab: error: {e}");
+            }
+            Err(bad(last))
+        }
     }
 }

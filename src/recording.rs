@@ -36,7 +36,7 @@ const QUOTE_CHARS: usize = 24;
 const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
 
 mod writer;
-pub use writer::{RecordingWriter, decimals_for, sync_folder};
+pub use writer::{RecordingWriter, compress, decimals_for, sync_folder};
 
 #[derive(Debug, thiserror::Error)]
 pub enum RecordingError {

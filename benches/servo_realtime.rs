@@ -1,0 +1,73 @@
+//! The servo loop in real time on the simulator: achieved rate, period error
+//! percentiles, missed deadlines, while the probe runs the thesis path and
+//! its scan is recorded. Not a statistical micro-benchmark: one long run,
+//! reported. `HAPTICLAB_SOAK_S` sets the duration (default 60 s).
+//!
+//! cargo bench --bench servo_realtime
+
+use std::time::{Duration, Instant};
+
+use hapticlab::device::sim::SimDevice;
+use hapticlab::profile::LoadedProfile;
+use hapticlab::servo::{Command, ServoEvent, spawn};
+
+fn main() {
+    // `cargo bench` passes `--bench`; a filter that names nothing here skips the run.
+    if std::env::args()
+        .skip(1)
+        .any(|a| !a.starts_with("--") && !"servo_realtime".contains(&a))
+    {
+        return;
+    }
+    let secs: f64 = std::env::var("HAPTICLAB_SOAK_S")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(60.0);
+    let lp = LoadedProfile::thesis();
+    let profile = lp.profile.clone();
+    let base = lp.base_dir.clone();
+    let handle = spawn(&lp.profile, move || {
+        SimDevice::new(&profile, &base, Some("S2"), 1).expect("the thesis texture S2")
+    })
+    .expect("spawn the servo thread");
+    let dir = tempfile::tempdir().expect("a temp dir");
+    let started = Instant::now();
+    let mut scans = 0;
+    let mut samples = 0;
+    let mut next_scan = true;
+    while started.elapsed() < Duration::from_secs_f64(secs) {
+        if next_scan {
+            scans += 1;
+            handle.send(Command::StartScan {
+                path: dir.path().join(format!("scan_{scans:03}.csv")),
+                meta: vec![("label".into(), toml::Value::String("S2".into()))],
+            });
+            next_scan = false;
+        }
+        // A console-like consumer: drain telemetry thirty times a second.
+        std::thread::sleep(Duration::from_millis(33));
+        let _ = handle.telemetry.try_iter().count();
+        for e in handle.events.try_iter() {
+            if let ServoEvent::ScanEnded { samples: n, .. } = e {
+                samples += n;
+                next_scan = true;
+            }
+        }
+    }
+    let (result, saved) = handle.shutdown();
+    let (_, stats) = result.expect("the servo thread ran");
+    let complete = saved.iter().filter(|s| s.complete).count();
+    println!("servo_realtime: {secs:.0} s on the simulator, thesis path, scans recorded");
+    println!("  {}", stats.summary());
+    println!(
+        "  mean rate error {:.3} %; {} scans started, {} complete, {} samples written",
+        (stats.rate_hz / 1000.0 - 1.0).abs() * 100.0,
+        scans,
+        complete,
+        samples
+    );
+    println!(
+        "  recorder blocks allocated because the writer lagged: {}",
+        stats.recorder_blocks_grown
+    );
+}
