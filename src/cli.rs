@@ -121,6 +121,9 @@ pub enum Command {
         after_help = "Example:\n  hapticlab classify --model thesis.model.json recordings/thesis-sim/S3/S3_025.csv"
     )]
     Classify {
+        /// The profile whose analysis settings the model must have been trained under.
+        #[command(flatten)]
+        profile: ProfileArg,
         #[arg(long, value_name = "MODEL")]
         model: PathBuf,
         #[arg(required = true, value_name = "FILE")]

@@ -108,7 +108,12 @@ pub fn run(cmd: Command) -> Result<(), Failure> {
             paths,
             out,
         } => train(&profile, &paths, &out),
-        Command::Classify { model, files, json } => classify(&model, &files, json),
+        Command::Classify {
+            profile,
+            model,
+            files,
+            json,
+        } => classify(&profile, &model, &files, json),
         Command::Evaluate {
             profile,
             paths,
@@ -438,8 +443,19 @@ fn train(profile: &ProfileArg, paths: &[PathBuf], out: &Path) -> Result<(), Fail
     Ok(())
 }
 
-fn classify(model_path: &Path, files: &[PathBuf], json: bool) -> Result<(), Failure> {
+fn classify(
+    profile: &ProfileArg,
+    model_path: &Path,
+    files: &[PathBuf],
+    json: bool,
+) -> Result<(), Failure> {
+    let lp = load_profile(profile)?;
     let model = Model::load(model_path).map_err(bad)?;
+    // The model's stored features were made under its analysis settings;
+    // a model whose settings differ from the profile's is refused.
+    model
+        .check_settings(&lp.profile.analysis)
+        .map_err(|e| bad(format!("{}: {e}", model_path.display())))?;
     let mut ex = FeatureExtractor::new(&model.analysis);
     let files = recording::collect_files(files).map_err(bad)?;
     let mut rows = Vec::new();
