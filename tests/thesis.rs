@@ -32,6 +32,7 @@ fn dominant_bins_and_accuracy_match_the_thesis() {
         per_class: PER_CLASS,
         seed: p.simulator.seed,
         threads: 2,
+        gzip: false,
     };
     let saved = simulate_dataset(&lp, &opts, &|_, _| {}).unwrap();
     assert_eq!(saved.len(), 4 * PER_CLASS);
