@@ -357,9 +357,14 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
         let late = now - deadline;
         let missed = late > self.missed_fraction * self.period;
         if late > self.period {
-            // Skip the deadlines already passed rather than burst to catch up.
+            // Skip the deadlines already passed rather than burst to catch up;
+            // each skipped one counts as missed.
             let skipped = (late / self.period).floor() as u64;
             self.deadline_index += skipped;
+            self.stats.missed += skipped;
+            if self.sink.is_active() {
+                self.scan_stats.missed += skipped;
+            }
         }
 
         let reading = match self.device.read(now) {

@@ -15,6 +15,7 @@ pub struct LoopStats {
     pub period_error_p50_us: f64,
     pub period_error_p99_us: f64,
     pub period_error_max_us: f64,
+    /// Ticks that started late, plus deadlines skipped after a long stall.
     pub missed_deadlines: u64,
     pub longest_missed_streak: u32,
     pub dropped_telemetry: u64,
