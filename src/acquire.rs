@@ -30,10 +30,8 @@ pub enum AcquireError {
 impl AcquireError {
     /// Bad input (exit code 2) rather than a runtime failure (1).
     pub fn is_bad_input(&self) -> bool {
-        matches!(
-            self,
-            AcquireError::BadInput(_) | AcquireError::Sim(SimError::UnknownTexture { .. })
-        ) || matches!(self, AcquireError::Sim(SimError::Surface(_)))
+        // A texture the profile does not have, or a surface CSV that cannot be used.
+        matches!(self, AcquireError::BadInput(_) | AcquireError::Sim(_))
     }
 }
 

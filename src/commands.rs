@@ -38,6 +38,12 @@ impl Failure {
     }
 }
 
+impl From<acquire::AcquireError> for Failure {
+    fn from(e: acquire::AcquireError) -> Failure {
+        if e.is_bad_input() { bad(e) } else { runtime(e) }
+    }
+}
+
 fn bad(m: impl std::fmt::Display) -> Failure {
     Failure::BadInput(m.to_string())
 }
@@ -143,7 +149,7 @@ fn simulate(
     }
     let started = std::time::Instant::now();
     let saved = acquire::simulate_dataset(&lp, &opts, &|done, _| pb.set_position(done as u64))
-        .map_err(|e| if e.is_bad_input() { bad(e) } else { runtime(e) })?;
+        .map_err(Failure::from)?;
     pb.finish_and_clear();
     let secs = started.elapsed().as_secs_f64();
     let samples: usize = saved.iter().map(|s| s.rows).sum();
@@ -248,7 +254,7 @@ fn scan(
             failed = Some(state);
         }
     })
-    .map_err(|e| if e.is_bad_input() { bad(e) } else { runtime(e) })?;
+    .map_err(Failure::from)?;
     if let Some(state) = failed {
         return Err(runtime(format!("the scan did not complete: {state}")));
     }

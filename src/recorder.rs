@@ -368,7 +368,13 @@ mod tests {
         let saved = recorder.join();
         assert_eq!(saved[0].rows, 1234);
         assert!(!saved[0].complete);
-        assert!(saved[0].aborted.as_deref().unwrap().contains("servo loop stopped"));
+        assert!(
+            saved[0]
+                .aborted
+                .as_deref()
+                .unwrap()
+                .contains("servo loop stopped")
+        );
         let rec = crate::recording::read(&path).unwrap();
         assert!(!rec.is_complete());
         assert_eq!(rec.len(), 1234);
