@@ -14,9 +14,7 @@ fn frame(c: &mut Criterion) {
         let mut terminal = Terminal::new(TestBackend::new(w, h)).unwrap();
         c.bench_function(&format!("full frame {w}x{h}"), |b| {
             b.iter(|| {
-                terminal
-                    .draw(|f| f.render_widget(&app, f.area()))
-                    .unwrap();
+                terminal.draw(|f| f.render_widget(&app, f.area())).unwrap();
             })
         });
     }

@@ -64,6 +64,15 @@ impl Drop for TerminalGuard {
     }
 }
 
+/// Raw mode and the alternate screen (and ratatui's panic hook, which
+/// restores the terminal before the panic message is printed).
+fn open_terminal() -> Result<ratatui::DefaultTerminal, Failure> {
+    ratatui::try_init().map_err(|e| {
+        ratatui::restore();
+        runtime(format!("cannot open the terminal: {e}"))
+    })
+}
+
 /// `hapticlab` / `hapticlab console`: the live console.
 pub fn run(lp: LoadedProfile, dataset: Option<PathBuf>) -> Result<(), Failure> {
     let keys = KeyMap::from_settings(&lp.profile.console).map_err(Failure::BadInput)?;
@@ -86,8 +95,7 @@ pub fn run(lp: LoadedProfile, dataset: Option<PathBuf>) -> Result<(), Failure> {
         app.model = Some(m);
     }
     let jobs = Jobs::default();
-    let mut terminal =
-        ratatui::try_init().map_err(|e| runtime(format!("cannot open the terminal: {e}")))?;
+    let mut terminal = open_terminal()?;
     let guard = TerminalGuard;
     let result = run_loop(&mut terminal, &mut app, Some(&mut lab), &jobs, &signals);
     drop(guard);
@@ -151,8 +159,7 @@ pub fn replay(lp: LoadedProfile, path: &Path, dataset: Option<PathBuf>) -> Resul
     }
     let jobs = Jobs::default();
     open_replay(&mut app, &jobs, path.to_path_buf(), files, train_dir);
-    let mut terminal =
-        ratatui::try_init().map_err(|e| runtime(format!("cannot open the terminal: {e}")))?;
+    let mut terminal = open_terminal()?;
     let guard = TerminalGuard;
     let result = run_loop(&mut terminal, &mut app, None, &jobs, &signals);
     drop(guard);

@@ -8,7 +8,7 @@ use crate::servo::{ServoEvent, Telemetry};
 
 use super::super::dataset::{JobResult, ModelInfo};
 use super::super::keymap::Key;
-use super::super::scan::ScanView;
+use super::super::scan::{ScanView, predict};
 use super::{Action, App};
 
 impl App {
@@ -164,6 +164,13 @@ impl App {
                     && self.model.is_none()
                 {
                     self.dataset.model = Some(ModelInfo::of(&m, None));
+                    // The recording already open was analysed before there was a model.
+                    if let Some(s) = self.replay.as_mut().and_then(|r| r.scan.as_mut())
+                        && s.prediction.is_none()
+                        && let Ok(f) = &s.features
+                    {
+                        s.prediction = Some(predict(&m, f, &s.path));
+                    }
                     self.model = Some(*m);
                 }
                 if let Some(r) = self.replay.as_mut() {

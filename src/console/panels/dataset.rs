@@ -36,12 +36,23 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
     }
     v.push(Line::raw(match (&d.model, &d.busy) {
         (_, Some(b)) => b.clone(),
-        (Some(m), None) => format!(
-            "model: k-NN k = {} on {} recordings of {}",
-            m.k,
-            m.examples,
-            m.labels.join(", ")
-        ),
+        (Some(m), None) => {
+            let stale = if d.total() > m.examples {
+                format!(
+                    "; {} newer stored ({} retrains)",
+                    d.total() - m.examples,
+                    app.keys.name(Key::Train)
+                )
+            } else {
+                String::new()
+            };
+            format!(
+                "model: k-NN k = {} on {} recordings of {}{stale}",
+                m.k,
+                m.examples,
+                m.labels.join(", ")
+            )
+        }
         (None, None) => format!(
             "model: none ({} trains, {} evaluates)",
             app.keys.name(Key::Train),

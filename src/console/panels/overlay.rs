@@ -170,7 +170,7 @@ fn help(app: &App, area: Rect, buf: &mut Buffer) {
         })
         .collect();
     lines.push(Line::raw(
-        "  any key closes this help; keys can be changed in the profile's [console] keys",
+        "  any key closes; change keys in the profile's [console] keys table",
     ));
     Paragraph::new(lines).block(frame("Keys")).render(r, buf);
 }

@@ -26,7 +26,7 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
     } else {
         format!("Recordings: {}", r.entries.len())
     };
-    let block = frame(&title);
+    let block = frame(&format!("{title} (label → predicted)"));
     let inner = block.inner(area);
     block.render(area, buf);
     let rows = usize::from(inner.height);
@@ -53,10 +53,10 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
                 None => "",
             };
             let text = format!(
-                "{} {name:<16} label {:<5} predicted {:<5} {verdict}",
+                "{} {name:<16} {:>5} → {:<5} {verdict}",
                 if i == r.selected { ">" } else { " " },
                 e.label.as_deref().unwrap_or("?"),
-                e.predicted.as_deref().unwrap_or("—"),
+                e.predicted.as_deref().unwrap_or("…"),
             );
             if i == r.selected {
                 Line::styled(text, Style::new().add_modifier(Modifier::REVERSED))
