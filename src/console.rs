@@ -230,13 +230,14 @@ where
     B::Error: std::fmt::Display,
 {
     let frame = Duration::from_secs(1) / FRAME_RATE;
+    let input = event::Input::start().map_err(|e| format!("terminal input: {e}"))?;
     if let Ok(size) = terminal.size() {
         app.resize(size.width, size.height);
     }
     let mut last = Instant::now();
     while !app.quit {
-        if signals.raised() {
-            app.warn("signal received: stopping the servo and leaving");
+        if signals.raised() || event::terminal_hung_up() {
+            app.warn("signal or hang-up: stopping the servo and leaving");
             break;
         }
         let started = Instant::now();
@@ -260,7 +261,10 @@ where
             if left.is_zero() || app.quit {
                 break;
             }
-            match event::next(left).map_err(|e| format!("terminal input: {e}"))? {
+            match input
+                .next(left)
+                .map_err(|e| format!("terminal input: {e}"))?
+            {
                 Some(Event::Key(k)) => {
                     let actions = app.handle_key(k);
                     run_actions(actions, app, lab.as_deref_mut(), jobs);

@@ -222,3 +222,27 @@ fn sigterm_mid_scan_keeps_the_scan_and_restores_the_terminal() {
     assert!(rec.len() > 10, "{} samples", rec.len());
     assert!(rec.aborted().is_some());
 }
+
+#[test]
+fn sighup_quits_cleanly() {
+    let tmp = tempfile::tempdir().unwrap();
+    let profile = fast_profile();
+    let ds = tmp.path().join("ds");
+    let mut s = Session::start(
+        &[
+            "console",
+            "--profile",
+            profile.to_str().unwrap(),
+            "--dataset",
+            ds.to_str().unwrap(),
+        ],
+        tmp.path(),
+    );
+    s.wait_for("Homed    yes", Duration::from_secs(20));
+    let pid = s.child.process_id().unwrap();
+    // SAFETY: kill(2) on our own child's pid.
+    assert_eq!(unsafe { libc::kill(pid as i32, libc::SIGHUP) }, 0);
+    let status = s.wait_exit(Duration::from_secs(15));
+    assert!(status.success(), "{status:?}");
+    assert!(s.restored(), "the alternate screen was not left");
+}

@@ -79,7 +79,7 @@ fn form(f: &Form, area: Rect, buf: &mut Buffer) {
         None => lines.push(Line::raw(f.hint.clone())),
     }
     Paragraph::new(lines)
-        .wrap(Wrap { trim: true })
+        .wrap(Wrap { trim: false })
         .block(frame(f.title()))
         .render(r, buf);
 }
