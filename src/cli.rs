@@ -148,6 +148,21 @@ pub enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Play recordings back through the console's dashboard (1×, 4×, 16×, single steps).
+    #[command(
+        after_help = "Keys: ↑/↓ recording, space pause, +/- speed, . step, ← restart, p predict, q quit.\n\nExample:\n  hapticlab replay recordings/thesis-sim\n  hapticlab replay recordings/thesis-sim/S2/S2_003.csv"
+    )]
+    Replay {
+        #[command(flatten)]
+        profile: ProfileArg,
+        /// A recording, or a folder of recordings.
+        #[arg(value_name = "FILE|DIR")]
+        path: PathBuf,
+        /// Recordings to train the model on (default: the folder replayed,
+        /// or the folder above a recording's label folder).
+        #[arg(long, value_name = "DIR")]
+        dataset: Option<PathBuf>,
+    },
     /// Check profiles: parse and validate every value.
     #[command(after_help = "Example:\n  hapticlab check profiles/*.toml")]
     Check {

@@ -73,9 +73,14 @@ fn progress_bar(total: u64, what: &str) -> ProgressBar {
 
 pub fn run(cmd: Command) -> Result<(), Failure> {
     match cmd {
-        Command::Console { .. } => Err(bad(
-            "the console is not built yet; see `hapticlab --help` for the headless commands",
-        )),
+        Command::Console { profile, dataset } => {
+            crate::console::run(load_profile(&profile)?, dataset)
+        }
+        Command::Replay {
+            profile,
+            path,
+            dataset,
+        } => crate::console::replay(load_profile(&profile)?, &path, dataset),
         Command::Simulate {
             profile,
             out,

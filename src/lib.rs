@@ -10,6 +10,7 @@ pub mod analysis;
 pub mod classify;
 pub mod cli;
 pub mod commands;
+pub mod console;
 pub mod device;
 pub mod evaluate;
 pub mod profile;

@@ -13,11 +13,13 @@ fn main() {
             std::process::exit(code);
         }
     };
-    let Some(command) = cli.command else {
-        // The console is the default; until it exists, show what there is.
-        let _ = <hapticlab::cli::Cli as clap::CommandFactory>::command().print_long_help();
-        return;
-    };
+    // The console on the built-in thesis profile is the default.
+    let command = cli.command.unwrap_or(hapticlab::cli::Command::Console {
+        profile: hapticlab::cli::ProfileArg {
+            profile: "thesis".into(),
+        },
+        dataset: None,
+    });
     if let Err(f) = hapticlab::commands::run(command) {
         eprintln!("hapticlab: error: {}", f.message());
         std::process::exit(f.exit_code());

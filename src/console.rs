@@ -1,0 +1,370 @@
+//! The lab console: a terminal front end over the engine (ratatui +
+//! crossterm), after the thesis's GUI (section 3.1.1): modes Manual, Target
+//! and Test, Start Measurement, Store Data, Predict — and training,
+//! evaluation and replay.
+//!
+//! This module runs the session: it starts the servo on the profile's device
+//! ([`live::Lab`]), sets up the terminal, and loops at a capped frame rate:
+//! drain the servo's channels once (never blocking the servo thread), poll
+//! finished jobs, advance a replay, draw (`impl Widget for &App`, a pure
+//! function of state), then wait for keys until the next frame is due. Keys
+//! become [`app::Action`]s, which [`execute`] carries out. On quit, error,
+//! panic or SIGINT/SIGTERM/SIGHUP the servo is shut down (forces off, any
+//! scan kept as aborted) and the terminal restored.
+
+pub mod app;
+pub mod dataset;
+pub mod event;
+pub mod feed;
+#[doc(hidden)]
+pub mod fixtures;
+pub mod form;
+pub mod keymap;
+pub mod live;
+pub mod panels;
+pub mod replay;
+pub mod scan;
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use ratatui::Terminal;
+use ratatui::backend::Backend;
+
+use crate::analysis::FeatureExtractor;
+use crate::commands::Failure;
+use crate::profile::LoadedProfile;
+use crate::recording;
+use crate::servo::Command;
+use app::{Action, App, Source};
+use dataset::Jobs;
+use event::{Event, Signals};
+use keymap::KeyMap;
+use live::Lab;
+
+/// Frames per second at most.
+pub const FRAME_RATE: u32 = 30;
+
+/// The default dataset folder: `recordings/session-<date>`.
+pub fn default_dataset() -> PathBuf {
+    let now = humantime::format_rfc3339(std::time::SystemTime::now()).to_string();
+    PathBuf::from("recordings").join(format!("session-{}", &now[..10]))
+}
+
+fn runtime(m: impl std::fmt::Display) -> Failure {
+    Failure::Runtime(m.to_string())
+}
+
+/// Restores the terminal when dropped (quit, error, or unwinding).
+struct TerminalGuard;
+
+impl Drop for TerminalGuard {
+    fn drop(&mut self) {
+        ratatui::restore();
+    }
+}
+
+/// Raw mode and the alternate screen (and ratatui's panic hook, which
+/// restores the terminal before the panic message is printed).
+fn open_terminal() -> Result<ratatui::DefaultTerminal, Failure> {
+    ratatui::try_init().map_err(|e| {
+        ratatui::restore();
+        runtime(format!("cannot open the terminal: {e}"))
+    })
+}
+
+/// `hapticlab` / `hapticlab console`: the live console.
+pub fn run(lp: LoadedProfile, dataset: Option<PathBuf>) -> Result<(), Failure> {
+    let keys = KeyMap::from_settings(&lp.profile.console).map_err(Failure::BadInput)?;
+    let dataset = dataset.unwrap_or_else(default_dataset);
+    let signals = Signals::register().map_err(runtime)?;
+    let mut app = App::new(
+        lp.clone(),
+        keys,
+        Source::Live {
+            backend: lp.profile.device.kind.name().into(),
+        },
+        dataset.clone(),
+    );
+    let texture = lp.profile.texture(&app.label).map(|t| t.label.clone());
+    let mut lab = Lab::start(&lp, &dataset, texture.as_deref()).map_err(runtime)?;
+    app.mounted = lab.texture.clone();
+    refresh_dataset(&mut app);
+    if let Some((m, file)) = dataset::load_saved_model(&lp, &dataset) {
+        app.dataset.model = Some(dataset::ModelInfo::of(&m, Some(file)));
+        app.model = Some(m);
+    }
+    let jobs = Jobs::default();
+    let mut terminal = open_terminal()?;
+    let guard = TerminalGuard;
+    let result = run_loop(&mut terminal, &mut app, Some(&mut lab), &jobs, &signals);
+    drop(guard);
+    // The device is made safe: the loop halts, forces zero, any scan is kept as aborted.
+    let saved = lab.shutdown();
+    let interrupted = saved.iter().filter(|s| !s.complete).count();
+    let (counts, unsaved) = dataset::count(&dataset);
+    let stored: usize = counts.iter().map(|(_, n)| n).sum();
+    println!(
+        "hapticlab console closed: {stored} recording(s) in {}{}{}",
+        dataset.display(),
+        if unsaved > 0 {
+            format!(
+                ", {unsaved} scan(s) not stored in {}",
+                dataset.join(dataset::UNSAVED_DIR).display()
+            )
+        } else {
+            String::new()
+        },
+        if interrupted > 0 {
+            format!("; {interrupted} scan interrupted and kept as incomplete")
+        } else {
+            String::new()
+        }
+    );
+    result.map_err(runtime)
+}
+
+/// `hapticlab replay FILE|DIR`: recordings through the same dashboard.
+pub fn replay(lp: LoadedProfile, path: &Path, dataset: Option<PathBuf>) -> Result<(), Failure> {
+    let keys = KeyMap::from_settings(&lp.profile.console).map_err(Failure::BadInput)?;
+    let files = recording::collect_files(&[path.to_path_buf()])
+        .map_err(|e| Failure::BadInput(e.to_string()))?;
+    if files.is_empty() {
+        return Err(Failure::BadInput(format!(
+            "{}: no recordings (*.csv, *.csv.gz) to replay",
+            path.display()
+        )));
+    }
+    // The training set: --dataset, the folder given, or the folder above a file's label folder.
+    let train_dir = dataset.clone().or_else(|| {
+        if path.is_dir() {
+            Some(path.to_path_buf())
+        } else {
+            path.parent().and_then(Path::parent).map(Path::to_path_buf)
+        }
+    });
+    let signals = Signals::register().map_err(runtime)?;
+    let mut app = App::new(
+        lp.clone(),
+        keys,
+        Source::ReplayOnly,
+        train_dir.clone().unwrap_or_else(|| path.to_path_buf()),
+    );
+    if let Some(d) = &train_dir {
+        refresh_dataset(&mut app);
+        if let Some((m, file)) = dataset::load_saved_model(&lp, d) {
+            app.dataset.model = Some(dataset::ModelInfo::of(&m, Some(file)));
+            app.model = Some(m);
+        }
+    }
+    let jobs = Jobs::default();
+    open_replay(&mut app, &jobs, path.to_path_buf(), files, train_dir);
+    let mut terminal = open_terminal()?;
+    let guard = TerminalGuard;
+    let result = run_loop(&mut terminal, &mut app, None, &jobs, &signals);
+    drop(guard);
+    result.map_err(runtime)
+}
+
+fn refresh_dataset(app: &mut App) {
+    let (counts, unsaved) = dataset::count(&app.dataset.dir);
+    app.dataset.counts = counts;
+    app.dataset.unsaved = unsaved;
+}
+
+fn open_replay(
+    app: &mut App,
+    jobs: &Jobs,
+    source: PathBuf,
+    files: Vec<PathBuf>,
+    train_dir: Option<PathBuf>,
+) {
+    let mut r = replay::Replay::new(source, files.clone());
+    r.listing = true;
+    app.replay = Some(r);
+    app.replay_feed.clear();
+    jobs.list(&app.profile, files, app.model.clone(), train_dir);
+    open_recording(app, 0);
+}
+
+/// Open recording `i` of the replay list: play it from the start.
+fn open_recording(app: &mut App, i: usize) {
+    let model = app.model.clone();
+    let lp = app.profile.clone();
+    let Some(r) = app.replay.as_mut() else {
+        return;
+    };
+    let Some(path) = r.entries.get(i).map(|e| e.path.clone()) else {
+        return;
+    };
+    r.selected = i;
+    app.replay_feed.clear();
+    match recording::read(&path) {
+        Ok(rec) => {
+            let mut ex = FeatureExtractor::new(&lp.profile.analysis);
+            let mut view = scan::analyse(&rec, &path, &mut ex);
+            if let (Some(m), Ok(f)) = (&model, &view.features) {
+                view.prediction = Some(scan::predict(m, f, &path));
+            }
+            r.player = Some(replay::Player::new(&rec));
+            r.scan = Some(view);
+            r.error = None;
+        }
+        Err(e) => {
+            r.player = None;
+            r.scan = None;
+            r.error = Some(e.to_string());
+        }
+    }
+}
+
+/// Draw, drain, and handle keys until the app quits or a signal arrives.
+pub fn run_loop<B: Backend>(
+    terminal: &mut Terminal<B>,
+    app: &mut App,
+    mut lab: Option<&mut Lab>,
+    jobs: &Jobs,
+    signals: &Signals,
+) -> Result<(), String>
+where
+    B::Error: std::fmt::Display,
+{
+    let frame = Duration::from_secs(1) / FRAME_RATE;
+    let input = event::Input::start().map_err(|e| format!("terminal input: {e}"))?;
+    if let Ok(size) = terminal.size() {
+        app.resize(size.width, size.height);
+    }
+    let mut last = Instant::now();
+    while !app.quit {
+        if signals.raised() || event::terminal_hung_up() {
+            app.warn("signal or hang-up: stopping the servo and leaving");
+            break;
+        }
+        let started = Instant::now();
+        // The world, once per frame.
+        let mut actions = match lab.as_deref_mut() {
+            Some(l) => l.drain(app),
+            None => vec![],
+        };
+        for r in jobs.poll() {
+            actions.extend(app.on_job(r));
+        }
+        run_actions(actions, app, lab.as_deref_mut(), jobs);
+        app.advance(started.duration_since(last).as_secs_f64());
+        last = started;
+        terminal
+            .draw(|f| f.render_widget(&*app, f.area()))
+            .map_err(|e| format!("cannot draw: {e}"))?;
+        // Keys until the next frame is due.
+        loop {
+            let left = frame.saturating_sub(started.elapsed());
+            if left.is_zero() || app.quit {
+                break;
+            }
+            match input
+                .next(left)
+                .map_err(|e| format!("terminal input: {e}"))?
+            {
+                Some(Event::Key(k)) => {
+                    let actions = app.handle_key(k);
+                    run_actions(actions, app, lab.as_deref_mut(), jobs);
+                }
+                Some(Event::Resize(w, h)) => app.resize(w, h),
+                None => {}
+            }
+        }
+    }
+    Ok(())
+}
+
+fn run_actions(mut actions: Vec<Action>, app: &mut App, mut lab: Option<&mut Lab>, jobs: &Jobs) {
+    // Actions may lead to more (a store after a queued scan, a prediction after training).
+    while !actions.is_empty() {
+        let mut next = Vec::new();
+        for a in actions {
+            next.extend(execute(a, app, lab.as_deref_mut(), jobs));
+        }
+        actions = next;
+    }
+}
+
+/// Carry out one action.
+pub fn execute(a: Action, app: &mut App, lab: Option<&mut Lab>, jobs: &Jobs) -> Vec<Action> {
+    let dir = app.dataset.dir.clone();
+    match a {
+        Action::Quit => {}
+        Action::SetMode(m) => send(lab, Command::SetMode(m)),
+        Action::SetTarget(p) => send(lab, Command::SetTarget(p)),
+        Action::SetSpeed(s) => send(lab, Command::SetSpeedScale(s)),
+        Action::Abort => send(lab, Command::Abort),
+        Action::StartScan => {
+            if let Some(l) = lab {
+                let label = app.label.clone();
+                l.start_scan(&label);
+            } else {
+                app.scan_running = false;
+            }
+        }
+        Action::Store { label } => {
+            let Some(from) = app.last_scan.as_ref().map(|s| s.path.clone()) else {
+                return vec![];
+            };
+            let r = live::store(&from, &dir, &label);
+            app.on_stored(r);
+            refresh_dataset(app);
+        }
+        Action::Mount(t) => {
+            if let Some(l) = lab {
+                match l.mount(&t, app) {
+                    Ok(()) => {
+                        app.mounted = l.texture.clone();
+                        app.live.clear();
+                    }
+                    Err(e) => app.error(format!("cannot mount {t}: {e}")),
+                }
+            }
+        }
+        Action::Predict => {
+            let model = app.model.clone();
+            let target = match app.replay.as_mut() {
+                Some(r) => r.scan.as_mut(),
+                None => app.last_scan.as_mut(),
+            };
+            if let (Some(m), Some(s)) = (model, target)
+                && let Ok(f) = &s.features
+            {
+                let p = scan::predict(&m, f, &s.path);
+                let text = match &p {
+                    Ok(pv) => format!("predicted {}", pv.prediction.label),
+                    Err(e) => format!("no prediction: {e}"),
+                };
+                s.prediction = Some(p);
+                app.info(text);
+            }
+        }
+        Action::Train { then_predict } => jobs.train(&app.profile, &dir, then_predict),
+        Action::Evaluate => jobs.evaluate(&app.profile, &dir),
+        Action::OpenReplay => match recording::collect_files(std::slice::from_ref(&dir)) {
+            Ok(files) if !files.is_empty() => {
+                let n = files.len();
+                open_replay(app, jobs, dir.clone(), files, Some(dir));
+                app.info(format!(
+                    "replaying {n} recordings; Esc returns to the live device"
+                ));
+            }
+            Ok(_) => app.info(format!(
+                "no stored recordings in {} to replay",
+                dir.display()
+            )),
+            Err(e) => app.error(e.to_string()),
+        },
+        Action::OpenRecording(i) => open_recording(app, i),
+    }
+    vec![]
+}
+
+fn send(lab: Option<&mut Lab>, c: Command) {
+    if let Some(l) = lab {
+        l.send(c);
+    }
+}

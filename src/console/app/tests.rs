@@ -1,0 +1,282 @@
+//! Key handling as pure state transitions: `App::handle_key` → actions.
+
+use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
+
+use super::{Action, App, Source};
+use crate::console::fixtures;
+use crate::console::form::{FormKind, Overlay};
+use crate::console::keymap::KeyMap;
+use crate::console::replay::{Player, Replay};
+use crate::profile::LoadedProfile;
+use crate::servo::{Mode, ServoEvent};
+
+fn key(c: char) -> KeyEvent {
+    KeyEvent::new(KeyCode::Char(c), KeyModifiers::NONE)
+}
+fn code(c: KeyCode) -> KeyEvent {
+    KeyEvent::new(c, KeyModifiers::NONE)
+}
+
+/// A fresh live console, the probe resting at the first waypoint.
+fn app() -> App {
+    let mut a = App::new(
+        LoadedProfile::thesis(),
+        KeyMap::default(),
+        Source::Live {
+            backend: "sim".into(),
+        },
+        "ds".into(),
+    );
+    a.mounted = Some("S1".into());
+    let mut t = fixtures::telemetry(0.0, Mode::Manual);
+    t.pos_m = [0.0, 0.0, -0.06];
+    a.on_telemetry(&t);
+    a
+}
+
+fn type_text(a: &mut App, text: &str) -> Vec<Action> {
+    let mut out = Vec::new();
+    for c in text.chars() {
+        out.extend(a.handle_key(key(c)));
+    }
+    out
+}
+
+#[test]
+fn m_cycles_manual_target_test() {
+    let mut a = app();
+    assert_eq!(a.handle_key(key('m')), vec![Action::SetMode(Mode::Target)]);
+    assert_eq!(a.target_m, Some([0.0, 0.0, -0.06]));
+    let mut t = fixtures::telemetry(0.1, Mode::Target);
+    t.pos_m = [0.0, 0.0, -0.06];
+    a.on_telemetry(&t);
+    assert_eq!(a.handle_key(key('m')), vec![Action::SetMode(Mode::Test)]);
+}
+
+#[test]
+fn s_starts_once_and_esc_aborts() {
+    let mut a = app();
+    assert_eq!(a.handle_key(key('s')), vec![Action::StartScan]);
+    assert!(a.scan_running);
+    assert_eq!(a.handle_key(key('s')), vec![]);
+    assert!(a.status.text.contains("a scan is running"));
+    assert_eq!(a.handle_key(key('m')), vec![]);
+    assert_eq!(a.handle_key(code(KeyCode::Esc)), vec![Action::Abort]);
+    a.on_servo_event(ServoEvent::ScanEnded {
+        path: "x".into(),
+        samples: 10,
+        aborted: Some("aborted by the user".into()),
+        stats: Default::default(),
+    });
+    assert!(!a.scan_running);
+}
+
+#[test]
+fn the_target_form_is_validated_against_the_workspace() {
+    let mut a = app();
+    assert_eq!(a.handle_key(key('t')), vec![]);
+    let Some(Overlay::Form(f)) = &a.overlay else {
+        panic!("no form")
+    };
+    assert_eq!(f.value(2), "-6.00");
+    // x = 9 cm is outside the ±5 cm workspace.
+    a.handle_key(code(KeyCode::Backspace));
+    a.handle_key(code(KeyCode::Backspace));
+    a.handle_key(code(KeyCode::Backspace));
+    a.handle_key(code(KeyCode::Backspace));
+    type_text(&mut a, "9");
+    assert_eq!(a.handle_key(code(KeyCode::Enter)), vec![]);
+    let Some(Overlay::Form(f)) = &a.overlay else {
+        panic!("the form closed")
+    };
+    assert!(f.error.as_ref().unwrap().contains("outside the workspace"));
+    a.handle_key(code(KeyCode::Backspace));
+    type_text(&mut a, "1.5");
+    assert_eq!(
+        a.handle_key(code(KeyCode::Enter)),
+        vec![Action::SetTarget([0.015, 0.0, -0.06])]
+    );
+    assert!(a.overlay.is_none());
+}
+
+#[test]
+fn arrows_and_page_keys_nudge_the_target_and_plus_minus_the_speed() {
+    let mut a = app();
+    let near = |got: &[Action], want: [f64; 3]| match got {
+        [Action::SetTarget(p)] => p.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-12),
+        _ => false,
+    };
+    assert!(near(
+        &a.handle_key(code(KeyCode::Right)),
+        [0.001, 0.0, -0.06]
+    ));
+    assert!(near(
+        &a.handle_key(code(KeyCode::Up)),
+        [0.001, 0.001, -0.06]
+    ));
+    assert!(near(
+        &a.handle_key(code(KeyCode::PageDown)),
+        [0.001, 0.001, -0.059]
+    ));
+    assert_eq!(a.handle_key(key('+')), vec![Action::SetSpeed(1.5)]);
+    assert_eq!(a.handle_key(key('-')), vec![Action::SetSpeed(1.0)]);
+    assert_eq!(a.handle_key(key('-')), vec![Action::SetSpeed(0.75)]);
+}
+
+#[test]
+fn w_stores_the_last_scan_under_a_label_defaulting_to_the_last() {
+    let mut a = app();
+    assert_eq!(a.handle_key(key('w')), vec![]);
+    assert!(a.overlay.is_none(), "nothing to store yet");
+    a.label = "S2".into();
+    assert_eq!(a.on_scan_saved(fixtures::scan_view(false)), vec![]);
+    a.handle_key(key('w'));
+    assert!(
+        matches!(&a.overlay, Some(Overlay::Form(f)) if f.kind == FormKind::Store && f.value(0) == "S2")
+    );
+    assert_eq!(
+        a.handle_key(code(KeyCode::Enter)),
+        vec![Action::Store { label: "S2".into() }]
+    );
+    a.on_stored(Ok("ds/S2/S2_001.csv".into()));
+    assert!(!a.unsaved_scan());
+    // A bad label is refused on the form.
+    a.last_scan.as_mut().unwrap().stored = None;
+    a.handle_key(key('w'));
+    a.handle_key(code(KeyCode::Backspace));
+    a.handle_key(code(KeyCode::Backspace));
+    type_text(&mut a, "../x");
+    assert_eq!(a.handle_key(code(KeyCode::Enter)), vec![]);
+    assert!(matches!(&a.overlay, Some(Overlay::Form(f)) if f.error.is_some()));
+}
+
+#[test]
+fn l_mounts_a_profile_texture_and_n_runs_a_training_session() {
+    let mut a = app();
+    a.handle_key(key('l'));
+    a.handle_key(code(KeyCode::Backspace));
+    a.handle_key(code(KeyCode::Backspace));
+    assert_eq!(type_text(&mut a, "S3"), vec![]);
+    assert_eq!(
+        a.handle_key(code(KeyCode::Enter)),
+        vec![Action::Mount("S3".into())]
+    );
+    a.mounted = Some("S3".into());
+    assert_eq!(a.label, "S3");
+    // Three automatic scans: each is stored as it completes, then the next starts.
+    a.handle_key(key('n'));
+    a.handle_key(code(KeyCode::Backspace));
+    type_text(&mut a, "3");
+    assert_eq!(a.handle_key(code(KeyCode::Enter)), vec![Action::StartScan]);
+    let store = Action::Store { label: "S3".into() };
+    assert_eq!(
+        a.on_scan_saved(fixtures::scan_view(false)),
+        vec![store.clone(), Action::StartScan]
+    );
+    a.on_stored(Ok("ds/S3/S3_001.csv".into()));
+    assert_eq!(
+        a.on_scan_saved(fixtures::scan_view(false)),
+        vec![store.clone(), Action::StartScan]
+    );
+    assert_eq!(a.on_scan_saved(fixtures::scan_view(false)), vec![store]);
+    assert!(!a.queued_run && a.queue_left == 0);
+    // A label that names no texture keeps the mounted one.
+    a.handle_key(key('l'));
+    for _ in 0..2 {
+        a.handle_key(code(KeyCode::Backspace));
+    }
+    type_text(&mut a, "wood");
+    assert_eq!(a.handle_key(code(KeyCode::Enter)), vec![]);
+    assert!(
+        a.status.text.contains("S3 stays mounted"),
+        "{}",
+        a.status.text
+    );
+}
+
+#[test]
+fn p_trains_first_when_there_is_no_model() {
+    let mut a = app();
+    assert_eq!(a.handle_key(key('p')), vec![]);
+    a.on_scan_saved(fixtures::scan_view(false));
+    assert_eq!(
+        a.handle_key(key('p')),
+        vec![Action::Train { then_predict: true }]
+    );
+    assert_eq!(a.handle_key(key('T')), vec![], "busy training");
+    assert_eq!(a.handle_key(key('e')), vec![Action::Evaluate]);
+}
+
+#[test]
+fn q_asks_before_losing_an_unsaved_scan_and_ctrl_c_quits_now() {
+    let mut a = app();
+    a.on_scan_saved(fixtures::scan_view(false));
+    assert_eq!(a.handle_key(key('q')), vec![]);
+    assert_eq!(a.overlay, Some(Overlay::ConfirmQuit));
+    assert_eq!(a.handle_key(key('n')), vec![]);
+    assert!(!a.quit);
+    a.handle_key(key('q'));
+    assert_eq!(a.handle_key(key('y')), vec![Action::Quit]);
+    assert!(a.quit);
+    let mut b = app();
+    assert_eq!(b.handle_key(key('q')), vec![Action::Quit]);
+    let mut c = app();
+    c.on_scan_saved(fixtures::scan_view(false));
+    let ctrl_c = KeyEvent::new(KeyCode::Char('c'), KeyModifiers::CONTROL);
+    assert_eq!(c.handle_key(ctrl_c), vec![Action::Quit]);
+}
+
+#[test]
+fn help_and_pages() {
+    let mut a = app();
+    a.resize(80, 24);
+    a.handle_key(key('?'));
+    assert_eq!(a.overlay, Some(Overlay::Help));
+    assert_eq!(a.handle_key(key('s')), vec![], "any key closes the help");
+    assert!(a.overlay.is_none());
+    a.handle_key(code(KeyCode::Tab));
+    assert_eq!(a.page, 1);
+    a.handle_key(key('4'));
+    assert_eq!(a.page, 3);
+    a.handle_key(code(KeyCode::Tab));
+    assert_eq!(a.page, 0);
+    a.resize(200, 60);
+    assert_eq!(a.page_count(), 1);
+}
+
+#[test]
+fn replay_keys_drive_the_player() {
+    let mut a = app();
+    let view = fixtures::scan_view(false);
+    let rec = crate::recording::Recording {
+        path: None,
+        meta: vec![],
+        columns: vec!["t_s".into(), "x_m".into()],
+        data: vec![
+            (0..1000).map(|i| i as f64 * 0.001).collect(),
+            vec![0.0; 1000],
+        ],
+        trailer_samples: Some(1000),
+    };
+    let mut r = Replay::new("ds".into(), vec!["ds/a.csv".into(), "ds/b.csv".into()]);
+    r.player = Some(Player::new(&rec));
+    r.scan = Some(view);
+    a.replay = Some(r);
+    a.advance(0.1);
+    assert_eq!(a.replay_feed.frames, 101);
+    a.handle_key(key(' '));
+    a.advance(0.1);
+    assert_eq!(a.replay_feed.frames, 101, "paused");
+    a.handle_key(key('.'));
+    assert_eq!(a.replay_feed.frames, 151, "a single step");
+    a.handle_key(key('+'));
+    assert_eq!(a.replay.as_ref().unwrap().player.as_ref().unwrap().speed, 4);
+    assert_eq!(
+        a.handle_key(code(KeyCode::Down)),
+        vec![Action::OpenRecording(1)]
+    );
+    assert_eq!(a.handle_key(code(KeyCode::Down)), vec![]);
+    assert_eq!(a.handle_key(key('s')), vec![], "no scans while replaying");
+    a.handle_key(code(KeyCode::Esc));
+    assert!(a.replay.is_none(), "Esc returns to the live device");
+}

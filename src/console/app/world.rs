@@ -1,0 +1,203 @@
+//! How the world changes the app: telemetry, servo events, saved and
+//! stored scans, finished jobs, and the replay clock. Like the key
+//! handlers, these only change state and return actions.
+
+use std::path::PathBuf;
+
+use crate::servo::{ServoEvent, Telemetry};
+
+use super::super::dataset::{JobResult, ModelInfo};
+use super::super::keymap::Key;
+use super::super::scan::{ScanView, predict};
+use super::{Action, App};
+
+impl App {
+    /// One telemetry frame from the servo.
+    pub fn on_telemetry(&mut self, t: &Telemetry) {
+        self.live.push(t);
+        self.speed_scale = t.speed_scale;
+    }
+
+    pub fn on_servo_event(&mut self, e: ServoEvent) {
+        match e {
+            ServoEvent::ScanStarted { path } => {
+                self.info(format!("recording the scan leg to {}", path.display()));
+            }
+            ServoEvent::ScanEnded {
+                aborted, samples, ..
+            } => {
+                self.scan_running = false;
+                match aborted {
+                    None => self.info(format!("scan complete: {samples} samples; analysing")),
+                    Some(r) => {
+                        self.queue_left = 0;
+                        self.queued_run = false;
+                        self.warn(format!(
+                            "scan aborted ({r}): {samples} samples kept, incomplete"
+                        ));
+                    }
+                }
+            }
+            ServoEvent::MotionStopped { reason } => {
+                self.scan_running = false;
+                self.queue_left = 0;
+                self.queued_run = false;
+                self.warn(format!("motion stopped: {reason}"));
+            }
+        }
+    }
+
+    /// A scan the recorder finished writing, analysed.
+    pub fn on_scan_saved(&mut self, view: ScanView) -> Vec<Action> {
+        self.scan_running = false;
+        self.dataset.unsaved += 1;
+        let complete = view.complete;
+        let analysed = match &view.features {
+            Ok(_) => String::new(),
+            Err(e) => format!(" — no features: {e}"),
+        };
+        self.last_scan = Some(view);
+        if !complete {
+            self.queue_left = 0;
+            return vec![];
+        }
+        if !self.queued_run {
+            self.info(format!(
+                "scan complete{analysed}: {} predicts, {} stores it",
+                self.key_name(Key::Predict),
+                self.key_name(Key::Store)
+            ));
+            return vec![];
+        }
+        let mut actions = vec![Action::Store {
+            label: self.label.clone(),
+        }];
+        if self.queue_left > 0 {
+            self.queue_left -= 1;
+            self.scan_running = true;
+            actions.push(Action::StartScan);
+        } else {
+            self.queued_run = false;
+        }
+        actions
+    }
+
+    /// The last scan was stored (or could not be).
+    pub fn on_stored(&mut self, result: Result<PathBuf, String>) {
+        match result {
+            Ok(path) => {
+                let left = if self.queued_run || self.queue_left > 0 {
+                    format!("; {} more to go", self.queue_left + 1)
+                } else {
+                    String::new()
+                };
+                let complete = self.last_scan.as_ref().is_none_or(|s| s.complete);
+                if let Some(s) = self.last_scan.as_mut() {
+                    s.path = path.clone();
+                    s.stored = Some(path.clone());
+                }
+                self.dataset.unsaved = self.dataset.unsaved.saturating_sub(1);
+                let note = if complete {
+                    ""
+                } else {
+                    " (incomplete: training skips it)"
+                };
+                if self.queued_run && self.scan_running {
+                    self.info(format!("stored {}{note}{left}", path.display()));
+                } else {
+                    self.info(format!("stored {}{note}", path.display()));
+                }
+            }
+            Err(e) => {
+                self.queue_left = 0;
+                self.queued_run = false;
+                self.error(format!("could not store the scan: {e}"));
+            }
+        }
+    }
+
+    /// A finished job; may ask for more (a prediction after training).
+    pub fn on_job(&mut self, r: JobResult) -> Vec<Action> {
+        self.dataset.busy = None;
+        match r {
+            JobResult::Trained {
+                model,
+                skipped,
+                saved,
+                then_predict,
+            } => {
+                let file = saved.as_ref().ok().cloned();
+                self.dataset.model = Some(ModelInfo::of(&model, file));
+                let skipped = if skipped > 0 {
+                    format!(", {skipped} incomplete skipped")
+                } else {
+                    String::new()
+                };
+                let text = format!(
+                    "trained k-NN (k = {}) on {} recordings of {}{skipped}",
+                    model.classifier.k,
+                    model.examples.len(),
+                    model.labels.join(", ")
+                );
+                match saved {
+                    Ok(p) => self.info(format!("{text}; saved {}", p.display())),
+                    Err(e) => self.warn(format!("{text}; not saved: {e}")),
+                }
+                self.model = Some(*model);
+                if then_predict {
+                    return vec![Action::Predict];
+                }
+                vec![]
+            }
+            JobResult::Evaluated(report) => {
+                self.info(format!(
+                    "evaluation: {}/{} right ({:.1} %)",
+                    report.correct(),
+                    report.tested(),
+                    report.accuracy * 100.0
+                ));
+                self.dataset.report = Some(*report);
+                vec![]
+            }
+            JobResult::Listed { entries, model } => {
+                if let Some(m) = model
+                    && self.model.is_none()
+                {
+                    self.dataset.model = Some(ModelInfo::of(&m, None));
+                    // The recording already open was analysed before there was a model.
+                    if let Some(s) = self.replay.as_mut().and_then(|r| r.scan.as_mut())
+                        && s.prediction.is_none()
+                        && let Ok(f) = &s.features
+                    {
+                        s.prediction = Some(predict(&m, f, &s.path));
+                    }
+                    self.model = Some(*m);
+                }
+                if let Some(r) = self.replay.as_mut() {
+                    for e in entries {
+                        if let Some(slot) = r.entries.iter_mut().find(|s| s.path == e.path) {
+                            *slot = e;
+                        }
+                    }
+                    r.listing = false;
+                    let (right, n) = r.score();
+                    if n > 0 {
+                        self.info(format!("replay: {right} of {n} recordings predicted right"));
+                    }
+                }
+                vec![]
+            }
+            JobResult::Failed { what, error } => {
+                self.error(format!("could not {what}: {error}"));
+                vec![]
+            }
+        }
+    }
+
+    /// Advance the replay by a frame's wall time.
+    pub fn advance(&mut self, wall_s: f64) {
+        if let Some(p) = self.replay.as_mut().and_then(|r| r.player.as_mut()) {
+            p.advance(wall_s, &mut self.replay_feed);
+        }
+    }
+}

@@ -1,0 +1,252 @@
+//! The live device behind the console: the servo loop on its own thread,
+//! the simulated Falcon with its mounted texture, and the files scans go to.
+//!
+//! [`Lab::drain`] is called once per frame: it empties the telemetry and
+//! event channels with `try_iter` (never waiting on the servo thread) and
+//! hands each finished recording, analysed, to the app. Scans are recorded
+//! to `<dataset>/.unsaved/` while they run, so an interrupted scan leaves
+//! its samples; [`Lab::store`] moves one to `<dataset>/<label>/`.
+
+use std::path::{Path, PathBuf};
+
+use crate::acquire::{next_free_index, scan_file, scan_metadata, scan_seed};
+use crate::analysis::FeatureExtractor;
+use crate::device::HapticDevice;
+use crate::device::sim::SimDevice;
+use crate::profile::{DeviceKind, LoadedProfile};
+use crate::recorder::{COLUMNS, SavedScan};
+use crate::recording::{self, RecordingWriter};
+use crate::servo::{self, Command, ServoHandle};
+
+use super::app::{Action, App};
+use super::dataset::UNSAVED_DIR;
+use super::scan;
+
+pub struct Lab {
+    lp: LoadedProfile,
+    handle: Option<ServoHandle>,
+    pub dataset: PathBuf,
+    /// The simulator's texture.
+    pub texture: Option<String>,
+    mounts: usize,
+    extractor: FeatureExtractor,
+}
+
+impl Lab {
+    /// Start the servo on the profile's device, `texture` under the probe.
+    pub fn start(lp: &LoadedProfile, dataset: &Path, texture: Option<&str>) -> Result<Lab, String> {
+        let mut lab = Lab {
+            lp: lp.clone(),
+            handle: None,
+            dataset: dataset.to_path_buf(),
+            texture: texture.map(str::to_string),
+            mounts: 0,
+            extractor: FeatureExtractor::new(&lp.profile.analysis),
+        };
+        lab.spawn()?;
+        Ok(lab)
+    }
+
+    pub fn backend(&self) -> &'static str {
+        self.lp.profile.device.kind.name()
+    }
+
+    fn spawn(&mut self) -> Result<(), String> {
+        let p = &self.lp.profile;
+        let device: Box<dyn HapticDevice> = match p.device.kind {
+            DeviceKind::Sim => {
+                let seed = scan_seed(
+                    p.simulator.seed,
+                    self.texture.as_deref().unwrap_or(""),
+                    self.mounts,
+                );
+                Box::new(
+                    SimDevice::new(p, &self.lp.base_dir, self.texture.as_deref(), seed)
+                        .map_err(|e| e.to_string())?,
+                )
+            }
+            other => {
+                return Err(format!(
+                    "device kind {:?} is not available in this build yet; use kind = \"sim\"",
+                    other.name()
+                ));
+            }
+        };
+        self.mounts += 1;
+        let handle = servo::spawn(p, move || device)
+            .map_err(|e| format!("cannot start the servo thread: {e}"))?;
+        self.handle = Some(handle);
+        Ok(())
+    }
+
+    /// Restart the simulator with another texture (only while idle): the
+    /// old loop is shut down, its device made safe.
+    pub fn mount(&mut self, texture: &str, app: &mut App) -> Result<(), String> {
+        if let Some(h) = self.handle.take() {
+            let (_, saved) = h.shutdown();
+            for s in saved {
+                self.deliver(s, app);
+            }
+        }
+        self.texture = Some(texture.to_string());
+        self.spawn()
+    }
+
+    pub fn send(&self, c: Command) {
+        if let Some(h) = &self.handle {
+            h.send(c);
+        }
+    }
+
+    /// Run the path, recording to the next free `.unsaved/scan-NNN.csv`.
+    pub fn start_scan(&mut self, label: &str) -> PathBuf {
+        let dir = self.dataset.join(UNSAVED_DIR);
+        let path = unsaved_path(&dir);
+        let mut extra = vec![
+            ("clock", toml::Value::String("real".into())),
+            (
+                "session",
+                toml::Value::String(self.dataset.display().to_string()),
+            ),
+        ];
+        if let Some(t) = &self.texture {
+            extra.push(("texture", toml::Value::String(t.clone())));
+        }
+        let meta = scan_metadata(&self.lp, label, self.backend(), &extra);
+        self.send(Command::StartScan {
+            path: path.clone(),
+            meta,
+        });
+        path
+    }
+
+    /// Once per frame: telemetry, events and saved scans into the app.
+    pub fn drain(&mut self, app: &mut App) -> Vec<Action> {
+        let Some(h) = &self.handle else {
+            return vec![];
+        };
+        for t in h.telemetry.try_iter() {
+            app.on_telemetry(&t);
+        }
+        for e in h.events.try_iter() {
+            app.on_servo_event(e);
+        }
+        let saved = h.saved();
+        let finished = h.is_finished();
+        let mut actions = Vec::new();
+        for s in saved {
+            actions.extend(self.deliver(s, app));
+        }
+        if finished {
+            app.error("the servo loop stopped; the device is safe (forces off). Quit with q");
+            self.handle = None;
+        }
+        actions
+    }
+
+    fn deliver(&mut self, s: SavedScan, app: &mut App) -> Vec<Action> {
+        if let Some(e) = &s.error {
+            app.error(format!("{}: {e}", s.path.display()));
+            return vec![];
+        }
+        match recording::read(&s.path) {
+            Ok(rec) => {
+                let view = scan::analyse(&rec, &s.path, &mut self.extractor);
+                app.on_scan_saved(view)
+            }
+            Err(e) => {
+                app.error(format!("cannot read the scan back: {e}"));
+                vec![]
+            }
+        }
+    }
+
+    /// Stop the loop (any scan kept as aborted); scans still being written.
+    pub fn shutdown(mut self) -> Vec<SavedScan> {
+        self.handle
+            .take()
+            .map(|h| h.shutdown().1)
+            .unwrap_or_default()
+    }
+}
+
+/// The first `scan-NNN.csv` free in `dir`.
+fn unsaved_path(dir: &Path) -> PathBuf {
+    (1..)
+        .map(|i| dir.join(format!("scan-{i:03}.csv")))
+        .find(|p| !p.exists())
+        .expect("an unbounded range has a free name")
+}
+
+/// Move a recording to `<dataset>/<label>/<label>_NNN.csv`: renamed when its
+/// metadata already names `label`, else rewritten with the new label (the
+/// samples, and an abort reason if any, unchanged).
+pub fn store(from: &Path, dataset: &Path, label: &str) -> Result<PathBuf, String> {
+    let to = scan_file(dataset, label, next_free_index(dataset, label));
+    let rec = recording::read(from).map_err(|e| e.to_string())?;
+    if let Some(dir) = to.parent() {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    }
+    if rec.label() == Some(label) {
+        std::fs::rename(from, &to).map_err(|e| format!("{}: {e}", to.display()))?;
+        return Ok(to);
+    }
+    let mut meta: Vec<(String, toml::Value)> = rec
+        .meta
+        .iter()
+        .filter(|(k, _)| k != recording::ABORTED_KEY)
+        .cloned()
+        .collect();
+    match meta.iter_mut().find(|(k, _)| k == "label") {
+        Some((_, v)) => *v = toml::Value::String(label.into()),
+        None => meta.insert(0, ("label".into(), toml::Value::String(label.into()))),
+    }
+    let columns: Vec<&str> = rec.columns.iter().map(String::as_str).collect();
+    let columns = if columns.is_empty() {
+        COLUMNS.to_vec()
+    } else {
+        columns
+    };
+    let mut w = RecordingWriter::create_new(&to, &meta, &columns).map_err(|e| e.to_string())?;
+    let mut row = vec![0.0; rec.data.len()];
+    for i in 0..rec.len() {
+        for (c, v) in row.iter_mut().enumerate() {
+            *v = rec.data[c][i];
+        }
+        w.write_row(&row).map_err(|e| e.to_string())?;
+    }
+    let done = match (rec.is_complete(), rec.aborted()) {
+        (true, _) => w.finish(),
+        (false, reason) => w.abort(reason.unwrap_or("incomplete")),
+    };
+    done.map_err(|e| e.to_string())?;
+    std::fs::remove_file(from).map_err(|e| format!("{}: {e}", from.display()))?;
+    Ok(to)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn storing_renames_or_rewrites_with_the_label() {
+        let d = tempfile::tempdir().unwrap();
+        let unsaved = d.path().join(UNSAVED_DIR).join("scan-001.csv");
+        let meta = vec![("label".to_string(), toml::Value::String("S1".into()))];
+        let mut w = RecordingWriter::create(&unsaved, &meta, &COLUMNS).unwrap();
+        w.write_row(&[0.0, 0.01, -0.004, -0.02, 0.0, -0.3, 0.0])
+            .unwrap();
+        w.finish().unwrap();
+        let to = store(&unsaved, d.path(), "S1").unwrap();
+        assert_eq!(to, d.path().join("S1/S1_001.csv"));
+        assert!(!unsaved.exists());
+        // Under another label: rewritten, label changed, still complete.
+        let to2 = store(&to, d.path(), "S3").unwrap();
+        assert_eq!(to2, d.path().join("S3/S3_001.csv"));
+        let rec = recording::read(&to2).unwrap();
+        assert_eq!(rec.label(), Some("S3"));
+        assert!(rec.is_complete());
+        assert_eq!(rec.len(), 1);
+        assert!(!to.exists());
+    }
+}

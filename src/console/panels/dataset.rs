@@ -1,0 +1,105 @@
+//! The Dataset panel: the session's dataset folder, recordings per label,
+//! whether a model is trained, and the last evaluation's confusion matrix
+//! with SR/ER per class (the thesis's Table 4.1).
+
+use ratatui::buffer::Buffer;
+use ratatui::layout::Rect;
+use ratatui::style::{Modifier, Style};
+use ratatui::text::Line;
+use ratatui::widgets::{Paragraph, Widget};
+
+use super::frame;
+use crate::console::app::App;
+use crate::console::keymap::Key;
+
+pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
+    let d = &app.dataset;
+    let mut v = vec![Line::raw(format!("folder {}", d.dir.display()))];
+    if d.counts.is_empty() {
+        v.push(Line::raw(format!(
+            "no recordings stored yet ({} stores a scan)",
+            app.keys.name(Key::Store)
+        )));
+    } else {
+        let per: Vec<String> = d.counts.iter().map(|(l, n)| format!("{l}: {n}")).collect();
+        v.push(Line::raw(format!(
+            "{} recordings — {}",
+            d.total(),
+            per.join("  ")
+        )));
+    }
+    if d.unsaved > 0 {
+        v.push(Line::raw(format!(
+            "{} scan(s) not stored, in .unsaved/",
+            d.unsaved
+        )));
+    }
+    v.push(Line::raw(match (&d.model, &d.busy) {
+        (_, Some(b)) => b.clone(),
+        (Some(m), None) => {
+            let stale = if d.total() > m.examples {
+                format!(
+                    "; {} newer stored ({} retrains)",
+                    d.total() - m.examples,
+                    app.keys.name(Key::Train)
+                )
+            } else {
+                String::new()
+            };
+            format!(
+                "model: k-NN k = {} on {} recordings of {}{stale}",
+                m.k,
+                m.examples,
+                m.labels.join(", ")
+            )
+        }
+        (None, None) => format!(
+            "model: none ({} trains, {} evaluates)",
+            app.keys.name(Key::Train),
+            app.keys.name(Key::Evaluate)
+        ),
+    }));
+    match &d.report {
+        None => v.push(Line::raw("no evaluation yet")),
+        Some(r) => {
+            v.push(Line::styled(
+                format!(
+                    "evaluation: {}/{} right ({:.1} %); rows true, columns classified as",
+                    r.correct(),
+                    r.tested(),
+                    r.accuracy * 100.0
+                ),
+                Style::new().add_modifier(Modifier::DIM),
+            ));
+            let mut head = format!("{:>7}", "");
+            for l in &r.labels {
+                head.push_str(&format!("{l:>7}"));
+            }
+            v.push(Line::styled(
+                head,
+                Style::new().add_modifier(Modifier::BOLD),
+            ));
+            for (i, l) in r.labels.iter().enumerate() {
+                let mut row = format!("{l:>7}");
+                for n in &r.confusion[i] {
+                    row.push_str(&format!("{n:>7}"));
+                }
+                v.push(Line::raw(row));
+            }
+            let rate = |f: &dyn Fn(&crate::evaluate::ClassRate) -> f64, name: &str| {
+                let mut row = format!("{name:>7}");
+                for l in &r.labels {
+                    let c = r.per_class.iter().find(|c| &c.label == l);
+                    match c.map(f) {
+                        Some(x) if x.is_finite() => row.push_str(&format!("{:>7.1}", x * 100.0)),
+                        _ => row.push_str(&format!("{:>7}", "—")),
+                    }
+                }
+                row
+            };
+            v.push(Line::raw(rate(&|c| c.success_rate, "SR(%)")));
+            v.push(Line::raw(rate(&|c| c.error_rate, "ER(%)")));
+        }
+    }
+    Paragraph::new(v).block(frame("Dataset")).render(area, buf);
+}

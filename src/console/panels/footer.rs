@@ -1,0 +1,143 @@
+//! The header line (profile, mode, page tabs) and the footer: the keys that
+//! matter now, then the status line, marked `!` for a warning and `ERROR:`
+//! for an error so that nothing rests on colour alone.
+
+use ratatui::buffer::Buffer;
+use ratatui::layout::Rect;
+use ratatui::style::{Color, Modifier, Style};
+use ratatui::text::{Line, Span};
+use ratatui::widgets::Widget;
+
+use super::Page;
+use crate::console::app::{App, Level};
+use crate::console::keymap::Key;
+
+pub fn render_header(app: &App, pages: &[Page], area: Rect, buf: &mut Buffer) {
+    let bold = Style::new().add_modifier(Modifier::BOLD);
+    let mut spans = vec![Span::styled(
+        " hapticlab ",
+        bold.add_modifier(Modifier::REVERSED),
+    )];
+    match &app.replay {
+        Some(r) => {
+            let name = r
+                .selected_path()
+                .and_then(|p| p.file_name())
+                .map_or(String::new(), |n| n.to_string_lossy().into_owned());
+            spans.push(Span::raw(format!(" replay {name} ")));
+        }
+        None => spans.push(Span::raw(format!(
+            " {} · {} mode ",
+            app.profile.profile.name,
+            app.mode().name()
+        ))),
+    }
+    if pages.len() > 1 {
+        let current = app.page % pages.len();
+        spans.push(Span::raw("│"));
+        for (i, p) in pages.iter().enumerate() {
+            if i == current {
+                spans.push(Span::styled(
+                    format!(" [{} {}] ", i + 1, p.name),
+                    bold.add_modifier(Modifier::REVERSED),
+                ));
+            } else {
+                spans.push(Span::raw(format!(" {} {} ", i + 1, p.name)));
+            }
+        }
+    }
+    Line::from(spans).render(area, buf);
+}
+
+/// The key hints for the current view, most important first.
+pub fn hints(app: &App) -> Vec<(String, &'static str)> {
+    let k = |key| app.keys.name(key);
+    if app.replay.is_some() {
+        let mut v = vec![
+            (k(Key::Help), "help"),
+            (format!("{}{}", k(Key::Up), k(Key::Down)), "recording"),
+            (k(Key::Pause), "pause"),
+            (format!("{}/{}", k(Key::Faster), k(Key::Slower)), "speed"),
+            (k(Key::Step), "step"),
+            (k(Key::Left), "restart"),
+            (k(Key::Predict), "predict"),
+        ];
+        if app.source != crate::console::app::Source::ReplayOnly {
+            v.push((k(Key::Abort), "back"));
+        }
+        v.push((k(Key::Quit), "quit"));
+        return v;
+    }
+    vec![
+        (k(Key::Help), "help"),
+        (k(Key::Start), "start"),
+        (k(Key::Abort), "abort"),
+        (k(Key::Store), "store"),
+        (k(Key::Predict), "predict"),
+        (k(Key::Mode), "mode"),
+        (k(Key::Target), "target"),
+        (k(Key::Label), "label"),
+        (k(Key::Queue), "queue"),
+        (k(Key::Train), "train"),
+        (k(Key::Evaluate), "evaluate"),
+        (k(Key::Replay), "replay"),
+        (k(Key::Quit), "quit"),
+    ]
+}
+
+pub fn render_footer(app: &App, pages: &[Page], area: Rect, buf: &mut Buffer) {
+    if area.height == 0 {
+        return;
+    }
+    let width = usize::from(area.width);
+    let mut used = 0;
+    let mut spans = Vec::new();
+    let pager = if pages.len() > 1 {
+        format!(
+            " {}: page {}/{}",
+            app.keys.name(Key::NextPage),
+            app.page % pages.len() + 1,
+            pages.len()
+        )
+    } else {
+        String::new()
+    };
+    let room = width.saturating_sub(pager.chars().count());
+    for (key, what) in hints(app) {
+        let len = key.chars().count() + what.len() + 2;
+        if used + len > room {
+            break;
+        }
+        used += len;
+        spans.push(Span::styled(
+            key,
+            Style::new().add_modifier(Modifier::BOLD | Modifier::REVERSED),
+        ));
+        spans.push(Span::raw(format!(" {what} ")));
+    }
+    spans.push(Span::raw(format!(
+        "{:>w$}",
+        pager,
+        w = width.saturating_sub(used)
+    )));
+    Line::from(spans).render(Rect { height: 1, ..area }, buf);
+    if area.height < 2 {
+        return;
+    }
+    let (prefix, style) = match app.status.level {
+        Level::Info => ("", Style::new()),
+        Level::Warn => ("! ", Style::new().fg(Color::Yellow)),
+        Level::Error => (
+            "ERROR: ",
+            Style::new().fg(Color::Red).add_modifier(Modifier::BOLD),
+        ),
+    };
+    Line::styled(format!("{prefix}{}", app.status.text), style).render(
+        Rect {
+            y: area.y + 1,
+            height: 1,
+            ..area
+        },
+        buf,
+    );
+}

@@ -1,0 +1,176 @@
+//! Overlays drawn over the panels: the help screen (every key, from the key
+//! map), the quit confirmation, and forms.
+
+use ratatui::buffer::Buffer;
+use ratatui::layout::Rect;
+use ratatui::style::{Modifier, Style};
+use ratatui::text::{Line, Span};
+use ratatui::widgets::{Clear, Paragraph, Widget, Wrap};
+
+use super::frame;
+use crate::console::app::App;
+use crate::console::form::{Form, Overlay};
+use crate::console::keymap::Key;
+
+fn centred(area: Rect, w: u16, h: u16) -> Rect {
+    let w = w.min(area.width);
+    let h = h.min(area.height);
+    Rect::new(
+        area.x + (area.width - w) / 2,
+        area.y + (area.height - h) / 2,
+        w,
+        h,
+    )
+}
+
+pub fn render(app: &App, o: &Overlay, area: Rect, buf: &mut Buffer) {
+    match o {
+        Overlay::Help => help(app, area, buf),
+        Overlay::ConfirmQuit => {
+            let r = centred(area, 60, 7);
+            Clear.render(r, buf);
+            let name = app
+                .last_scan
+                .as_ref()
+                .map_or(String::new(), |s| s.path.display().to_string());
+            Paragraph::new(vec![
+                Line::raw("The last scan is not stored in the dataset"),
+                Line::raw(format!("(it stays in {name}).")),
+                Line::raw(""),
+                Line::raw("y: quit anyway   w: store it first   any other key: stay"),
+            ])
+            .wrap(Wrap { trim: true })
+            .block(frame("Quit?"))
+            .render(r, buf);
+        }
+        Overlay::Form(f) => form(f, area, buf),
+    }
+}
+
+fn form(f: &Form, area: Rect, buf: &mut Buffer) {
+    let h = f.fields.len() as u16 + 6;
+    let r = centred(area, 64, h);
+    Clear.render(r, buf);
+    let mut lines = Vec::new();
+    for (i, field) in f.fields.iter().enumerate() {
+        let focused = i == f.focus;
+        lines.push(Line::from(vec![
+            Span::raw(format!(
+                "{} {:<8} ",
+                if focused { ">" } else { " " },
+                field.name
+            )),
+            Span::styled(
+                format!("{}{}", field.text, if focused { "_" } else { "" }),
+                if focused {
+                    Style::new().add_modifier(Modifier::REVERSED)
+                } else {
+                    Style::new()
+                },
+            ),
+        ]));
+    }
+    lines.push(Line::raw(""));
+    match &f.error {
+        Some(e) => lines.push(Line::styled(
+            format!("ERROR: {e}"),
+            Style::new().add_modifier(Modifier::BOLD),
+        )),
+        None => lines.push(Line::raw(f.hint.clone())),
+    }
+    Paragraph::new(lines)
+        .wrap(Wrap { trim: false })
+        .block(frame(f.title()))
+        .render(r, buf);
+}
+
+fn help(app: &App, area: Rect, buf: &mut Buffer) {
+    let k = |key| app.keys.name(key);
+    let rows: Vec<(String, &str)> = vec![
+        (
+            k(Key::Mode),
+            "cycle the mode: Manual (no forces) → Target → Test",
+        ),
+        (
+            k(Key::Start),
+            "start a measurement: run the waypoint path, record the stroke",
+        ),
+        (
+            k(Key::Abort),
+            "abort the scan or motion (forces off); close a replay",
+        ),
+        (
+            k(Key::Store),
+            "store the last scan as <dataset>/<label>/<label>_NNN.csv",
+        ),
+        (
+            k(Key::Label),
+            "set the label of the next scans (a texture's label mounts it)",
+        ),
+        (
+            k(Key::Queue),
+            "queue N automatic scans, each stored as it completes",
+        ),
+        (
+            k(Key::Predict),
+            "predict the scan on screen (trains first if no model)",
+        ),
+        (
+            k(Key::Train),
+            "train k-NN on the dataset (saved as model.json there)",
+        ),
+        (
+            k(Key::Evaluate),
+            "evaluate: split, train, test; confusion matrix, SR/ER",
+        ),
+        (k(Key::Target), "type a target position in cm (Target mode)"),
+        (
+            format!(
+                "{}{}{}{} {}/{}",
+                k(Key::Left),
+                k(Key::Right),
+                k(Key::Up),
+                k(Key::Down),
+                k(Key::Away),
+                k(Key::Toward)
+            ),
+            "nudge the target 1 mm in x, y, z",
+        ),
+        (
+            format!("{}/{}", k(Key::Faster), k(Key::Slower)),
+            "path speed (replay: 1×, 4×, 16×)",
+        ),
+        (k(Key::Replay), "replay browser on the dataset folder"),
+        (
+            format!("{} {} {}", k(Key::Pause), k(Key::Step), k(Key::Left)),
+            "replay: pause, single step, restart; ↑/↓ recording",
+        ),
+        (
+            format!("{} 1-4", k(Key::NextPage)),
+            "next page / page N (small terminals)",
+        ),
+        (
+            k(Key::Quit),
+            "quit (asks if the last scan is not stored); Ctrl-C quits now",
+        ),
+    ];
+    let h = rows.len() as u16 + 4;
+    let r = centred(area, 78, h);
+    Clear.render(r, buf);
+    let mut lines: Vec<Line> = rows
+        .into_iter()
+        .map(|(key, what)| {
+            Line::from(vec![
+                Span::styled(
+                    format!("{key:>12} "),
+                    Style::new().add_modifier(Modifier::BOLD),
+                ),
+                Span::raw(what.to_string()),
+            ])
+        })
+        .collect();
+    lines.push(Line::raw(
+        "  any key closes; change keys in the profile's [console] keys table",
+    ));
+    Paragraph::new(lines).block(frame("Keys")).render(r, buf);
+}

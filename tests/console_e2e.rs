@@ -1,0 +1,248 @@
+//! The real binary in a pseudo-terminal (portable-pty, screen parsed by
+//! vt100): start the console on a fast test profile, run a scan, predict it,
+//! read the label off the screen, quit, and check the terminal was restored.
+//! A second run is ended by SIGTERM mid-scan: the scan must be kept on disk
+//! as aborted and the terminal restored.
+
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{Receiver, channel};
+use std::time::{Duration, Instant};
+
+use portable_pty::{Child, CommandBuilder, PtySize, native_pty_system};
+
+const COLS: u16 = 160;
+const ROWS: u16 = 48;
+
+fn fast_profile() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/console-fast.toml")
+}
+
+struct Session {
+    child: Box<dyn Child + Send + Sync>,
+    writer: Box<dyn Write + Send>,
+    output: Receiver<Vec<u8>>,
+    parser: vt100::Parser,
+    raw: Vec<u8>,
+}
+
+impl Session {
+    fn start(args: &[&str], cwd: &Path) -> Session {
+        let pty = native_pty_system()
+            .openpty(PtySize {
+                rows: ROWS,
+                cols: COLS,
+                pixel_width: 0,
+                pixel_height: 0,
+            })
+            .unwrap();
+        let mut cmd = CommandBuilder::new(env!("CARGO_BIN_EXE_hapticlab"));
+        cmd.args(args);
+        cmd.cwd(cwd);
+        cmd.env("TERM", "xterm-256color");
+        let child = pty.slave.spawn_command(cmd).unwrap();
+        drop(pty.slave);
+        let mut reader = pty.master.try_clone_reader().unwrap();
+        let writer = pty.master.take_writer().unwrap();
+        let (tx, output) = channel();
+        std::thread::spawn(move || {
+            let _keep_master_open = pty.master;
+            let mut buf = [0u8; 8192];
+            while let Ok(n) = reader.read(&mut buf) {
+                if n == 0 || tx.send(buf[..n].to_vec()).is_err() {
+                    break;
+                }
+            }
+        });
+        Session {
+            child,
+            writer,
+            output,
+            parser: vt100::Parser::new(
+                std::num::NonZeroU16::new(ROWS).unwrap(),
+                std::num::NonZeroU16::new(COLS).unwrap(),
+                0,
+            ),
+            raw: Vec::new(),
+        }
+    }
+
+    fn pump(&mut self, wait: Duration) {
+        if let Ok(bytes) = self.output.recv_timeout(wait) {
+            self.parser.process(&bytes);
+            self.raw.extend_from_slice(&bytes);
+        }
+        while let Ok(bytes) = self.output.try_recv() {
+            self.parser.process(&bytes);
+            self.raw.extend_from_slice(&bytes);
+        }
+    }
+
+    fn screen(&self) -> String {
+        self.parser.screen().contents()
+    }
+
+    /// Wait until the screen shows `text`.
+    fn wait_for(&mut self, text: &str, limit: Duration) -> String {
+        let start = Instant::now();
+        loop {
+            self.pump(Duration::from_millis(50));
+            let s = self.screen();
+            if s.contains(text) {
+                return s;
+            }
+            assert!(
+                start.elapsed() < limit,
+                "waited {limit:?} for {text:?}; the screen:\n{s}"
+            );
+        }
+    }
+
+    fn send(&mut self, keys: &str) {
+        self.writer.write_all(keys.as_bytes()).unwrap();
+        self.writer.flush().unwrap();
+    }
+
+    /// Wait for the process to end; its exit status.
+    fn wait_exit(&mut self, limit: Duration) -> portable_pty::ExitStatus {
+        let start = Instant::now();
+        loop {
+            self.pump(Duration::from_millis(50));
+            if let Some(status) = self.child.try_wait().unwrap() {
+                self.pump(Duration::from_millis(200));
+                return status;
+            }
+            assert!(
+                start.elapsed() < limit,
+                "the console did not exit:\n{}",
+                self.screen()
+            );
+        }
+    }
+
+    fn restored(&self) -> bool {
+        !self.parser.screen().alternate_screen() && self.raw.windows(8).any(|w| w == b"\x1b[?1049l")
+    }
+}
+
+fn simulate(dir: &Path) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hapticlab"))
+        .args(["simulate", "--profile"])
+        .arg(fast_profile())
+        .arg("--out")
+        .arg(dir)
+        .args(["--per-class", "6", "--threads", "2"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn scan_predict_and_quit_in_a_pseudo_terminal() {
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path().join("ds");
+    simulate(&ds);
+    let profile = fast_profile();
+    let mut s = Session::start(
+        &[
+            "console",
+            "--profile",
+            profile.to_str().unwrap(),
+            "--dataset",
+            ds.to_str().unwrap(),
+        ],
+        tmp.path(),
+    );
+    s.wait_for("Device", Duration::from_secs(20));
+    s.wait_for("Homed    yes", Duration::from_secs(10));
+    // Label S2: the simulator mounts texture S2.
+    s.send("l\x7f\x7fS2\r");
+    s.wait_for("mounting texture S2", Duration::from_secs(10));
+    s.send("s");
+    s.wait_for("scan complete", Duration::from_secs(30));
+    s.send("p");
+    let screen = s.wait_for("Predicted ", Duration::from_secs(30));
+    let label = screen
+        .split("Predicted ")
+        .nth(1)
+        .and_then(|rest| rest.split_whitespace().next())
+        .unwrap()
+        .to_string();
+    assert_eq!(label, "S2", "the screen:\n{screen}");
+    assert!(screen.contains("recorded as S2: right"), "{screen}");
+    // Quitting with the scan unstored asks first.
+    s.send("q");
+    s.wait_for("Quit?", Duration::from_secs(5));
+    s.send("y");
+    let status = s.wait_exit(Duration::from_secs(15));
+    assert!(status.success(), "{status:?}");
+    assert!(s.restored(), "the alternate screen was not left");
+    assert!(
+        ds.join("model.json").exists(),
+        "p trained and saved a model"
+    );
+    assert_eq!(std::fs::read_dir(ds.join(".unsaved")).unwrap().count(), 1);
+}
+
+#[test]
+fn sigterm_mid_scan_keeps_the_scan_and_restores_the_terminal() {
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path().join("ds");
+    let profile = fast_profile();
+    let mut s = Session::start(
+        &[
+            "console",
+            "--profile",
+            profile.to_str().unwrap(),
+            "--dataset",
+            ds.to_str().unwrap(),
+        ],
+        tmp.path(),
+    );
+    s.wait_for("Homed    yes", Duration::from_secs(20));
+    s.send("s");
+    s.wait_for("% recorded", Duration::from_secs(20));
+    let pid = s.child.process_id().unwrap();
+    // SAFETY: kill(2) on our own child's pid.
+    assert_eq!(unsafe { libc::kill(pid as i32, libc::SIGTERM) }, 0);
+    let status = s.wait_exit(Duration::from_secs(15));
+    assert!(status.success(), "{status:?}");
+    assert!(s.restored(), "the alternate screen was not left");
+    let scans: Vec<_> = std::fs::read_dir(ds.join(".unsaved"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(scans.len(), 1);
+    let rec = hapticlab::recording::read(&scans[0]).unwrap();
+    assert!(!rec.is_complete(), "interrupted: no trailer");
+    assert!(rec.len() > 10, "{} samples", rec.len());
+    assert!(rec.aborted().is_some());
+}
+
+#[test]
+fn sighup_quits_cleanly() {
+    let tmp = tempfile::tempdir().unwrap();
+    let profile = fast_profile();
+    let ds = tmp.path().join("ds");
+    let mut s = Session::start(
+        &[
+            "console",
+            "--profile",
+            profile.to_str().unwrap(),
+            "--dataset",
+            ds.to_str().unwrap(),
+        ],
+        tmp.path(),
+    );
+    s.wait_for("Homed    yes", Duration::from_secs(20));
+    let pid = s.child.process_id().unwrap();
+    // SAFETY: kill(2) on our own child's pid.
+    assert_eq!(unsafe { libc::kill(pid as i32, libc::SIGHUP) }, 0);
+    let status = s.wait_exit(Duration::from_secs(15));
+    assert!(status.success(), "{status:?}");
+    assert!(s.restored(), "the alternate screen was not left");
+}
