@@ -1,7 +1,9 @@
 //! The servo loop in real time on the simulator: achieved rate, period error
 //! percentiles, missed deadlines, while the probe runs the thesis path and
 //! its scan is recorded. Not a statistical micro-benchmark: one long run,
-//! reported. `HAPTICLAB_SOAK_S` sets the duration (default 60 s).
+//! reported. `HAPTICLAB_SOAK_S` sets the duration (default 60 s);
+//! `HAPTICLAB_RT=1` asks for the profile's real-time setup (SCHED_FIFO 80,
+//! memory locked), as `device.realtime` does.
 //!
 //! cargo bench --bench servo_realtime
 
@@ -23,7 +25,15 @@ fn main() {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(60.0);
-    let lp = LoadedProfile::thesis();
+    let mut lp = LoadedProfile::thesis();
+    let rt = std::env::var("HAPTICLAB_RT").is_ok_and(|v| v == "1");
+    if rt {
+        lp.profile.device.realtime = Some(hapticlab::profile::Realtime {
+            priority: 80,
+            lock_memory: true,
+            cpu: None,
+        });
+    }
     let profile = lp.profile.clone();
     let base = lp.base_dir.clone();
     let handle = spawn(&lp.profile, move || {
@@ -48,16 +58,27 @@ fn main() {
         std::thread::sleep(Duration::from_millis(33));
         let _ = handle.telemetry.try_iter().count();
         for e in handle.events.try_iter() {
-            if let ServoEvent::ScanEnded { samples: n, .. } = e {
-                samples += n;
-                next_scan = true;
+            match e {
+                ServoEvent::ScanEnded { samples: n, .. } => {
+                    samples += n;
+                    next_scan = true;
+                }
+                ServoEvent::Notice { message } => println!("  note: {message}"),
+                _ => {}
             }
         }
     }
     let (result, saved) = handle.shutdown();
     let (_, stats) = result.expect("the servo thread ran");
     let complete = saved.iter().filter(|s| s.complete).count();
-    println!("servo_realtime: {secs:.0} s on the simulator, thesis path, scans recorded");
+    println!(
+        "servo_realtime: {secs:.0} s on the simulator, thesis path, scans recorded{}",
+        if rt {
+            ", SCHED_FIFO requested"
+        } else {
+            ", normal priority"
+        }
+    );
     println!("  {}", stats.summary());
     println!(
         "  mean rate error {:.3} %; {} scans started, {} complete, {} samples written",

@@ -382,6 +382,7 @@ pub fn scan_live(
                     (stats, recorded, reason) = (s, samples > 0, aborted);
                     break;
                 }
+                Ok(ServoEvent::Notice { message }) => eprintln!("note: {message}"),
                 Ok(_) => {}
                 Err(crossbeam_channel::RecvTimeoutError::Timeout) => {
                     if started.elapsed() > per_scan_limit {

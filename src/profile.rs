@@ -261,6 +261,25 @@ pub struct Device {
     /// A tick counts as missed when it starts this late, as a fraction of the period.
     #[serde(default = "default_missed_fraction")]
     pub missed_deadline_fraction: f64,
+    /// Ask the OS for real-time scheduling of the servo thread (opt-in).
+    #[serde(default)]
+    pub realtime: Option<Realtime>,
+}
+
+/// Real-time setup of the servo thread: SCHED_FIFO at `priority`, memory
+/// locked, optionally pinned to one core. When the system refuses (no
+/// privilege, no RT limits), the loop says so once and runs on without it.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Realtime {
+    /// SCHED_FIFO priority, 1–99.
+    pub priority: u8,
+    /// Lock the process's memory (mlockall) so page faults cannot stall a tick.
+    #[serde(default)]
+    pub lock_memory: bool,
+    /// Pin the servo thread to this core.
+    #[serde(default)]
+    pub cpu: Option<usize>,
 }
 
 fn default_missed_streak() -> u32 {
@@ -662,6 +681,14 @@ impl Profile {
         }
         if d.missed_deadline_streak == 0 {
             return bad("device.missed_deadline_streak", "must be at least 1");
+        }
+        if let Some(rt) = &d.realtime
+            && !(1..=99).contains(&rt.priority)
+        {
+            return bad(
+                "device.realtime.priority",
+                format!("must be from 1 to 99, got {}", rt.priority),
+            );
         }
         if !(d.missed_deadline_fraction > 0.0 && d.missed_deadline_fraction <= 10.0) {
             return bad("device.missed_deadline_fraction", "must be in (0, 10]");

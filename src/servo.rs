@@ -104,6 +104,10 @@ pub enum ServoEvent {
     MotionStopped {
         reason: String,
     },
+    /// Something the user should know that stops nothing (said once).
+    Notice {
+        message: String,
+    },
 }
 
 /// Why `tick` says the loop should end.
@@ -553,6 +557,17 @@ where
     let thread = std::thread::Builder::new()
         .name("servo".into())
         .spawn(move || {
+            let notices = profile
+                .device
+                .realtime
+                .as_ref()
+                .map(clock::request_realtime)
+                .unwrap_or_default();
+            if let Some(tx) = &links.events {
+                for message in notices {
+                    let _ = tx.try_send(ServoEvent::Notice { message });
+                }
+            }
             let device = make();
             let clock = clock::RealClock::start();
             let mut servo = ServoLoop::new(device, clock, &profile, sink, links);

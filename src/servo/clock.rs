@@ -88,6 +88,53 @@ impl Clock for RealClock {
     }
 }
 
+/// Apply the profile's real-time request to the calling thread. Returns a
+/// note for the user for each part the system refused (none when all took).
+pub fn request_realtime(rt: &crate::profile::Realtime) -> Vec<String> {
+    let mut refused = Vec::new();
+    #[cfg(target_os = "linux")]
+    {
+        let param = libc::sched_param {
+            sched_priority: i32::from(rt.priority),
+        };
+        // SAFETY: pid 0 is the calling thread; `param` is a valid sched_param.
+        if unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) } != 0 {
+            refused.push(format!(
+                "real-time scheduling (SCHED_FIFO {}) refused: {}; running at normal priority (see `ulimit -r`, or grant CAP_SYS_NICE)",
+                rt.priority,
+                std::io::Error::last_os_error()
+            ));
+        }
+        // SAFETY: mlockall takes flags only.
+        if rt.lock_memory && unsafe { libc::mlockall(libc::MCL_CURRENT | libc::MCL_FUTURE) } != 0 {
+            refused.push(format!(
+                "locking memory refused: {}; running unlocked (see `ulimit -l`)",
+                std::io::Error::last_os_error()
+            ));
+        }
+        if let Some(cpu) = rt.cpu {
+            // SAFETY: a zeroed cpu_set_t is empty; CPU_SET stays within it for cpu < CPU_SETSIZE.
+            let ok = cpu < libc::CPU_SETSIZE as usize
+                && unsafe {
+                    let mut set: libc::cpu_set_t = std::mem::zeroed();
+                    libc::CPU_SET(cpu, &mut set);
+                    libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set) == 0
+                };
+            if !ok {
+                refused.push(format!(
+                    "pinning the servo thread to core {cpu} refused: {}; running unpinned",
+                    std::io::Error::last_os_error()
+                ));
+            }
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    refused.push(format!(
+        "real-time scheduling is only supported on Linux; running at normal priority ({rt:?})"
+    ));
+    refused
+}
+
 pub struct VirtualClock {
     now: f64,
     period: f64,

@@ -44,6 +44,7 @@ impl App {
                 self.queued_run = false;
                 self.warn(format!("motion stopped: {reason}"));
             }
+            ServoEvent::Notice { message } => self.warn(message),
         }
     }
 
