@@ -1,6 +1,7 @@
 //! The servo loop in real time on the simulator: achieved rate, period error
-//! percentiles, missed deadlines, while the probe runs the thesis path and
-//! its scan is recorded. Not a statistical micro-benchmark: one long run,
+//! percentiles, missed deadlines, while the probe runs the thesis path, its
+//! scans are recorded, and a console-like consumer drains the telemetry and
+//! renders a full 200×60 console frame thirty times a second. Not a statistical micro-benchmark: one long run,
 //! reported. `HAPTICLAB_SOAK_S` sets the duration (default 60 s);
 //! `HAPTICLAB_RT=1` asks for the profile's real-time setup (SCHED_FIFO 80,
 //! memory locked), as `device.realtime` does.
@@ -45,6 +46,9 @@ fn main() {
     let mut scans = 0;
     let mut samples = 0;
     let mut next_scan = true;
+    let console = hapticlab::console::fixtures::app(200, 60);
+    let mut terminal = ratatui::Terminal::new(ratatui::backend::TestBackend::new(200, 60))
+        .expect("a test terminal");
     while started.elapsed() < Duration::from_secs_f64(secs) {
         if next_scan {
             scans += 1;
@@ -54,9 +58,12 @@ fn main() {
             });
             next_scan = false;
         }
-        // A console-like consumer: drain telemetry thirty times a second.
+        // A console-like consumer: drain telemetry and draw thirty times a second.
         std::thread::sleep(Duration::from_millis(33));
         let _ = handle.telemetry.try_iter().count();
+        terminal
+            .draw(|f| f.render_widget(&console, f.area()))
+            .expect("draw");
         for e in handle.events.try_iter() {
             match e {
                 ServoEvent::ScanEnded { samples: n, .. } => {
