@@ -1,0 +1,1 @@
+//! The USB transport (nusb): not written yet.
