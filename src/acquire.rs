@@ -10,6 +10,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use crate::device::HapticDevice;
+use crate::device::falcon::{self, OpenError};
 use crate::device::sim::{SimDevice, SimError};
 use crate::profile::{DeviceKind, LoadedProfile, check_label};
 use crate::recorder::SavedScan;
@@ -36,6 +37,35 @@ impl AcquireError {
         ) || matches!(self, AcquireError::Sim(SimError::Surface(_)))
     }
 }
+
+impl From<OpenError> for AcquireError {
+    fn from(e: OpenError) -> Self {
+        match e {
+            OpenError::BadInput(m) => AcquireError::BadInput(m),
+            OpenError::Device(m) => AcquireError::Runtime(m),
+        }
+    }
+}
+
+/// The profile's device, ready to run: the simulator, the emulated Falcon
+/// (both stroking `texture`, free air when `None`, seeded with `seed`), or
+/// the real Falcon on USB. `log` hears the Falcon's start-up steps.
+pub fn open_device(
+    lp: &LoadedProfile,
+    texture: Option<&str>,
+    seed: u64,
+    log: &mut dyn FnMut(&str),
+) -> Result<Box<dyn HapticDevice>, AcquireError> {
+    let p = &lp.profile;
+    Ok(match p.device.kind {
+        DeviceKind::Sim => Box::new(SimDevice::new(p, &lp.base_dir, texture, seed)?),
+        DeviceKind::FalconEmulator => Box::new(falcon::open_emulated(lp, texture, seed, log)?),
+        DeviceKind::Falcon => Box::new(falcon::open_usb(lp, log)?),
+    })
+}
+
+/// What `scan` tells the user when the Falcon is not homed.
+pub const HOMING_HELP: &str = "the Falcon is not homed (its LEDs are red): pull the grip all the way out towards you, then push it all the way back in; the LEDs turn blue when it is homed";
 
 /// The metadata every recording carries.
 pub fn scan_metadata(
@@ -137,7 +167,13 @@ pub fn simulate_one(
     path: &Path,
 ) -> Result<(SavedScan, LoopStats), AcquireError> {
     let p = &lp.profile;
-    let device = SimDevice::new(p, &lp.base_dir, Some(label), seed)?;
+    if p.device.kind == DeviceKind::Falcon {
+        return Err(AcquireError::BadInput(format!(
+            "{}: simulate runs on the simulator or the emulated Falcon, not a real one (device.kind = \"falcon\"); use `scan` for the real device",
+            lp.origin
+        )));
+    }
+    let device = open_device(lp, Some(label), seed, &mut |_| {})?;
     let clock = VirtualClock::new(
         p.device.rate_hz,
         p.simulator.period_jitter_s,
@@ -161,6 +197,23 @@ pub fn simulate_one(
         ..Links::default()
     };
     let mut servo = ServoLoop::new(device, clock, p, sink, links);
+    if p.device.kind == DeviceKind::FalconEmulator {
+        // The emulated hand homes the grip first (forces stay off until then).
+        let mut ticks = 0u64;
+        while !servo.reading().homed {
+            if ticks > (30.0 * p.device.rate_hz) as u64 {
+                return Err(AcquireError::Runtime(
+                    "the emulated Falcon did not home within 30 s (is `[falcon.emulator] auto_home` off?)".into(),
+                ));
+            }
+            if let Err(h) = servo.tick() {
+                return Err(AcquireError::Runtime(format!(
+                    "the emulated Falcon stopped while homing: {h}"
+                )));
+            }
+            ticks += 1;
+        }
+    }
     servo.apply(Command::StartScan {
         path: path.to_path_buf(),
         meta,

@@ -15,6 +15,8 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
+pub mod hardware;
+
 /// The thesis profile, compiled in so that `hapticlab` works from any folder.
 pub const THESIS_PROFILE: &str = include_str!("../profiles/thesis.toml");
 
@@ -43,6 +45,12 @@ pub struct Profile {
     pub textures: Vec<Texture>,
     #[serde(default)]
     pub simulator: Simulator,
+    /// The Novint Falcon and its emulator (`device.kind = "falcon"`, `"falcon-emulator"`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub falcon: Option<hardware::FalconSection>,
+    /// Hands-free triggers: HID foot switches and button boxes.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub triggers: Vec<hardware::TriggerSpec>,
 }
 
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq)]
@@ -756,7 +764,7 @@ impl Profile {
         if !(1..=64).contains(&s.substeps) {
             return bad("simulator.substeps", "must be from 1 to 64");
         }
-        Ok(())
+        hardware::validate(self)
     }
 
     pub fn texture(&self, label: &str) -> Option<&Texture> {

@@ -402,3 +402,91 @@ impl<T: FalconTransport> Drop for FalconDevice<T> {
         self.make_safe();
     }
 }
+
+/// Why a Falcon could not be opened: the user's input (exit code 2) or the
+/// device (exit code 1).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum OpenError {
+    #[error("{0}")]
+    BadInput(String),
+    #[error("{0}")]
+    Device(String),
+}
+
+/// The driver's settings from a profile; the firmware file (if named) is
+/// read and checked here, before any USB traffic.
+pub fn config_from_profile(lp: &crate::profile::LoadedProfile) -> Result<FalconConfig, OpenError> {
+    let section = lp.profile.falcon.clone().unwrap_or_default();
+    let firmware = match &section.firmware {
+        Some(path) => Some(
+            firmware::load_image(&lp.resolve(path))
+                .map_err(|e| OpenError::BadInput(e.to_string()))?,
+        ),
+        None => None,
+    };
+    let period_ms = 1000.0 / lp.profile.device.rate_hz;
+    Ok(FalconConfig {
+        frame: Frame {
+            origin_m: section.origin_m,
+        },
+        encoder_offset_deg: section.encoder_offset_deg,
+        firmware,
+        firmware_attempts: section.firmware_attempts,
+        reply_timeout: Duration::from_secs_f64(section.reply_timeout_ms / 1000.0),
+        link_lost_after: (section.link_lost_after_ms / period_ms).ceil().max(2.0) as u32,
+    })
+}
+
+fn firmware_failure(e: firmware::FirmwareError) -> OpenError {
+    match e {
+        firmware::FirmwareError::File(_) | firmware::FirmwareError::NoImage => {
+            OpenError::BadInput(e.to_string())
+        }
+        other => OpenError::Device(other.to_string()),
+    }
+}
+
+/// The emulated Falcon of a profile, stroking `texture` (free air when
+/// `None`), its physics seeded with `seed`.
+pub fn open_emulated(
+    lp: &crate::profile::LoadedProfile,
+    texture: Option<&str>,
+    seed: u64,
+    log: &mut dyn FnMut(&str),
+) -> Result<FalconDevice<emulator::EmulatedFalcon>, OpenError> {
+    let config = config_from_profile(lp)?;
+    let section = lp.profile.falcon.clone().unwrap_or_default();
+    let e = &section.emulator;
+    let sim = super::sim::SimDevice::new(&lp.profile, &lp.base_dir, texture, seed)
+        .map_err(|e| OpenError::BadInput(e.to_string()))?;
+    let emu = emulator::EmulatedFalcon::new(
+        sim,
+        emulator::EmulatorConfig {
+            firmware_loaded: e.firmware_loaded,
+            upload_failures: e.upload_failures,
+            drop_rate: e.drop_rate,
+            garble_rate: e.garble_rate,
+            split_rate: e.split_rate,
+            unplug_after_s: e.unplug_after_s,
+            auto_home: e.auto_home,
+            leading_zero: seed % 2 == 1,
+            seed,
+            frame: config.frame,
+            encoder_offset_deg: config.encoder_offset_deg,
+            position_noise_m: lp.profile.simulator.position_noise_m,
+        },
+    );
+    FalconDevice::open(emu, config, log).map_err(firmware_failure)
+}
+
+/// The real Falcon of a profile, over USB.
+pub fn open_usb(
+    lp: &crate::profile::LoadedProfile,
+    log: &mut dyn FnMut(&str),
+) -> Result<FalconDevice<usb::UsbTransport>, OpenError> {
+    let config = config_from_profile(lp)?;
+    let index = lp.profile.falcon.as_ref().map_or(0, |f| f.index);
+    let transport = usb::UsbTransport::open(index).map_err(|e| OpenError::Device(e.to_string()))?;
+    log(&format!("opened {}", transport.describe()));
+    FalconDevice::open(transport, config, log).map_err(firmware_failure)
+}
