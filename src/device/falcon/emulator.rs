@@ -632,4 +632,50 @@ mod tests {
         }
         assert!(dev.transport().counters.max_motor > 0);
     }
+
+    #[test]
+    fn faults_are_survived_and_counted_and_unplugging_stops_the_motors() {
+        let e = emulator(EmulatorConfig {
+            drop_rate: 0.05,
+            garble_rate: 0.05,
+            split_rate: 0.3,
+            unplug_after_s: Some(4.0),
+            ..EmulatorConfig::default()
+        });
+        let mut dev = FalconDevice::open(e, FalconConfig::default(), &mut |_| {}).unwrap();
+        let hold = [0.0, 0.0, -0.04];
+        let mut failed_at = None;
+        for k in 1..5000 {
+            let t = k as f64 * 0.001;
+            match dev.read(t) {
+                Ok(r) => {
+                    let f = if r.homed {
+                        [0, 1, 2].map(|a| 200.0 * (hold[a] - r.pos_m[a]))
+                    } else {
+                        [0.0; 3]
+                    };
+                    dev.command(f).unwrap();
+                }
+                Err(e) => {
+                    assert!(
+                        matches!(e, crate::device::DeviceError::Disconnected(_)),
+                        "{e}"
+                    );
+                    assert!(e.to_string().contains("unplugged"), "{e}");
+                    failed_at = Some(t);
+                    break;
+                }
+            }
+        }
+        let t = failed_at.expect("the unplug is noticed");
+        assert!((4.0..4.01).contains(&t), "noticed at {t}");
+        let s = dev.stats();
+        assert!(s.missed_replies > 50 && s.bad_packets > 50, "{s:?}");
+        assert!(dev.is_homed());
+        // The motors stopped with the cable; the driver stays failed and safe.
+        assert_eq!(dev.transport().motor, [0; 3]);
+        dev.make_safe();
+        assert!(dev.read(t + 0.001).is_err());
+        assert!(dev.command([1.0, 0.0, 0.0]).is_err());
+    }
 }

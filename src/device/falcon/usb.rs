@@ -48,7 +48,9 @@ pub enum UsbError {
     Busy { at: String, detail: String },
     #[error("cannot open the Falcon at {at}: {detail}")]
     Other { at: String, detail: String },
-    #[error("cannot list USB devices: {0}")]
+    #[error(
+        "cannot list USB devices ({0}): this system shows no USB bus (a container, or a VM without USB passthrough?), so no Falcon can be reached"
+    )]
     List(String),
 }
 
