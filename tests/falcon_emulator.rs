@@ -6,8 +6,13 @@
 use std::path::Path;
 use std::process::Command;
 
-use hapticlab::acquire::simulate_one;
+use hapticlab::acquire::{SimulateOptions, simulate_dataset, simulate_one};
+use hapticlab::analysis::FeatureExtractor;
+use hapticlab::classify::Model;
+use hapticlab::commands::load_examples;
 use hapticlab::device::falcon::{self, OpenError};
+use hapticlab::evaluate::{evaluate, split};
+use hapticlab::profile::Evaluation;
 use hapticlab::profile::LoadedProfile;
 use hapticlab::recording;
 
@@ -46,6 +51,36 @@ fn a_whole_scan_runs_through_the_emulated_falcon() {
     let y = rec.column("y_m").unwrap();
     let mean = y.iter().sum::<f64>() / y.len() as f64;
     assert!((mean - -0.0043).abs() < 0.001, "mean height {mean}");
+}
+
+/// The thesis's result through the whole driver stack (reduced: 12 scans
+/// per texture, 8 to train and 4 to test; `hapticlab simulate --per-class 30`
+/// on profiles/thesis-emulator.toml and `evaluate` give 40/40).
+#[test]
+fn the_thesis_result_holds_through_the_emulated_falcon() {
+    let lp = LoadedProfile::load(Path::new("profiles/thesis-emulator.toml")).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let opts = SimulateOptions {
+        out: dir.path().to_path_buf(),
+        per_class: 12,
+        seed: 1,
+        threads: 2,
+        gzip: false,
+    };
+    let saved = simulate_dataset(&lp, &opts, &|_, _| {}).unwrap();
+    assert!(saved.iter().all(|s| s.complete), "{saved:?}");
+    let p = &lp.profile;
+    let mut ex = FeatureExtractor::new(&p.analysis);
+    let examples = load_examples(&[dir.path().to_path_buf()], &mut ex).unwrap();
+    let eval = Evaluation {
+        train_per_class: 8,
+        test_per_class: 4,
+        shuffle_seed: None,
+    };
+    let split = split(examples, &eval).unwrap();
+    let model = Model::train(&p.name, &p.analysis, &p.classifier, split.train).unwrap();
+    let report = evaluate(&model, &split.test).unwrap();
+    assert!(report.correct() >= 15, "{}", report.table());
 }
 
 #[test]

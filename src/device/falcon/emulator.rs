@@ -249,7 +249,7 @@ impl EmulatedFalcon {
                     self.to_host.push_back(0x41);
                     self.counters.uploads_started += 1;
                     let fail = self.counters.uploads_started <= self.cfg.upload_failures;
-                    let corrupt_at = fail.then(|| 62 * 40 + 17 + self.rng.random_range(0..62));
+                    let corrupt_at = fail.then(|| 62 * 40 + self.rng.random_range(0..62));
                     self.fw = Firmware::Boot(Boot::Loading {
                         received: 0,
                         corrupt_at,
