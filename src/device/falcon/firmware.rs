@@ -354,4 +354,71 @@ mod tests {
         std::fs::write(&missing, vec![7u8; 8492]).unwrap();
         assert_eq!(load_image(&missing).unwrap().bytes.len(), 8492);
     }
+
+    /// A Falcon whose boot loader never answers (e.g. no wall power):
+    /// FTDI requests succeed, bytes vanish.
+    struct Silent {
+        controls: Vec<(u8, u16)>,
+    }
+    impl FalconTransport for Silent {
+        fn kind(&self) -> &'static str {
+            "silent"
+        }
+        fn control(&mut self, request: u8, value: u16) -> Result<(), TransportError> {
+            self.controls.push((request, value));
+            Ok(())
+        }
+        fn write(&mut self, _: &[u8]) -> Result<(), TransportError> {
+            Ok(())
+        }
+        fn read(&mut self, _: &mut [u8], _: Duration) -> Result<usize, TransportError> {
+            Ok(0)
+        }
+    }
+
+    #[test]
+    fn a_silent_boot_loader_fails_at_the_handshake_after_every_attempt() {
+        let mut t = Silent { controls: vec![] };
+        let image = FirmwareImage {
+            path: "nvent_firmware.bin".into(),
+            bytes: vec![0; 8492],
+        };
+        let mut log = Vec::new();
+        let e =
+            ensure_loaded(&mut t, Some(&image), 2, &mut |m| log.push(m.to_string())).unwrap_err();
+        assert_eq!(
+            e,
+            FirmwareError::UploadFailed {
+                attempts: 2,
+                last: UploadStep::Handshake { tries: 100 }
+            }
+        );
+        let msg = e.to_string();
+        assert!(msg.contains("0A 43 0D") && msg.contains("hub"), "{msg}");
+        assert_eq!(
+            log.iter()
+                .filter(|m| m.contains("failed at the handshake"))
+                .count(),
+            2
+        );
+        // Loader mode as the facts give it: 16 ms latency, 9600 baud, RTS low, DTR low then high.
+        let loader: Vec<(u8, u16)> = t
+            .controls
+            .iter()
+            .copied()
+            .skip_while(|c| *c != (ftdi::LATENCY, 16))
+            .take(6)
+            .collect();
+        assert_eq!(
+            loader,
+            vec![
+                (ftdi::LATENCY, 16),
+                (ftdi::BAUD, ftdi::BAUD_9600),
+                (ftdi::LINE, ftdi::LINE_8N1),
+                (ftdi::FLOW, ftdi::FLOW_NONE),
+                (ftdi::MODEM, ftdi::RTS_LOW),
+                (ftdi::MODEM, ftdi::DTR_LOW),
+            ]
+        );
+    }
 }

@@ -372,11 +372,10 @@ impl ForwardSolver {
     /// the reachable region).
     fn continuation(&mut self, theta1: Vec3) -> Result<(Vec3, u32), KinematicsError> {
         let start = inverse(START_GUESS_M)?.theta1;
-        let mut total = 0;
         for pieces in [4u32, 16, 64] {
             let mut p = START_GUESS_M;
             let mut ok = true;
-            total = 0;
+            let mut total = 0;
             for k in 1..=pieces {
                 let l = f64::from(k) / f64::from(pieces);
                 let target = [
@@ -399,7 +398,6 @@ impl ForwardSolver {
                 return Ok((p, total));
             }
         }
-        let _ = total;
         Err(KinematicsError::NoConvergence {
             residual_rad: f64::NAN,
         })
