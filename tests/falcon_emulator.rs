@@ -242,3 +242,66 @@ fn devices_and_the_falcon_exit_codes() {
         "{stderr}"
     );
 }
+
+/// Trigger presses drive `scan`: start begins each scan, abort stops one.
+#[test]
+fn trigger_presses_start_and_abort_live_scans() {
+    use hapticlab::acquire::{LiveHooks, LiveScans, scan_live_with};
+    use hapticlab::triggers::{TriggerAction, TriggerEvent};
+    use std::sync::Arc;
+    use std::sync::atomic::AtomicBool;
+
+    let lp = quick();
+    let dir = tempfile::tempdir().unwrap();
+    let press = |action| TriggerEvent::Action {
+        action,
+        source: "pedal".into(),
+    };
+    let run = |events: Vec<TriggerEvent>, count: usize| {
+        let (tx, rx) = crossbeam_channel::unbounded();
+        for e in events {
+            tx.send(e).unwrap();
+        }
+        let req = LiveScans {
+            label: "S2".into(),
+            texture: None,
+            count,
+            out: dir.path().to_path_buf(),
+            seed: 1,
+        };
+        let mut notes = Vec::new();
+        let mut scans = Vec::new();
+        let r = scan_live_with(
+            &lp,
+            &req,
+            Arc::new(AtomicBool::new(false)),
+            LiveHooks {
+                on_scan: &mut |s| scans.push(s.saved.clone()),
+                on_note: &mut |m| notes.push(m.to_string()),
+                triggers: Some(rx),
+            },
+        );
+        drop(tx);
+        (r.map(|v| v.len()).map_err(|e| e.to_string()), scans, notes)
+    };
+    // One press, one complete scan.
+    let (n, scans, notes) = run(vec![press(TriggerAction::Start)], 1);
+    assert_eq!(n, Ok(1));
+    assert!(scans[0].complete, "{scans:?}");
+    assert!(notes.iter().any(|m| m.contains("press start")), "{notes:?}");
+    // Start, then abort while it runs: the scan stops, and no second one starts.
+    let (n, scans, _) = run(
+        vec![press(TriggerAction::Start), press(TriggerAction::Abort)],
+        2,
+    );
+    assert_eq!(n, Ok(1));
+    assert!(!scans[0].complete);
+    assert_eq!(scans[0].aborted.as_deref(), Some("aborted by the user"));
+    // Abort while waiting: nothing runs.
+    let (n, _, notes) = run(vec![press(TriggerAction::Abort)], 1);
+    assert_eq!(n, Ok(0));
+    assert!(
+        notes.iter().any(|m| m.contains("no more scans")),
+        "{notes:?}"
+    );
+}
