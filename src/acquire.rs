@@ -10,12 +10,14 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use crate::device::HapticDevice;
+use crate::device::falcon::{self, OpenError};
 use crate::device::sim::{SimDevice, SimError};
 use crate::profile::{DeviceKind, LoadedProfile, check_label};
 use crate::recorder::SavedScan;
 use crate::servo::clock::VirtualClock;
 use crate::servo::stats::LoopStats;
 use crate::servo::{Command, Links, ServoEvent, ServoLoop};
+use crate::triggers::{TriggerAction, TriggerEvent};
 
 #[derive(Debug, thiserror::Error)]
 pub enum AcquireError {
@@ -34,6 +36,35 @@ impl AcquireError {
         matches!(self, AcquireError::BadInput(_) | AcquireError::Sim(_))
     }
 }
+
+impl From<OpenError> for AcquireError {
+    fn from(e: OpenError) -> Self {
+        match e {
+            OpenError::BadInput(m) => AcquireError::BadInput(m),
+            OpenError::Device(m) => AcquireError::Runtime(m),
+        }
+    }
+}
+
+/// The profile's device, ready to run: the simulator, the emulated Falcon
+/// (both stroking `texture`, free air when `None`, seeded with `seed`), or
+/// the real Falcon on USB. `log` hears the Falcon's start-up steps.
+pub fn open_device(
+    lp: &LoadedProfile,
+    texture: Option<&str>,
+    seed: u64,
+    log: &mut dyn FnMut(&str),
+) -> Result<Box<dyn HapticDevice>, AcquireError> {
+    let p = &lp.profile;
+    Ok(match p.device.kind {
+        DeviceKind::Sim => Box::new(SimDevice::new(p, &lp.base_dir, texture, seed)?),
+        DeviceKind::FalconEmulator => Box::new(falcon::open_emulated(lp, texture, seed, log)?),
+        DeviceKind::Falcon => Box::new(falcon::open_usb(lp, log)?),
+    })
+}
+
+/// What `scan` tells the user when the Falcon is not homed.
+pub const HOMING_HELP: &str = "the Falcon is not homed (its LEDs are red): pull the grip all the way out towards you, then push it all the way back in; the LEDs turn blue when it is homed";
 
 /// The metadata every recording carries.
 pub fn scan_metadata(
@@ -135,7 +166,13 @@ pub fn simulate_one(
     path: &Path,
 ) -> Result<(SavedScan, LoopStats), AcquireError> {
     let p = &lp.profile;
-    let device = SimDevice::new(p, &lp.base_dir, Some(label), seed)?;
+    if p.device.kind == DeviceKind::Falcon {
+        return Err(AcquireError::BadInput(format!(
+            "{}: simulate runs on the simulator or the emulated Falcon, not a real one (device.kind = \"falcon\"); use `scan` for the real device",
+            lp.origin
+        )));
+    }
+    let device = open_device(lp, Some(label), seed, &mut |_| {})?;
     let clock = VirtualClock::new(
         p.device.rate_hz,
         p.simulator.period_jitter_s,
@@ -159,6 +196,23 @@ pub fn simulate_one(
         ..Links::default()
     };
     let mut servo = ServoLoop::new(device, clock, p, sink, links);
+    if p.device.kind == DeviceKind::FalconEmulator {
+        // The emulated hand homes the grip first (forces stay off until then).
+        let mut ticks = 0u64;
+        while !servo.reading().homed {
+            if ticks > (30.0 * p.device.rate_hz) as u64 {
+                return Err(AcquireError::Runtime(
+                    "the emulated Falcon did not home within 30 s (is `[falcon.emulator] auto_home` off?)".into(),
+                ));
+            }
+            if let Err(h) = servo.tick() {
+                return Err(AcquireError::Runtime(format!(
+                    "the emulated Falcon stopped while homing: {h}"
+                )));
+            }
+            ticks += 1;
+        }
+    }
     servo.apply(Command::StartScan {
         path: path.to_path_buf(),
         meta,
@@ -299,6 +353,16 @@ pub struct LiveScans {
     pub seed: u64,
 }
 
+/// What a live session reports besides scans, and its optional triggers.
+pub struct LiveHooks<'a> {
+    pub on_scan: &'a mut dyn FnMut(&ScanReport),
+    /// The device's start-up steps, homing instructions, trigger news.
+    pub on_note: &'a mut dyn FnMut(&str),
+    /// Hands-free triggers: when given, each scan waits for a start press,
+    /// and an abort press stops the running scan.
+    pub triggers: Option<crossbeam_channel::Receiver<TriggerEvent>>,
+}
+
 /// Live scans in real time on the profile's device: `count` runs of the path,
 /// each recorded to the next free `out/<label>/<label>_NNN.csv`. `texture`
 /// picks the simulated texture (default: the label). Stops early, keeping
@@ -309,6 +373,90 @@ pub fn scan_live(
     stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
     on_scan: &mut dyn FnMut(&ScanReport),
 ) -> Result<Vec<ScanReport>, AcquireError> {
+    scan_live_with(
+        lp,
+        req,
+        stop,
+        LiveHooks {
+            on_scan,
+            on_note: &mut |_| {},
+            triggers: None,
+        },
+    )
+}
+
+/// Wait until the device is homed, telling the user how once. `Ok(false)`
+/// when the loop ended or a signal came first.
+fn wait_for_homing(
+    lp: &LoadedProfile,
+    handle: &crate::servo::ServoHandle,
+    stop: &std::sync::atomic::AtomicBool,
+    on_note: &mut dyn FnMut(&str),
+) -> Result<bool, AcquireError> {
+    let limit = lp
+        .profile
+        .falcon
+        .as_ref()
+        .map_or(120.0, |f| f.homing_timeout_s);
+    let started = Instant::now();
+    let mut told = false;
+    loop {
+        if stop.load(Ordering::Relaxed) {
+            handle.stop.store(true, Ordering::Relaxed);
+            return Ok(false);
+        }
+        match handle.telemetry.recv_timeout(Duration::from_millis(50)) {
+            Ok(t) if t.homed => {
+                if told {
+                    on_note("homed: the LEDs are blue; forces are on");
+                }
+                return Ok(true);
+            }
+            Ok(_) => {
+                if !told {
+                    on_note(&format!("{HOMING_HELP} (waiting up to {limit:.0} s)"));
+                    told = true;
+                }
+            }
+            Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
+            Err(crossbeam_channel::RecvTimeoutError::Disconnected) => return Ok(false),
+        }
+        if handle.is_finished() {
+            return Ok(false);
+        }
+        if started.elapsed().as_secs_f64() > limit {
+            return Err(AcquireError::Runtime(format!(
+                "the Falcon was not homed within {limit:.0} s: pull the grip fully out and push it fully in; if the LEDs stay red, check the Falcon's wall power (homing needs the motors)"
+            )));
+        }
+    }
+}
+
+fn trigger_note(e: &TriggerEvent) -> Option<String> {
+    match e {
+        TriggerEvent::Action { .. } => None,
+        TriggerEvent::Connected(s) => Some(format!("trigger {s} connected")),
+        TriggerEvent::Absent { source, why } => {
+            Some(format!("trigger {source}: {why}; scans start without it"))
+        }
+        TriggerEvent::Unplugged { source, why } => Some(format!(
+            "trigger {source} was unplugged ({why}); scans go on without it"
+        )),
+    }
+}
+
+/// As [`scan_live`], with notes and hands-free triggers.
+pub fn scan_live_with(
+    lp: &LoadedProfile,
+    req: &LiveScans,
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    hooks: LiveHooks<'_>,
+) -> Result<Vec<ScanReport>, AcquireError> {
+    let LiveHooks {
+        on_scan,
+        on_note,
+        triggers,
+    } = hooks;
     let LiveScans {
         label,
         texture,
@@ -325,18 +473,7 @@ pub fn scan_live(
     );
     check_label(label).map_err(AcquireError::BadInput)?;
     let p = &lp.profile;
-    let device: Box<dyn HapticDevice> = match p.device.kind {
-        DeviceKind::Sim => {
-            let tex = texture.unwrap_or(label);
-            Box::new(SimDevice::new(p, &lp.base_dir, Some(tex), seed)?)
-        }
-        other => {
-            return Err(AcquireError::Runtime(format!(
-                "device kind {:?} is not available in this build yet; use kind = \"sim\"",
-                other.name()
-            )));
-        }
-    };
+    let device = open_device(lp, Some(texture.unwrap_or(label)), seed, on_note)?;
     let kind = device.kind();
     let handle = crate::servo::spawn(p, move || device)
         .map_err(|e| AcquireError::Runtime(format!("cannot start the servo thread: {e}")))?;
@@ -344,7 +481,52 @@ pub fn scan_live(
     let servo_stop = handle.stop.clone();
     let mut reports = Vec::new();
     let per_scan_limit = Duration::from_secs_f64(path_duration_s(lp) * 2.0 + 30.0);
-    'scans: for _ in 0..count {
+    let homed = match wait_for_homing(lp, &handle, &stop, on_note) {
+        Ok(h) => h,
+        Err(e) => {
+            let _ = handle.shutdown();
+            return Err(e);
+        }
+    };
+    'scans: for k in 0..count {
+        if !homed {
+            break;
+        }
+        if let Some(rx) = &triggers {
+            on_note(&format!(
+                "press start on the trigger to begin scan {} of {count} (abort ends the session)",
+                k + 1
+            ));
+            loop {
+                if stop.load(Ordering::Relaxed) || handle.is_finished() {
+                    servo_stop.store(true, Ordering::Relaxed);
+                    break 'scans;
+                }
+                let _ = handle.telemetry.try_iter().count();
+                match rx.recv_timeout(Duration::from_millis(50)) {
+                    Ok(TriggerEvent::Action { action, .. }) => match action {
+                        TriggerAction::Start => break,
+                        TriggerAction::Abort => {
+                            on_note("abort pressed: no more scans");
+                            break 'scans;
+                        }
+                        TriggerAction::Store => {
+                            on_note("store pressed: scans are stored as they finish")
+                        }
+                    },
+                    Ok(e) => {
+                        if let Some(m) = trigger_note(&e) {
+                            on_note(&m);
+                        }
+                    }
+                    Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
+                    Err(crossbeam_channel::RecvTimeoutError::Disconnected) => {
+                        on_note("the triggers stopped; scanning without them");
+                        break;
+                    }
+                }
+            }
+        }
         let index = next_free_index(out, label);
         let path = scan_file(out, label, index);
         let meta = scan_metadata(
@@ -372,6 +554,22 @@ pub fn scan_live(
             }
             // Nobody displays telemetry here: drain it so none counts as dropped.
             let _ = handle.telemetry.try_iter().count();
+            if let Some(rx) = &triggers {
+                for e in rx.try_iter() {
+                    match e {
+                        TriggerEvent::Action {
+                            action: TriggerAction::Abort,
+                            ..
+                        } => handle.send(Command::Abort),
+                        TriggerEvent::Action { .. } => {}
+                        other => {
+                            if let Some(m) = trigger_note(&other) {
+                                on_note(&m);
+                            }
+                        }
+                    }
+                }
+            }
             match handle.events.recv_timeout(Duration::from_millis(50)) {
                 Ok(ServoEvent::ScanEnded {
                     stats: s,
@@ -438,6 +636,10 @@ pub fn scan_live(
         reports.push(r);
     }
     match result {
+        // The device failed before any scan could run: that is the error.
+        Ok((crate::servo::Halt::DeviceError(reason), _)) if reports.is_empty() => Err(
+            AcquireError::Runtime(format!("the {kind} device stopped: {reason}")),
+        ),
         Ok(_) => Ok(reports),
         Err(panic) => Err(AcquireError::Runtime(format!(
             "the servo thread failed: {panic}"

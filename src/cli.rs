@@ -163,6 +163,12 @@ pub enum Command {
         #[arg(long, value_name = "DIR")]
         dataset: Option<PathBuf>,
     },
+    /// List attached Novint Falcons and HID triggers, and whether they can be opened.
+    #[command(after_help = "Example:\n  hapticlab devices --profile profiles/thesis-falcon.toml")]
+    Devices {
+        #[command(flatten)]
+        profile: ProfileArg,
+    },
     /// Check profiles: parse and validate every value.
     #[command(after_help = "Example:\n  hapticlab check profiles/*.toml")]
     Check {

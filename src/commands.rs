@@ -132,6 +132,7 @@ pub fn run(cmd: Command) -> Result<(), Failure> {
             json,
         } => evaluate_cmd(&profile, &paths, shuffle_seed, json),
         Command::Check { profiles } => check(&profiles),
+        Command::Devices { profile } => crate::devices::run(&profile),
     }
 }
 
@@ -198,7 +199,7 @@ fn scan(
         return Err(bad("--count must be at least 1"));
     }
     crate::profile::check_label(label).map_err(|e| bad(format!("--label: {e}")))?;
-    if lp.profile.device.kind == crate::profile::DeviceKind::Sim {
+    if lp.profile.device.kind != crate::profile::DeviceKind::Falcon {
         let tex = texture.unwrap_or(label);
         if lp.profile.texture(tex).is_none() {
             let known: Vec<&str> = lp
@@ -236,7 +237,11 @@ fn scan(
         out: out.to_path_buf(),
         seed: seed.unwrap_or(lp.profile.simulator.seed),
     };
-    let reports = acquire::scan_live(&lp, &req, stop, &mut |r| {
+    // Hands-free triggers: used when at least one is plugged in; never fatal.
+    let watcher = start_triggers(&lp);
+    let triggers = watcher.as_ref().map(|w| w.events.clone());
+    let mut on_note = |m: &str| eprintln!("{m}");
+    let mut on_scan = |r: &acquire::ScanReport| {
         n += 1;
         let s = &r.saved;
         let state = match (&s.aborted, &s.error) {
@@ -258,8 +263,14 @@ fn scan(
         if s.aborted.is_some() || s.error.is_some() {
             failed = Some(state);
         }
-    })
-    .map_err(Failure::from)?;
+    };
+    let hooks = acquire::LiveHooks {
+        on_scan: &mut on_scan,
+        on_note: &mut on_note,
+        triggers,
+    };
+    let reports = acquire::scan_live_with(&lp, &req, stop, hooks).map_err(Failure::from)?;
+    drop(watcher);
     if let Some(state) = failed {
         return Err(runtime(format!("the scan did not complete: {state}")));
     }
@@ -270,6 +281,38 @@ fn scan(
         )));
     }
     Ok(())
+}
+
+/// Start watching the profile's triggers; `None` when none is configured or
+/// none is plugged in (each absent one is reported).
+fn start_triggers(lp: &LoadedProfile) -> Option<crate::triggers::TriggerWatcher> {
+    use crate::triggers::{TriggerEvent, TriggerWatcher, hid::HidBackend};
+    if lp.profile.triggers.is_empty() {
+        return None;
+    }
+    let w = match TriggerWatcher::start(lp.profile.triggers.clone(), || Box::new(HidBackend::new()))
+    {
+        Ok(w) => w,
+        Err(e) => {
+            eprintln!("triggers unavailable ({e}); scans start without them");
+            return None;
+        }
+    };
+    // Each trigger reports in once at start: connected or absent.
+    let mut connected = 0;
+    for _ in 0..lp.profile.triggers.len() {
+        match w.events.recv_timeout(std::time::Duration::from_secs(2)) {
+            Ok(TriggerEvent::Connected(s)) => {
+                eprintln!("trigger {s} connected");
+                connected += 1;
+            }
+            Ok(TriggerEvent::Absent { source, why }) => {
+                eprintln!("trigger {source}: {why}; scans start without it")
+            }
+            _ => {}
+        }
+    }
+    (connected > 0).then_some(w)
 }
 
 /// Recordings under `paths`, read and turned into feature vectors. Incomplete

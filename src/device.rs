@@ -3,6 +3,7 @@
 //! [`HapticDevice`]; the servo loop is generic over it, so tests never need
 //! hardware. A device never decides forces: it applies what it is told.
 
+pub mod falcon;
 pub mod sim;
 pub mod surface;
 
@@ -15,6 +16,29 @@ pub struct Reading {
     pub buttons: u8,
     /// Whether the device is homed (forces are only applied once it is).
     pub homed: bool,
+}
+
+/// Counters of a device's link to the host (packet-based devices only).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+pub struct LinkStats {
+    pub packets: u64,
+    pub replies: u64,
+    /// Garbled or partial packets thrown away.
+    pub bad_packets: u64,
+    /// Ticks on which no reply came in time.
+    pub missed_replies: u64,
+}
+
+impl LinkStats {
+    /// The counts since `earlier`.
+    pub fn since(&self, earlier: &LinkStats) -> LinkStats {
+        LinkStats {
+            packets: self.packets.saturating_sub(earlier.packets),
+            replies: self.replies.saturating_sub(earlier.replies),
+            bad_packets: self.bad_packets.saturating_sub(earlier.bad_packets),
+            missed_replies: self.missed_replies.saturating_sub(earlier.missed_replies),
+        }
+    }
 }
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -39,6 +63,10 @@ pub trait HapticDevice: Send {
     fn command(&mut self, force_n: [f64; 3]) -> Result<(), DeviceError>;
     /// Zero the forces, best effort; must not panic. Called on every exit path.
     fn make_safe(&mut self);
+    /// Link counters, for devices that talk in packets (the Falcon).
+    fn link_stats(&self) -> Option<LinkStats> {
+        None
+    }
 }
 
 impl<D: HapticDevice + ?Sized> HapticDevice for Box<D> {
@@ -53,5 +81,8 @@ impl<D: HapticDevice + ?Sized> HapticDevice for Box<D> {
     }
     fn make_safe(&mut self) {
         (**self).make_safe()
+    }
+    fn link_stats(&self) -> Option<LinkStats> {
+        (**self).link_stats()
     }
 }

@@ -15,6 +15,8 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
+pub mod hardware;
+
 /// The thesis profile, compiled in so that `hapticlab` works from any folder.
 pub const THESIS_PROFILE: &str = include_str!("../profiles/thesis.toml");
 
@@ -46,6 +48,12 @@ pub struct Profile {
     /// The lab console's settings (optional).
     #[serde(default)]
     pub console: ConsoleSettings,
+    /// The Novint Falcon and its emulator (`device.kind = "falcon"`, `"falcon-emulator"`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub falcon: Option<hardware::FalconSection>,
+    /// Hands-free triggers: HID foot switches and button boxes.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub triggers: Vec<hardware::TriggerSpec>,
 }
 
 /// The lab console's settings: `[console]` in a profile.
@@ -967,7 +975,7 @@ impl Profile {
             return bad("simulator.substeps", "must be from 1 to 64");
         }
         self.console.bindings()?;
-        Ok(())
+        hardware::validate(self)
     }
 
     pub fn texture(&self, label: &str) -> Option<&Texture> {

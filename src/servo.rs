@@ -164,6 +164,8 @@ pub struct ServoLoop<D: HapticDevice, C: Clock> {
     reading: Reading,
     force: [f64; 3],
     halted: Option<Halt>,
+    /// The device's link counters when the scan began.
+    link_at_scan_start: Option<crate::device::LinkStats>,
 }
 
 impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
@@ -206,11 +208,17 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
             },
             force: [0.0; 3],
             halted: None,
+            link_at_scan_start: None,
         }
     }
 
     pub fn mode(&self) -> Mode {
         self.mode
+    }
+
+    /// The device's last reading.
+    pub fn reading(&self) -> Reading {
+        self.reading
     }
 
     pub fn device(&self) -> &D {
@@ -229,6 +237,7 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
     pub fn stats(&self) -> LoopStats {
         let mut s = self.stats.snapshot();
         s.recorder_blocks_grown = self.sink.grown;
+        s.link = self.device.link_stats();
         s
     }
 
@@ -305,6 +314,10 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
                 let mut stats = self.scan_stats.snapshot();
                 stats.dropped_telemetry = self.stats.dropped_telemetry;
                 stats.recorder_blocks_grown = self.sink.grown;
+                stats.link = match (self.device.link_stats(), self.link_at_scan_start) {
+                    (Some(now), Some(start)) => Some(now.since(&start)),
+                    (now, _) => now,
+                };
                 self.event(ServoEvent::ScanEnded {
                     path,
                     samples,
@@ -433,6 +446,7 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
             self.sink.begin(&path, meta);
             self.scan_t0 = Some(now);
             self.scan_stats.reset();
+            self.link_at_scan_start = self.device.link_stats();
             self.event(ServoEvent::ScanStarted { path });
         }
         if self.sink.is_active() {

@@ -89,6 +89,7 @@ pub fn telemetry(t_s: f64, mode: Mode) -> Telemetry {
             dropped_telemetry: 0,
             dropped_events: 0,
             recorder_blocks_grown: 0,
+            link: None,
         },
     }
 }

@@ -22,6 +22,8 @@ pub struct LoopStats {
     pub dropped_events: u64,
     /// Sample blocks the recorder had to allocate because the writer lagged.
     pub recorder_blocks_grown: u64,
+    /// The device's link counters (the Falcon's packets), when it has a link.
+    pub link: Option<crate::device::LinkStats>,
 }
 
 pub struct StatsCollector {
@@ -134,6 +136,7 @@ impl StatsCollector {
             dropped_telemetry: self.dropped_telemetry,
             dropped_events: self.dropped_events,
             recorder_blocks_grown: self.blocks_grown,
+            link: None,
         }
     }
 }
@@ -152,7 +155,12 @@ impl LoopStats {
             self.missed_deadlines,
             self.longest_missed_streak,
             self.dropped_telemetry
-        )
+        ) + &self.link.map_or(String::new(), |l| {
+            format!(
+                "; link: {} packets, {} replies, {} bad packets, {} missed replies",
+                l.packets, l.replies, l.bad_packets, l.missed_replies
+            )
+        })
     }
 }
 

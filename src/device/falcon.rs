@@ -1,0 +1,492 @@
+//! The Novint Falcon driver: one [`FalconDevice`] over any [`FalconTransport`]
+//! — USB ([`usb::UsbTransport`], `device.kind = "falcon"`) or the byte-level
+//! emulator ([`emulator::EmulatedFalcon`], `"falcon-emulator"`).
+//!
+//! This module owns the lockstep exchange and the device's state: it probes
+//! and loads the firmware ([`firmware`]), sends one 16-byte command per tick
+//! and takes one reply ([`packet`]), turns encoder counts into a position
+//! and forces into motor commands ([`kinematics`]), keeps the LEDs red until
+//! the device is homed and blue after, applies no force until it is, drops
+//! force components that would push the grip further out of its workspace,
+//! and counts bad packets and missed replies. It never decides forces and
+//! never allocates per tick.
+//!
+//! The exchange is pipelined: `command` writes the packet for this tick, and
+//! the next `read` collects its reply (waiting at most `reply_timeout`). A
+//! reply that does not come is counted as missed and the last position is
+//! held; after two misses the packet is sent again; after `link_lost_after`
+//! without any reply the device counts as gone.
+
+pub mod emulator;
+pub mod firmware;
+pub mod kinematics;
+pub mod packet;
+pub mod usb;
+
+use std::time::{Duration, Instant};
+
+use super::{DeviceError, HapticDevice, LinkStats, Reading};
+use firmware::{FirmwareImage, FirmwareReport};
+use kinematics::{ForwardSolver, Frame};
+use packet::{CommandPacket, PacketReader, ReplyPacket};
+
+/// The FTDI vendor requests the Falcon's USB-serial chip understands
+/// (request type 0x40: vendor, device, host to device; index 0).
+pub mod ftdi {
+    pub const REQUEST_TYPE: u8 = 0x40;
+    pub const PURGE: u8 = 0;
+    pub const MODEM: u8 = 1;
+    pub const FLOW: u8 = 2;
+    pub const BAUD: u8 = 3;
+    pub const LINE: u8 = 4;
+    pub const LATENCY: u8 = 9;
+    pub const PURGE_RX: u16 = 1;
+    pub const PURGE_TX: u16 = 2;
+    /// Modem control: high byte = which lines to set, low byte = their levels.
+    pub const DTR_HIGH: u16 = 0x0101;
+    pub const DTR_LOW: u16 = 0x0100;
+    pub const RTS_HIGH: u16 = 0x0202;
+    pub const RTS_LOW: u16 = 0x0200;
+    pub const FLOW_NONE: u16 = 0;
+    pub const LINE_8N1: u16 = 0x0008;
+    /// Baud divisors on the FTDI's 3 MHz base: 9600 baud, ~140 kbaud, ~1.5 Mbaud.
+    pub const BAUD_9600: u16 = 0x4138;
+    pub const BAUD_LOADER: u16 = 0x0015;
+    pub const BAUD_NORMAL: u16 = 0x0002;
+    /// Vendor and product id of a Falcon.
+    pub const VENDOR_ID: u16 = 0x0403;
+    pub const PRODUCT_ID: u16 = 0xCB48;
+}
+
+/// Why a transport failed.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TransportError {
+    #[error("the Falcon is disconnected: {0}")]
+    Disconnected(String),
+    #[error("USB I/O failed: {0}")]
+    Io(String),
+}
+
+/// A byte pipe to a Falcon's FTDI chip: vendor control requests, and bulk
+/// bytes each way with the FTDI's modem-status bytes already stripped.
+pub trait FalconTransport: Send {
+    /// `"falcon"` or `"falcon-emulator"`: what recordings call the device.
+    fn kind(&self) -> &'static str;
+    /// An FTDI vendor request (see [`ftdi`]).
+    fn control(&mut self, request: u8, value: u16) -> Result<(), TransportError>;
+    fn write(&mut self, bytes: &[u8]) -> Result<(), TransportError>;
+    /// Received bytes into `buf`, waiting up to `timeout` for the first;
+    /// `Ok(0)` when none came in time.
+    fn read(&mut self, buf: &mut [u8], timeout: Duration) -> Result<usize, TransportError>;
+    /// The servo loop's time (seconds): the emulator runs its physics up to
+    /// it; a real device ignores it.
+    fn advance_to(&mut self, _t_s: f64) {}
+}
+
+/// How to drive a Falcon (from the profile's `[falcon]` section).
+#[derive(Debug, Clone)]
+pub struct FalconConfig {
+    pub frame: Frame,
+    pub encoder_offset_deg: f64,
+    pub firmware: Option<FirmwareImage>,
+    pub firmware_attempts: u32,
+    /// How long a `read` waits for the reply to the last packet.
+    pub reply_timeout: Duration,
+    /// Consecutive missed replies after which the device counts as gone.
+    pub link_lost_after: u32,
+}
+
+impl Default for FalconConfig {
+    fn default() -> Self {
+        FalconConfig {
+            frame: Frame::default(),
+            encoder_offset_deg: kinematics::DEFAULT_ENCODER_OFFSET_DEG,
+            firmware: None,
+            firmware_attempts: 20,
+            reply_timeout: Duration::from_micros(900),
+            link_lost_after: 250,
+        }
+    }
+}
+
+/// Counters for the lab (and the console's Device panel).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct FalconStats {
+    pub packets_sent: u64,
+    pub replies: u64,
+    pub missed_replies: u64,
+    pub resends: u64,
+    /// Garbled or partial packets thrown away while resynchronising.
+    pub bad_packets: u64,
+    pub discarded_bytes: u64,
+    /// Forward-kinematics Newton steps per solution: `fk_iterations[n]` counts solutions taking n.
+    pub fk_iterations: [u64; 16],
+    pub fk_restarts: u64,
+    pub fk_failures: u64,
+    /// Ticks on which a force component was dropped at the workspace's edge.
+    pub workspace_clamps: u64,
+    /// Replies received when homing completed.
+    pub homed_after_replies: Option<u64>,
+    pub firmware: FirmwareReport,
+}
+
+impl FalconStats {
+    /// The largest number of Newton steps any solution took.
+    pub fn fk_max_iterations(&self) -> usize {
+        self.fk_iterations.iter().rposition(|&n| n > 0).unwrap_or(0)
+    }
+}
+
+/// The driver over a transport. See the module's documentation.
+pub struct FalconDevice<T: FalconTransport> {
+    transport: T,
+    config: FalconConfig,
+    reader: PacketReader,
+    solver: ForwardSolver,
+    rx: [u8; 64],
+    motor: [i16; 3],
+    awaiting: bool,
+    missed_streak: u32,
+    homed: bool,
+    buttons: u8,
+    /// Profile frame.
+    pos: [f64; 3],
+    have_position: bool,
+    gone: Option<String>,
+    stats: FalconStats,
+}
+
+impl<T: FalconTransport> FalconDevice<T> {
+    /// Bring a Falcon up: firmware probed (and uploaded if needed), normal
+    /// mode, the first packet exchanged. `log` hears each step.
+    pub fn open(
+        mut transport: T,
+        config: FalconConfig,
+        log: &mut dyn FnMut(&str),
+    ) -> Result<FalconDevice<T>, firmware::FirmwareError> {
+        let report = firmware::ensure_loaded(
+            &mut transport,
+            config.firmware.as_ref(),
+            config.firmware_attempts,
+            log,
+        )?;
+        firmware::set_normal_mode(&mut transport).map_err(|error| {
+            firmware::FirmwareError::Link {
+                during: "setting normal mode",
+                error,
+            }
+        })?;
+        let pos = config.frame.to_profile(kinematics::START_GUESS_M);
+        Ok(FalconDevice {
+            transport,
+            config,
+            reader: PacketReader::new(),
+            solver: ForwardSolver::new(),
+            rx: [0; 64],
+            motor: [0; 3],
+            awaiting: false,
+            missed_streak: 0,
+            homed: false,
+            buttons: 0,
+            pos,
+            have_position: false,
+            gone: None,
+            stats: FalconStats {
+                firmware: report,
+                ..FalconStats::default()
+            },
+        })
+    }
+
+    pub fn stats(&self) -> FalconStats {
+        let mut s = self.stats.clone();
+        s.bad_packets = self.reader.stats.bad_packets;
+        s.discarded_bytes = self.reader.stats.discarded_bytes;
+        s
+    }
+
+    pub fn transport(&self) -> &T {
+        &self.transport
+    }
+
+    pub fn transport_mut(&mut self) -> &mut T {
+        &mut self.transport
+    }
+
+    pub fn is_homed(&self) -> bool {
+        self.homed
+    }
+
+    fn flags(&self) -> u8 {
+        packet::FLAG_HOMING
+            | if self.homed {
+                packet::LED_BLUE
+            } else {
+                packet::LED_RED
+            }
+    }
+
+    fn lost(&mut self, e: TransportError) -> DeviceError {
+        match e {
+            TransportError::Disconnected(m) => {
+                let m = format!("the Falcon was unplugged or lost power ({m})");
+                self.gone = Some(m.clone());
+                DeviceError::Disconnected(m)
+            }
+            TransportError::Io(m) => DeviceError::Io(m),
+        }
+    }
+
+    fn send(&mut self) -> Result<(), DeviceError> {
+        let p = packet::encode_command(&CommandPacket {
+            motor: self.motor,
+            flags: self.flags(),
+        });
+        self.transport.write(&p).map_err(|e| self.lost(e))?;
+        self.awaiting = true;
+        self.stats.packets_sent += 1;
+        Ok(())
+    }
+
+    /// The newest reply that arrives within the timeout.
+    fn collect_reply(&mut self) -> Result<Option<ReplyPacket>, DeviceError> {
+        let mut newest = None;
+        let deadline = Instant::now() + self.config.reply_timeout;
+        loop {
+            while let Some(p) = self.reader.next_packet() {
+                if let Some(r) = packet::decode_reply(&p) {
+                    newest = Some(r);
+                }
+            }
+            if newest.is_some() {
+                return Ok(newest);
+            }
+            let left = deadline.saturating_duration_since(Instant::now());
+            let n = self
+                .transport
+                .read(&mut self.rx, left)
+                .map_err(|e| self.lost(e))?;
+            if n == 0 {
+                return Ok(None);
+            }
+            let (rx, reader) = (&self.rx, &mut self.reader);
+            reader.push(&rx[..n]);
+        }
+    }
+
+    fn take_reply(&mut self, r: ReplyPacket) {
+        self.stats.replies += 1;
+        self.awaiting = false;
+        self.missed_streak = 0;
+        self.buttons = r.buttons;
+        let homed = r.is_homed();
+        if homed && !self.homed {
+            // The counts jump to the absolute frame when homing completes.
+            self.solver.reset();
+            self.stats.homed_after_replies = Some(self.stats.replies);
+        }
+        self.homed = homed;
+        let off = self.config.encoder_offset_deg;
+        let theta = r.encoder.map(|c| kinematics::angle_of_count(c, off));
+        match self.solver.solve(theta) {
+            Ok(s) => {
+                let n = (s.iterations as usize).min(self.stats.fk_iterations.len() - 1);
+                self.stats.fk_iterations[n] += 1;
+                if s.restarted {
+                    self.stats.fk_restarts += 1;
+                }
+                self.pos = self.config.frame.to_profile(s.p);
+                self.have_position = true;
+            }
+            // Before homing the counts are relative and may name no
+            // reachable point: hold the last position.
+            Err(_) => self.stats.fk_failures += 1,
+        }
+    }
+}
+
+impl<T: FalconTransport> HapticDevice for FalconDevice<T> {
+    fn kind(&self) -> &'static str {
+        self.transport.kind()
+    }
+
+    fn read(&mut self, t_s: f64) -> Result<Reading, DeviceError> {
+        if let Some(m) = &self.gone {
+            return Err(DeviceError::Disconnected(m.clone()));
+        }
+        self.transport.advance_to(t_s);
+        if !self.awaiting {
+            self.send()?;
+        }
+        match self.collect_reply()? {
+            Some(r) => self.take_reply(r),
+            None => {
+                self.stats.missed_replies += 1;
+                self.missed_streak += 1;
+                if self.missed_streak >= self.config.link_lost_after {
+                    let m = format!(
+                        "no reply from the Falcon in {} packets: the link is lost (unplugged, powered off, or a hub in the way)",
+                        self.missed_streak
+                    );
+                    self.gone = Some(m.clone());
+                    return Err(DeviceError::Disconnected(m));
+                }
+                if self.missed_streak.is_multiple_of(2) {
+                    // Lost rather than late: send again.
+                    self.awaiting = false;
+                    self.stats.resends += 1;
+                }
+            }
+        }
+        Ok(Reading {
+            pos_m: self.pos,
+            buttons: self.buttons,
+            homed: self.homed && self.have_position,
+        })
+    }
+
+    fn command(&mut self, force_n: [f64; 3]) -> Result<(), DeviceError> {
+        if let Some(m) = &self.gone {
+            return Err(DeviceError::Disconnected(m.clone()));
+        }
+        self.motor = [0; 3];
+        if self.homed && self.have_position && force_n.iter().all(|f| f.is_finite()) {
+            let p = self.config.frame.to_falcon(self.pos);
+            let mut f = force_n;
+            // Never push the grip further out of its workspace.
+            for a in 0..3 {
+                let out_low = p[a] < kinematics::FALCON_MIN_M[a] && f[a] < 0.0;
+                let out_high = p[a] > kinematics::FALCON_MAX_M[a] && f[a] > 0.0;
+                if out_low || out_high {
+                    f[a] = 0.0;
+                    self.stats.workspace_clamps += 1;
+                }
+            }
+            if let Some(j) = self.solver.jacobian() {
+                self.motor = kinematics::motor_commands(kinematics::torques(j, f));
+            }
+        }
+        if !self.awaiting {
+            self.send()?;
+        }
+        Ok(())
+    }
+
+    fn make_safe(&mut self) {
+        self.motor = [0; 3];
+        if self.gone.is_none() {
+            // Best effort, outside the lockstep: a zero packet now.
+            let p = packet::encode_command(&CommandPacket {
+                motor: [0; 3],
+                flags: self.flags(),
+            });
+            if self.transport.write(&p).is_ok() {
+                self.awaiting = true;
+                self.stats.packets_sent += 1;
+            }
+        }
+    }
+
+    fn link_stats(&self) -> Option<LinkStats> {
+        Some(LinkStats {
+            packets: self.stats.packets_sent,
+            replies: self.stats.replies,
+            bad_packets: self.reader.stats.bad_packets,
+            missed_replies: self.stats.missed_replies,
+        })
+    }
+}
+
+impl<T: FalconTransport> Drop for FalconDevice<T> {
+    fn drop(&mut self) {
+        self.make_safe();
+    }
+}
+
+/// Why a Falcon could not be opened: the user's input (exit code 2) or the
+/// device (exit code 1).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum OpenError {
+    #[error("{0}")]
+    BadInput(String),
+    #[error("{0}")]
+    Device(String),
+}
+
+/// The driver's settings from a profile; the firmware file (if named) is
+/// read and checked here, before any USB traffic.
+pub fn config_from_profile(lp: &crate::profile::LoadedProfile) -> Result<FalconConfig, OpenError> {
+    let section = lp.profile.falcon.clone().unwrap_or_default();
+    let firmware = match &section.firmware {
+        Some(path) => Some(
+            firmware::load_image(&lp.resolve(path))
+                .map_err(|e| OpenError::BadInput(e.to_string()))?,
+        ),
+        None => None,
+    };
+    let period_ms = 1000.0 / lp.profile.device.rate_hz;
+    Ok(FalconConfig {
+        frame: Frame {
+            origin_m: section.origin_m,
+        },
+        encoder_offset_deg: section.encoder_offset_deg,
+        firmware,
+        firmware_attempts: section.firmware_attempts,
+        reply_timeout: Duration::from_secs_f64(section.reply_timeout_ms / 1000.0),
+        link_lost_after: (section.link_lost_after_ms / period_ms).ceil().max(2.0) as u32,
+    })
+}
+
+fn firmware_failure(e: firmware::FirmwareError) -> OpenError {
+    match e {
+        firmware::FirmwareError::File(_) | firmware::FirmwareError::NoImage => {
+            OpenError::BadInput(e.to_string())
+        }
+        other => OpenError::Device(other.to_string()),
+    }
+}
+
+/// The emulated Falcon of a profile, stroking `texture` (free air when
+/// `None`), its physics seeded with `seed`.
+pub fn open_emulated(
+    lp: &crate::profile::LoadedProfile,
+    texture: Option<&str>,
+    seed: u64,
+    log: &mut dyn FnMut(&str),
+) -> Result<FalconDevice<emulator::EmulatedFalcon>, OpenError> {
+    let config = config_from_profile(lp)?;
+    let section = lp.profile.falcon.clone().unwrap_or_default();
+    let e = &section.emulator;
+    let sim = super::sim::SimDevice::new(&lp.profile, &lp.base_dir, texture, seed)
+        .map_err(|e| OpenError::BadInput(e.to_string()))?;
+    let emu = emulator::EmulatedFalcon::new(
+        sim,
+        emulator::EmulatorConfig {
+            firmware_loaded: e.firmware_loaded,
+            upload_failures: e.upload_failures,
+            drop_rate: e.drop_rate,
+            garble_rate: e.garble_rate,
+            split_rate: e.split_rate,
+            unplug_after_s: e.unplug_after_s,
+            auto_home: e.auto_home,
+            leading_zero: seed % 2 == 1,
+            seed,
+            frame: config.frame,
+            encoder_offset_deg: config.encoder_offset_deg,
+            position_noise_m: lp.profile.simulator.position_noise_m,
+        },
+    );
+    FalconDevice::open(emu, config, log).map_err(firmware_failure)
+}
+
+/// The real Falcon of a profile, over USB.
+pub fn open_usb(
+    lp: &crate::profile::LoadedProfile,
+    log: &mut dyn FnMut(&str),
+) -> Result<FalconDevice<usb::UsbTransport>, OpenError> {
+    let config = config_from_profile(lp)?;
+    let index = lp.profile.falcon.as_ref().map_or(0, |f| f.index);
+    let transport = usb::UsbTransport::open(index).map_err(|e| OpenError::Device(e.to_string()))?;
+    log(&format!("opened {}", transport.describe()));
+    FalconDevice::open(transport, config, log).map_err(firmware_failure)
+}

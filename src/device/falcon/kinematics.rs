@@ -1,0 +1,632 @@
+//! The Falcon's delta kinematics after R. E. Stamper's model (the geometry
+//! libnifalcon uses), derived and written for this project: inverse
+//! kinematics in closed form, forward kinematics by Newton's method warm-
+//! started from the last solution, the Jacobian, Cartesian force → motor
+//! commands, encoder counts ↔ motor angles, and the map between the Falcon's
+//! frame and the profile's.
+//!
+//! ## The leg model
+//! Each leg i is rotated by φᵢ (105°, −15°, −135°) about the Falcon's z axis.
+//! In leg coordinates (u, v, w) = (cosφ x + sinφ y − r, −sinφ x + cosφ y − s, z)
+//! the end effector sits at
+//!
+//! ```text
+//! u = a cos θ1 − c + L cos θ2
+//! w = a sin θ1     + L sin θ2        L = d + e + b sin θ3
+//! v = b cos θ3 − f
+//! ```
+//!
+//! where θ1 is the motor's angle (the upper arm, length a), and θ2, θ3 are
+//! the passive angles of the parallelogram (length b). Eliminating θ2 gives
+//! one constraint per leg, `G = (u + c − a cos θ1)² + (w − a sin θ1)² − L² = 0`,
+//! from which both the inverse kinematics (solve for θ1) and the Jacobian
+//! (implicit differentiation: ∂θ1/∂p = −∇ₚG / ∂G/∂θ1) follow.
+//!
+//! ## Frames
+//! The Falcon's kinematic frame: x to the right, y up, z towards the user
+//! (z grows as the grip is pulled out), metres, origin on the axis of
+//! symmetry at the motors' plane; the workspace's centre is near z = 0.12.
+//! The profile's frame (the thesis's): x along the stroke, y vertical and up,
+//! z towards the user. The axes agree; [`Frame`] only shifts the origin:
+//! `profile = falcon − origin`, with `origin` from the profile's
+//! `[falcon] origin_m` (default (0, 0, 0.16): the thesis's waypoints, at
+//! z = −6…−2 cm, land at Falcon z = 0.10…0.14).
+//!
+//! Pure functions and a small solver state: no I/O, no allocation.
+
+use std::f64::consts::PI;
+
+/// Stamper's constants for the Falcon, metres.
+pub const A: f64 = 0.060;
+pub const B: f64 = 0.1025;
+pub const C: f64 = 0.01443;
+pub const D: f64 = 0.01125;
+pub const E: f64 = 0.01125;
+pub const F: f64 = -0.025;
+pub const R: f64 = 0.040;
+pub const S: f64 = -0.02309;
+/// The legs' angles about z, degrees.
+pub const LEG_ANGLES_DEG: [f64; 3] = [105.0, -15.0, -135.0];
+
+/// Encoder: 320 slots × 4 edges per motor turn, through the 0.110/0.01425 capstan drive.
+pub const COUNTS_PER_MOTOR_TURN: f64 = 1280.0;
+pub const DRIVE_RATIO: f64 = 0.110 / 0.01425;
+/// The arm angle of encoder count 0 after homing, degrees (approximate; the
+/// profile's `falcon.encoder_offset_deg` can calibrate it).
+pub const DEFAULT_ENCODER_OFFSET_DEG: f64 = 35.0;
+/// Motor command units per newton-metre of joint torque, and the largest
+/// command sent (Novint's own SDK never exceeds it; the 16-bit field would wrap).
+pub const COMMAND_PER_NM: f64 = 10_000.0;
+pub const MAX_COMMAND: i16 = 4095;
+
+/// The Falcon's workspace in its own frame, metres: the 4-inch cube Novint
+/// specifies, centred on z = 0.125. Positions must also be reachable by the
+/// legs ([`inverse`] succeeds).
+pub const FALCON_MIN_M: [f64; 3] = [-0.05, -0.05, 0.075];
+pub const FALCON_MAX_M: [f64; 3] = [0.05, 0.05, 0.175];
+/// Where the profile's origin lies in the Falcon's frame unless the profile says.
+pub const DEFAULT_ORIGIN_M: [f64; 3] = [0.0, 0.0, 0.16];
+/// The forward solver's first guess (and fallback), Falcon frame.
+pub const START_GUESS_M: [f64; 3] = [0.0, 0.0, 0.12];
+
+pub type Vec3 = [f64; 3];
+pub type Mat3 = [[f64; 3]; 3];
+
+/// All three legs' angles, radians.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct LegAngles {
+    /// Motor (upper arm) angles.
+    pub theta1: Vec3,
+    pub theta2: Vec3,
+    pub theta3: Vec3,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
+pub enum KinematicsError {
+    #[error("({:.4}, {:.4}, {:.4}) m is out of reach of leg {leg}", .p[0], .p[1], .p[2])]
+    Unreachable { p: Vec3, leg: usize },
+    #[error("the forward kinematics did not converge (joint error {residual_rad:.2e} rad)")]
+    NoConvergence { residual_rad: f64 },
+    #[error("the Jacobian is singular here")]
+    Singular,
+}
+
+/// Leg `i`'s sine and cosine of φ.
+fn leg_trig(i: usize) -> (f64, f64) {
+    LEG_ANGLES_DEG[i].to_radians().sin_cos()
+}
+
+/// A point in leg `i`'s coordinates (u, v, w).
+fn to_leg(i: usize, p: Vec3) -> Vec3 {
+    let (s, c) = leg_trig(i);
+    [c * p[0] + s * p[1] - R, -s * p[0] + c * p[1] - S, p[2]]
+}
+
+/// Inverse kinematics, closed form: the legs' angles at `p` (Falcon frame).
+pub fn inverse(p: Vec3) -> Result<LegAngles, KinematicsError> {
+    let mut out = LegAngles::default();
+    for i in 0..3 {
+        let [u, v, w] = to_leg(i, p);
+        let cos3 = (v + F) / B;
+        if !(-1.0..=1.0).contains(&cos3) {
+            return Err(KinematicsError::Unreachable { p, leg: i });
+        }
+        let t3 = cos3.acos();
+        let l = D + E + B * t3.sin();
+        // The constraint as a·(P cos θ1 + w sin θ1) = k/2: a phase-shifted cosine.
+        let pu = u + C;
+        let k = pu * pu + w * w + A * A - l * l;
+        let rho = pu.hypot(w);
+        let cos_shift = k / (2.0 * A * rho);
+        if !(rho > 0.0 && (-1.0..=1.0).contains(&cos_shift)) {
+            return Err(KinematicsError::Unreachable { p, leg: i });
+        }
+        // Of the two elbow solutions, the Falcon's arms take the lower one.
+        let t1 = w.atan2(pu) - cos_shift.acos();
+        let t2 = (w - A * t1.sin()).atan2(pu - A * t1.cos());
+        out.theta1[i] = wrap(t1);
+        out.theta2[i] = t2;
+        out.theta3[i] = t3;
+    }
+    Ok(out)
+}
+
+fn wrap(a: f64) -> f64 {
+    let mut a = a;
+    while a > PI {
+        a -= 2.0 * PI;
+    }
+    while a <= -PI {
+        a += 2.0 * PI;
+    }
+    a
+}
+
+/// ∂θ1/∂p: row i is how leg i's motor angle changes with the position
+/// (rad/m), from the constraint by implicit differentiation.
+pub fn joint_rates(angles: &LegAngles) -> Mat3 {
+    let mut m = [[0.0; 3]; 3];
+    for (i, row) in m.iter_mut().enumerate() {
+        let (t1, t2, t3) = (angles.theta1[i], angles.theta2[i], angles.theta3[i]);
+        let denom = A * (t2 - t1).sin() * t3.sin();
+        // Gradient in leg coordinates (u, v, w), then rotated back by φ.
+        let gu = t2.cos() * t3.sin() / denom;
+        let gv = t3.cos() / denom;
+        let gw = t2.sin() * t3.sin() / denom;
+        let (s, c) = leg_trig(i);
+        *row = [c * gu - s * gv, s * gu + c * gv, gw];
+    }
+    m
+}
+
+pub fn det(m: &Mat3) -> f64 {
+    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+}
+
+pub fn invert(m: &Mat3) -> Result<Mat3, KinematicsError> {
+    let dt = det(m);
+    if !(dt.is_finite() && dt.abs() > 1e-12) {
+        return Err(KinematicsError::Singular);
+    }
+    let mut inv = [[0.0; 3]; 3];
+    for (r, row) in inv.iter_mut().enumerate() {
+        for (c, v) in row.iter_mut().enumerate() {
+            // Cofactor of (c, r), transposed.
+            let (r1, r2) = ((c + 1) % 3, (c + 2) % 3);
+            let (c1, c2) = ((r + 1) % 3, (r + 2) % 3);
+            *v = (m[r1][c1] * m[r2][c2] - m[r1][c2] * m[r2][c1]) / dt;
+        }
+    }
+    Ok(inv)
+}
+
+pub fn mul(m: &Mat3, v: Vec3) -> Vec3 {
+    [
+        m[0][0] * v[0] + m[0][1] * v[1] + m[0][2] * v[2],
+        m[1][0] * v[0] + m[1][1] * v[1] + m[1][2] * v[2],
+        m[2][0] * v[0] + m[2][1] * v[1] + m[2][2] * v[2],
+    ]
+}
+
+pub fn mul_transposed(m: &Mat3, v: Vec3) -> Vec3 {
+    [
+        m[0][0] * v[0] + m[1][0] * v[1] + m[2][0] * v[2],
+        m[0][1] * v[0] + m[1][1] * v[1] + m[2][1] * v[2],
+        m[0][2] * v[0] + m[1][2] * v[1] + m[2][2] * v[2],
+    ]
+}
+
+/// The Jacobian J = ∂p/∂θ1 (m/rad) at the legs' angles: column j is how
+/// the end effector moves when motor j turns.
+pub fn jacobian(angles: &LegAngles) -> Result<Mat3, KinematicsError> {
+    invert(&joint_rates(angles))
+}
+
+/// Joint torques (N·m) that make force `f` (N, Falcon frame): τ = Jᵀ·F.
+pub fn torques(j: &Mat3, f: Vec3) -> Vec3 {
+    mul_transposed(j, f)
+}
+
+/// The force (N, Falcon frame) that joint torques make: F = J⁻ᵀ·τ.
+pub fn force_of_torques(j: &Mat3, tau: Vec3) -> Result<Vec3, KinematicsError> {
+    let inv = invert(j)?;
+    Ok(mul_transposed(&inv, tau))
+}
+
+/// Motor commands for joint torques: −10000 per N·m, clamped to ±4095.
+pub fn motor_commands(tau: Vec3) -> [i16; 3] {
+    let mut out = [0i16; 3];
+    for (o, t) in out.iter_mut().zip(tau) {
+        let v = (-COMMAND_PER_NM * t).round();
+        *o = if v.is_finite() {
+            v.clamp(-f64::from(MAX_COMMAND), f64::from(MAX_COMMAND)) as i16
+        } else {
+            0
+        };
+    }
+    out
+}
+
+/// The joint torques (N·m) that motor commands produce.
+pub fn torques_of_commands(cmd: [i16; 3]) -> Vec3 {
+    cmd.map(|c| -f64::from(c) / COMMAND_PER_NM)
+}
+
+/// Degrees of arm rotation per encoder count (≈ 0.036435°).
+pub fn degrees_per_count() -> f64 {
+    360.0 / (COUNTS_PER_MOTOR_TURN * DRIVE_RATIO)
+}
+
+/// A motor's arm angle (rad) from its encoder count.
+pub fn angle_of_count(count: i16, offset_deg: f64) -> f64 {
+    (f64::from(count) * degrees_per_count() + offset_deg).to_radians()
+}
+
+/// The encoder count nearest an arm angle (rad), saturating at the i16 range.
+pub fn count_of_angle(theta: f64, offset_deg: f64) -> i16 {
+    let c = ((theta.to_degrees() - offset_deg) / degrees_per_count()).round();
+    c.clamp(f64::from(i16::MIN), f64::from(i16::MAX)) as i16
+}
+
+/// Whether `p` (Falcon frame) lies in the workspace box and in reach.
+pub fn in_workspace(p: Vec3) -> bool {
+    (0..3).all(|a| p[a] >= FALCON_MIN_M[a] && p[a] <= FALCON_MAX_M[a]) && inverse(p).is_ok()
+}
+
+/// The profile frame ↔ the Falcon's: same axes, shifted origin.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Frame {
+    /// Where the profile's origin lies in the Falcon's frame, metres.
+    pub origin_m: Vec3,
+}
+
+impl Default for Frame {
+    fn default() -> Self {
+        Frame {
+            origin_m: DEFAULT_ORIGIN_M,
+        }
+    }
+}
+
+impl Frame {
+    pub fn to_falcon(&self, p: Vec3) -> Vec3 {
+        [
+            p[0] + self.origin_m[0],
+            p[1] + self.origin_m[1],
+            p[2] + self.origin_m[2],
+        ]
+    }
+    pub fn to_profile(&self, p: Vec3) -> Vec3 {
+        [
+            p[0] - self.origin_m[0],
+            p[1] - self.origin_m[1],
+            p[2] - self.origin_m[2],
+        ]
+    }
+}
+
+/// Newton's method on the inverse kinematics: p ← p + J(p)·(θ − IK(p)).
+/// Warm-started from the last solution, so at stroke speeds one or two
+/// steps reach a nanometre.
+pub struct ForwardSolver {
+    last: Vec3,
+    /// The angles and Jacobian at the last solution (for force mapping).
+    last_angles: LegAngles,
+    last_jacobian: Option<Mat3>,
+    /// Joint error (rad) below which a solution is accepted.
+    pub tolerance_rad: f64,
+    pub max_iterations: u32,
+}
+
+/// One forward solution.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Solution {
+    pub p: Vec3,
+    /// Newton steps taken.
+    pub iterations: u32,
+    /// Restarted from the first guess (the warm start failed).
+    pub restarted: bool,
+}
+
+impl Default for ForwardSolver {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl ForwardSolver {
+    pub fn new() -> ForwardSolver {
+        ForwardSolver {
+            last: START_GUESS_M,
+            last_angles: LegAngles::default(),
+            last_jacobian: None,
+            tolerance_rad: 1e-10,
+            max_iterations: 15,
+        }
+    }
+
+    /// The last solution (Falcon frame).
+    pub fn position(&self) -> Vec3 {
+        self.last
+    }
+
+    /// The Jacobian at the last solution, if one was found.
+    pub fn jacobian(&self) -> Option<&Mat3> {
+        self.last_jacobian.as_ref()
+    }
+
+    pub fn angles(&self) -> &LegAngles {
+        &self.last_angles
+    }
+
+    /// Forget the warm start (after a jump, e.g. homing).
+    pub fn reset(&mut self) {
+        self.last = START_GUESS_M;
+        self.last_jacobian = None;
+    }
+
+    /// The position whose motor angles are `theta1` (rad).
+    pub fn solve(&mut self, theta1: Vec3) -> Result<Solution, KinematicsError> {
+        match self.newton(self.last, theta1) {
+            Ok((p, iterations)) => Ok(Solution {
+                p,
+                iterations,
+                restarted: false,
+            }),
+            Err(_) => {
+                let (p, iterations) = self.continuation(theta1)?;
+                Ok(Solution {
+                    p,
+                    iterations,
+                    restarted: true,
+                })
+            }
+        }
+    }
+
+    /// A cold start: walk the joint angles from the first guess's to the
+    /// target in small steps, solving each from the last, so that every
+    /// Newton step starts close (far from the guess, a direct step can leave
+    /// the reachable region).
+    fn continuation(&mut self, theta1: Vec3) -> Result<(Vec3, u32), KinematicsError> {
+        let start = inverse(START_GUESS_M)?.theta1;
+        for pieces in [4u32, 16, 64] {
+            let mut p = START_GUESS_M;
+            let mut ok = true;
+            let mut total = 0;
+            for k in 1..=pieces {
+                let l = f64::from(k) / f64::from(pieces);
+                let target = [
+                    start[0] + l * (theta1[0] - start[0]),
+                    start[1] + l * (theta1[1] - start[1]),
+                    start[2] + l * (theta1[2] - start[2]),
+                ];
+                match self.newton(p, target) {
+                    Ok((q, n)) => {
+                        p = q;
+                        total += n;
+                    }
+                    Err(_) => {
+                        ok = false;
+                        break;
+                    }
+                }
+            }
+            if ok {
+                return Ok((p, total));
+            }
+        }
+        Err(KinematicsError::NoConvergence {
+            residual_rad: f64::NAN,
+        })
+    }
+
+    fn newton(&mut self, start: Vec3, theta1: Vec3) -> Result<(Vec3, u32), KinematicsError> {
+        let mut p = start;
+        let mut angles = inverse(p)?;
+        let mut residual = max_abs(sub(theta1, angles.theta1));
+        let mut steps = 0;
+        while residual > self.tolerance_rad {
+            if steps >= self.max_iterations {
+                return Err(KinematicsError::NoConvergence {
+                    residual_rad: residual,
+                });
+            }
+            let j = jacobian(&angles)?;
+            let dp = mul(&j, sub(theta1, angles.theta1));
+            // Halve the step while it leaves the reachable region or grows the error.
+            let mut scale = 1.0;
+            loop {
+                let q = [
+                    p[0] + scale * dp[0],
+                    p[1] + scale * dp[1],
+                    p[2] + scale * dp[2],
+                ];
+                if let Ok(a) = inverse(q) {
+                    let r = max_abs(sub(theta1, a.theta1));
+                    if r < residual || scale < 1e-3 {
+                        p = q;
+                        angles = a;
+                        residual = r;
+                        break;
+                    }
+                }
+                scale *= 0.5;
+                if scale < 1e-3 {
+                    return Err(KinematicsError::NoConvergence {
+                        residual_rad: residual,
+                    });
+                }
+            }
+            steps += 1;
+        }
+        self.last = p;
+        self.last_angles = angles;
+        self.last_jacobian = jacobian(&angles).ok();
+        Ok((p, steps))
+    }
+}
+
+fn sub(a: Vec3, b: Vec3) -> Vec3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn max_abs(v: Vec3) -> f64 {
+    v[0].abs().max(v[1].abs()).max(v[2].abs())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dist(a: Vec3, b: Vec3) -> f64 {
+        let d = sub(a, b);
+        (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt()
+    }
+
+    /// A grid over the workspace box, reachable points only.
+    fn grid(step: f64) -> Vec<Vec3> {
+        let mut pts = Vec::new();
+        let n = |a: usize| ((FALCON_MAX_M[a] - FALCON_MIN_M[a]) / step).round() as usize;
+        for i in 0..=n(0) {
+            for j in 0..=n(1) {
+                for k in 0..=n(2) {
+                    let p = [
+                        FALCON_MIN_M[0] + i as f64 * step,
+                        FALCON_MIN_M[1] + j as f64 * step,
+                        FALCON_MIN_M[2] + k as f64 * step,
+                    ];
+                    if inverse(p).is_ok() {
+                        pts.push(p);
+                    }
+                }
+            }
+        }
+        pts
+    }
+
+    #[test]
+    fn fk_of_ik_is_the_point_within_a_micrometre_over_the_workspace() {
+        let pts = grid(0.01);
+        assert!(pts.len() > 700, "only {} reachable grid points", pts.len());
+        let mut solver = ForwardSolver::new();
+        let mut worst: f64 = 0.0;
+        for &p in &pts {
+            let a = inverse(p).unwrap();
+            // Cold: from the first guess, as after a reset.
+            solver.reset();
+            let s = solver
+                .solve(a.theta1)
+                .unwrap_or_else(|e| panic!("{p:?}: {e}"));
+            let e = dist(s.p, p);
+            worst = worst.max(e);
+            assert!(e < 1e-6, "{p:?}: FK(IK(p)) is {e:.2e} m off");
+        }
+        eprintln!(
+            "worst FK(IK(p)) error over {} points: {worst:.2e} m",
+            pts.len()
+        );
+    }
+
+    #[test]
+    fn the_thesis_path_is_reachable_through_the_default_frame() {
+        let frame = Frame::default();
+        let lp = crate::profile::LoadedProfile::thesis();
+        for w in &lp.profile.path.waypoints_m {
+            let q = frame.to_falcon(*w);
+            assert!(in_workspace(q), "{w:?} -> {q:?}");
+        }
+    }
+
+    #[test]
+    fn joint_angles_are_equal_on_the_axis_of_symmetry() {
+        for z in [0.09, 0.11, 0.125, 0.15] {
+            let a = inverse([0.0, 0.0, z]).unwrap();
+            for i in 1..3 {
+                assert!((a.theta1[i] - a.theta1[0]).abs() < 1e-12, "{a:?}");
+                assert!((a.theta2[i] - a.theta2[0]).abs() < 1e-12);
+                assert!((a.theta3[i] - a.theta3[0]).abs() < 1e-12);
+            }
+            // Pulling the grip out raises every arm.
+            let b = inverse([0.0, 0.0, z + 0.001]).unwrap();
+            assert!(b.theta1[0] > a.theta1[0]);
+        }
+    }
+
+    #[test]
+    fn the_jacobian_matches_finite_differences() {
+        let h = 1e-7;
+        for p in [
+            [0.0, 0.0, 0.11],
+            [0.03, -0.02, 0.13],
+            [-0.045, 0.01, 0.145],
+            [0.02, 0.04, 0.09],
+        ] {
+            let a = inverse(p).unwrap();
+            let m = joint_rates(&a);
+            for col in 0..3 {
+                let mut hi = p;
+                let mut lo = p;
+                hi[col] += h;
+                lo[col] -= h;
+                let (ah, al) = (inverse(hi).unwrap(), inverse(lo).unwrap());
+                for (row, m_row) in m.iter().enumerate() {
+                    let fd = (ah.theta1[row] - al.theta1[row]) / (2.0 * h);
+                    let rel = (fd - m_row[col]).abs() / m_row[col].abs().max(1.0);
+                    assert!(rel < 1e-6, "{p:?} [{row}][{col}]: {} vs {fd}", m_row[col]);
+                }
+            }
+            // J = ∂p/∂θ1 is its inverse.
+            let j = jacobian(&a).unwrap();
+            let id = [
+                mul(&j, [m[0][0], m[1][0], m[2][0]]),
+                mul(&j, [m[0][1], m[1][1], m[2][1]]),
+            ];
+            assert!((id[0][0] - 1.0).abs() < 1e-9 && id[0][1].abs() < 1e-9);
+            assert!((id[1][1] - 1.0).abs() < 1e-9 && id[1][2].abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn forces_map_to_commands_and_back_with_the_clamp() {
+        let a = inverse([0.0, 0.0, 0.11]).unwrap();
+        let j = jacobian(&a).unwrap();
+        // One newton up: a few hundred counts per motor (≈ 325 on average).
+        let cmd = motor_commands(torques(&j, [0.0, 1.0, 0.0]));
+        let mean = cmd.iter().map(|c| f64::from(c.abs())).sum::<f64>() / 3.0;
+        assert!((250.0..450.0).contains(&mean), "{cmd:?}");
+        // Back through the Jacobian: the same force, to the command's rounding.
+        let f = force_of_torques(&j, torques_of_commands(cmd)).unwrap();
+        assert!(
+            (f[1] - 1.0).abs() < 0.01 && f[0].abs() < 0.01 && f[2].abs() < 0.01,
+            "{f:?}"
+        );
+        // Far beyond the device: every command clamps at ±4095.
+        let cmd = motor_commands(torques(&j, [0.0, 100.0, 0.0]));
+        assert!(cmd.iter().all(|c| c.abs() <= MAX_COMMAND), "{cmd:?}");
+        assert!(cmd.iter().any(|c| c.abs() == MAX_COMMAND), "{cmd:?}");
+        assert_eq!(motor_commands([f64::NAN, 0.0, 0.0])[0], 0);
+    }
+
+    #[test]
+    fn encoder_counts_round_trip() {
+        assert!((degrees_per_count() - 0.036435).abs() < 1e-5);
+        for c in [-3000i16, -1, 0, 1, 2500] {
+            let th = angle_of_count(c, 35.0);
+            assert_eq!(count_of_angle(th, 35.0), c);
+        }
+        assert!((angle_of_count(0, 35.0).to_degrees() - 35.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn warm_started_fk_takes_few_steps_at_stroke_speed() {
+        let mut solver = ForwardSolver::new();
+        let mut worst = 0;
+        // 1 cm/s (the thesis's stroke) and 10 cm/s (a fast transit), 1 kHz.
+        for speed in [0.01, 0.1] {
+            let dt = 0.001;
+            let mut p: Vec3 = [-0.045, 0.01, 0.14];
+            solver.reset();
+            for step in 0..900 {
+                p[0] += speed * dt;
+                p[1] = 0.01 + 0.001 * (p[0] * 2000.0).sin();
+                let a = inverse(p).unwrap();
+                let s = solver.solve(a.theta1).unwrap();
+                assert!(dist(s.p, p) < 1e-9);
+                if step > 0 {
+                    worst = worst.max(s.iterations);
+                }
+            }
+        }
+        assert!(worst <= 4, "{worst} iterations");
+    }
+
+    #[test]
+    fn unreachable_points_are_refused() {
+        assert!(inverse([0.0, 0.0, 0.5]).is_err());
+        assert!(!in_workspace([0.0, 0.0, 0.2]));
+        assert!(in_workspace([0.0, 0.0, 0.12]));
+    }
+}

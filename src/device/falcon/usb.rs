@@ -1,0 +1,330 @@
+//! The USB transport: a Falcon's FTDI chip driven directly through nusb
+//! (pure Rust over Linux usbfs: no libusb, no libftdi, no system packages).
+//!
+//! It owns finding Falcons (vendor 0x0403, product 0xCB48), opening one
+//! (detaching any kernel driver from interface 0 and claiming it), sending
+//! the FTDI vendor control requests, writing bulk OUT (endpoint 0x02) from a
+//! small pool of reused buffers, and keeping several bulk IN reads (0x81, one
+//! 64-byte packet each) always pending so that replies stream in at ~1 kHz.
+//! Every IN packet starts with two FTDI modem-status bytes, stripped here.
+//! It says plainly when permissions prevent access and how to fix it.
+
+use std::collections::VecDeque;
+use std::time::{Duration, Instant};
+
+use nusb::MaybeFuture;
+use nusb::transfer::{Buffer, Bulk, ControlOut, ControlType, In, Out, Recipient, TransferError};
+
+use super::{FalconTransport, TransportError, ftdi};
+
+const INTERFACE: u8 = 0;
+const EP_OUT: u8 = 0x02;
+const EP_IN: u8 = 0x81;
+/// Reads kept pending, and bytes each (one full-speed packet).
+const IN_TRANSFERS: usize = 4;
+const IN_LEN: usize = 64;
+/// FTDI modem-status bytes at the start of every IN packet.
+const STATUS_BYTES: usize = 2;
+const OUT_BUFFERS: usize = 4;
+const OUT_LEN: usize = 64;
+const CONTROL_TIMEOUT: Duration = Duration::from_millis(200);
+const WRITE_TIMEOUT: Duration = Duration::from_millis(100);
+
+/// The udev rule shipped in the repository, and how to install it.
+pub const UDEV_HINT: &str = "install the udev rule shipped with hapticlab: \
+`sudo cp contrib/99-novint-falcon.rules /etc/udev/rules.d/ && sudo udevadm control --reload-rules && sudo udevadm trigger`, \
+make sure you are in the `plugdev` group, then unplug and replug the Falcon";
+
+/// Why a Falcon could not be opened.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum UsbError {
+    #[error(
+        "no Novint Falcon (USB 0403:cb48) is plugged in{0}; plug it in directly (not through a hub) with its power supply connected"
+    )]
+    NotFound(String),
+    #[error("permission denied opening the Falcon at {at}: {UDEV_HINT}")]
+    Permission { at: String },
+    #[error("the Falcon at {at} is in use by another program ({detail}); close it and try again")]
+    Busy { at: String, detail: String },
+    #[error("cannot open the Falcon at {at}: {detail}")]
+    Other { at: String, detail: String },
+    #[error(
+        "cannot list USB devices ({0}): this system shows no USB bus (a container, or a VM without USB passthrough?), so no Falcon can be reached"
+    )]
+    List(String),
+}
+
+/// One attached Falcon, as `hapticlab devices` shows it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FalconInfo {
+    pub location: String,
+    pub serial: Option<String>,
+    pub product: Option<String>,
+    /// `Ok` when it can be opened; the reason when not.
+    pub access: Result<(), UsbError>,
+}
+
+fn location(d: &nusb::DeviceInfo) -> String {
+    format!("USB bus {} device {}", d.busnum(), d.device_address())
+}
+
+fn falcons() -> Result<Vec<nusb::DeviceInfo>, UsbError> {
+    let list = nusb::list_devices()
+        .wait()
+        .map_err(|e| UsbError::List(e.to_string()))?;
+    Ok(list
+        .filter(|d| d.vendor_id() == ftdi::VENDOR_ID && d.product_id() == ftdi::PRODUCT_ID)
+        .collect())
+}
+
+fn open_error(at: String, e: nusb::Error) -> UsbError {
+    match e.kind() {
+        nusb::ErrorKind::PermissionDenied => UsbError::Permission { at },
+        nusb::ErrorKind::Busy => UsbError::Busy {
+            at,
+            detail: e.to_string(),
+        },
+        nusb::ErrorKind::Disconnected | nusb::ErrorKind::NotFound => {
+            UsbError::NotFound(format!(" (it vanished from {at})"))
+        }
+        _ => UsbError::Other {
+            at,
+            detail: e.to_string(),
+        },
+    }
+}
+
+/// Every attached Falcon, each tried for access (opened and closed again).
+pub fn list_falcons() -> Result<Vec<FalconInfo>, UsbError> {
+    Ok(falcons()?
+        .into_iter()
+        .map(|d| {
+            let at = location(&d);
+            let access = d
+                .open()
+                .wait()
+                .map(|_| ())
+                .map_err(|e| open_error(at.clone(), e));
+            FalconInfo {
+                location: at,
+                serial: d.serial_number().map(str::to_string),
+                product: d.product_string().map(str::to_string),
+                access,
+            }
+        })
+        .collect())
+}
+
+/// Drop the two modem-status bytes at the start of each `max_packet`-sized
+/// piece of an IN transfer, passing the payload on.
+pub fn strip_modem_status(data: &[u8], max_packet: usize, mut out: impl FnMut(&[u8])) {
+    for packet in data.chunks(max_packet.max(STATUS_BYTES + 1)) {
+        if packet.len() > STATUS_BYTES {
+            out(&packet[STATUS_BYTES..]);
+        }
+    }
+}
+
+fn transfer_error(e: TransferError) -> TransportError {
+    match e {
+        TransferError::Disconnected => TransportError::Disconnected("USB device gone".into()),
+        other => TransportError::Io(other.to_string()),
+    }
+}
+
+pub struct UsbTransport {
+    device: nusb::Device,
+    _interface: nusb::Interface,
+    ep_in: nusb::Endpoint<Bulk, In>,
+    ep_out: nusb::Endpoint<Bulk, Out>,
+    max_packet: usize,
+    rx: VecDeque<u8>,
+    free_out: Vec<Buffer>,
+    at: String,
+}
+
+impl UsbTransport {
+    /// Open the `index`-th attached Falcon (0 = the first).
+    pub fn open(index: usize) -> Result<UsbTransport, UsbError> {
+        let all = falcons()?;
+        let count = all.len();
+        let info = all.into_iter().nth(index).ok_or_else(|| {
+            UsbError::NotFound(if count == 0 {
+                String::new()
+            } else {
+                format!(" at index {index} ({count} attached; `[falcon] index` counts from 0)")
+            })
+        })?;
+        let at = location(&info);
+        let device = info.open().wait().map_err(|e| open_error(at.clone(), e))?;
+        // 0403:cb48 is normally left alone by ftdi_sio; detach it if not.
+        let interface = device
+            .detach_and_claim_interface(INTERFACE)
+            .wait()
+            .map_err(|e| open_error(at.clone(), e))?;
+        let other = |e: nusb::Error| UsbError::Other {
+            at: at.clone(),
+            detail: e.to_string(),
+        };
+        let mut ep_in = interface.endpoint::<Bulk, In>(EP_IN).map_err(other)?;
+        let ep_out = interface.endpoint::<Bulk, Out>(EP_OUT).map_err(other)?;
+        let max_packet = ep_in.max_packet_size().max(IN_LEN);
+        for _ in 0..IN_TRANSFERS {
+            ep_in.submit(ep_in.allocate(max_packet));
+        }
+        let free_out = (0..OUT_BUFFERS).map(|_| ep_out.allocate(OUT_LEN)).collect();
+        Ok(UsbTransport {
+            device,
+            _interface: interface,
+            ep_in,
+            ep_out,
+            max_packet,
+            rx: VecDeque::with_capacity(4096),
+            free_out,
+            at,
+        })
+    }
+
+    pub fn describe(&self) -> String {
+        format!("the Novint Falcon at {}", self.at)
+    }
+
+    /// Take back finished OUT buffers; wait up to `wait` for one when none is free.
+    fn reclaim(&mut self, wait: Duration) -> Result<(), TransportError> {
+        let mut wait = wait;
+        while self.ep_out.pending() > 0 {
+            match self.ep_out.wait_next_complete(wait) {
+                Some(c) => {
+                    let status = c.status;
+                    let mut b = c.buffer;
+                    b.clear();
+                    self.free_out.push(b);
+                    status.map_err(transfer_error)?;
+                    wait = Duration::ZERO;
+                }
+                None => break,
+            }
+        }
+        Ok(())
+    }
+}
+
+impl FalconTransport for UsbTransport {
+    fn kind(&self) -> &'static str {
+        "falcon"
+    }
+
+    fn control(&mut self, request: u8, value: u16) -> Result<(), TransportError> {
+        if request == ftdi::PURGE && value & ftdi::PURGE_RX != 0 {
+            self.rx.clear();
+        }
+        self.device
+            .control_out(
+                ControlOut {
+                    control_type: ControlType::Vendor,
+                    recipient: Recipient::Device,
+                    request,
+                    value,
+                    index: 0,
+                    data: &[],
+                },
+                CONTROL_TIMEOUT,
+            )
+            .wait()
+            .map_err(transfer_error)
+    }
+
+    fn write(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
+        for piece in bytes.chunks(OUT_LEN) {
+            self.reclaim(Duration::ZERO)?;
+            if self.free_out.is_empty() {
+                self.reclaim(WRITE_TIMEOUT)?;
+            }
+            let Some(mut b) = self.free_out.pop() else {
+                return Err(TransportError::Io(
+                    "USB writes are not completing (the Falcon stopped reading)".into(),
+                ));
+            };
+            b.clear();
+            b.extend_from_slice(piece);
+            self.ep_out.submit(b);
+        }
+        Ok(())
+    }
+
+    fn read(&mut self, buf: &mut [u8], timeout: Duration) -> Result<usize, TransportError> {
+        let deadline = Instant::now() + timeout;
+        loop {
+            if !self.rx.is_empty() {
+                let n = buf.len().min(self.rx.len());
+                for (slot, b) in buf.iter_mut().zip(self.rx.drain(..n)) {
+                    *slot = b;
+                }
+                return Ok(n);
+            }
+            let left = deadline.saturating_duration_since(Instant::now());
+            let Some(c) = self.ep_in.wait_next_complete(left) else {
+                return Ok(0);
+            };
+            let status = c.status;
+            let mut b = c.buffer;
+            if status.is_ok() {
+                let rx = &mut self.rx;
+                strip_modem_status(&b, self.max_packet, |p| rx.extend(p));
+            }
+            // Keep the read pending whatever happened to this one.
+            b.clear();
+            b.set_requested_len(self.max_packet);
+            self.ep_in.submit(b);
+            match status {
+                Ok(()) | Err(TransferError::Cancelled) => {}
+                Err(e) => return Err(transfer_error(e)),
+            }
+            if self.rx.is_empty() && Instant::now() >= deadline {
+                return Ok(0);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn modem_status_bytes_are_stripped_per_packet() {
+        // Two 64-byte packets and a short one: 62 + 62 + 3 payload bytes.
+        let mut raw = Vec::new();
+        for (k, n) in [(0u8, 62usize), (1, 62), (2, 3)] {
+            raw.extend([0x01, 0x60]);
+            raw.extend(std::iter::repeat_n(b'a' + k, n));
+        }
+        let mut out = Vec::new();
+        strip_modem_status(&raw, 64, |p| out.extend_from_slice(p));
+        assert_eq!(out.len(), 127);
+        assert!(out[..62].iter().all(|&b| b == b'a'));
+        assert!(out[62..124].iter().all(|&b| b == b'b'));
+        assert_eq!(&out[124..], b"ccc");
+        // A status-only packet carries nothing.
+        let mut n = 0;
+        strip_modem_status(&[0x01, 0x60], 64, |p| n += p.len());
+        assert_eq!(n, 0);
+    }
+
+    #[test]
+    fn errors_say_how_to_fix_permissions() {
+        let e = UsbError::Permission {
+            at: "USB bus 1 device 7".into(),
+        }
+        .to_string();
+        assert!(
+            e.contains("contrib/99-novint-falcon.rules") && e.contains("plugdev"),
+            "{e}"
+        );
+        assert!(
+            UsbError::NotFound(String::new())
+                .to_string()
+                .contains("0403:cb48")
+        );
+    }
+}

@@ -1,0 +1,324 @@
+//! The profile's hardware sections: `[falcon]` (with `[falcon.emulator]`)
+//! for the Novint Falcon and its emulator, and `[[triggers]]` for hands-free
+//! HID triggers. Schema and validation only; this module touches no device
+//! and no file (the firmware file is checked when the device opens).
+
+use std::path::PathBuf;
+
+use serde::{Deserialize, Serialize};
+
+use super::{DeviceKind, Invalid, Profile};
+use crate::device::falcon::kinematics::{self, DEFAULT_ENCODER_OFFSET_DEG, DEFAULT_ORIGIN_M};
+
+/// How to drive a Falcon.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FalconSection {
+    /// The firmware image from the user's libnifalcon or Novint install
+    /// (nvent_firmware.bin recommended), relative to the profile's folder.
+    /// Needed after every power-up; never shipped with hapticlab.
+    #[serde(default)]
+    pub firmware: Option<PathBuf>,
+    /// Where the profile's origin lies in the Falcon's kinematic frame
+    /// (x right, y up, z towards the user; the axes are the profile's), metres.
+    #[serde(default = "default_origin")]
+    pub origin_m: [f64; 3],
+    /// The arm angle at encoder count 0 after homing, degrees.
+    #[serde(default = "default_encoder_offset")]
+    pub encoder_offset_deg: f64,
+    /// Which Falcon, when several are plugged in (0 = the first listed).
+    #[serde(default)]
+    pub index: usize,
+    /// Whole firmware loads to try before giving up (real devices need several).
+    #[serde(default = "default_firmware_attempts")]
+    pub firmware_attempts: u32,
+    /// How long `scan` waits for the user to home the grip.
+    #[serde(default = "default_homing_timeout")]
+    pub homing_timeout_s: f64,
+    /// How long a tick waits for the reply to its packet.
+    #[serde(default = "default_reply_timeout")]
+    pub reply_timeout_ms: f64,
+    /// Without any reply for this long, the Falcon counts as gone.
+    #[serde(default = "default_link_lost")]
+    pub link_lost_after_ms: f64,
+    /// Only for `device.kind = "falcon-emulator"`.
+    #[serde(default)]
+    pub emulator: EmulatorSection,
+}
+
+fn default_origin() -> [f64; 3] {
+    DEFAULT_ORIGIN_M
+}
+fn default_encoder_offset() -> f64 {
+    DEFAULT_ENCODER_OFFSET_DEG
+}
+fn default_firmware_attempts() -> u32 {
+    20
+}
+fn default_homing_timeout() -> f64 {
+    120.0
+}
+fn default_reply_timeout() -> f64 {
+    0.9
+}
+fn default_link_lost() -> f64 {
+    250.0
+}
+
+impl Default for FalconSection {
+    fn default() -> Self {
+        FalconSection {
+            firmware: None,
+            origin_m: default_origin(),
+            encoder_offset_deg: default_encoder_offset(),
+            index: 0,
+            firmware_attempts: default_firmware_attempts(),
+            homing_timeout_s: default_homing_timeout(),
+            reply_timeout_ms: default_reply_timeout(),
+            link_lost_after_ms: default_link_lost(),
+            emulator: EmulatorSection::default(),
+        }
+    }
+}
+
+/// The emulated Falcon's state and faults.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct EmulatorSection {
+    /// The firmware is already running; when false the driver uploads
+    /// `falcon.firmware` (any file of a known size will do for the emulator).
+    pub firmware_loaded: bool,
+    /// The first N uploads fail (a corrupted echo).
+    pub upload_failures: u32,
+    /// Per reply: the chance it is lost, garbled, or split in two reads.
+    pub drop_rate: f64,
+    pub garble_rate: f64,
+    pub split_rate: f64,
+    /// Pull the cable this many seconds after the loop starts.
+    pub unplug_after_s: Option<f64>,
+    /// A simulated hand homes the grip (pulls it out and pushes it in).
+    pub auto_home: bool,
+}
+
+impl Default for EmulatorSection {
+    fn default() -> Self {
+        EmulatorSection {
+            firmware_loaded: true,
+            upload_failures: 0,
+            drop_rate: 0.0,
+            garble_rate: 0.0,
+            split_rate: 0.0,
+            unplug_after_s: None,
+            auto_home: true,
+        }
+    }
+}
+
+/// What a trigger button does.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Hash)]
+#[serde(rename_all = "kebab-case")]
+pub enum TriggerAction {
+    /// Start a measurement (a scan).
+    Start,
+    /// Store the last measurement.
+    Store,
+    /// Abort the running measurement.
+    Abort,
+}
+
+impl TriggerAction {
+    pub fn name(self) -> &'static str {
+        match self {
+            TriggerAction::Start => "start",
+            TriggerAction::Store => "store",
+            TriggerAction::Abort => "abort",
+        }
+    }
+}
+
+/// A HID device (foot switch, button box) whose buttons trigger actions.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct TriggerSpec {
+    /// A name for messages (default: the ids).
+    #[serde(default)]
+    pub name: String,
+    pub vendor_id: u16,
+    pub product_id: u16,
+    /// Bytes at the start of each input report before the button bits
+    /// (e.g. 1 for devices that send a report id).
+    #[serde(default)]
+    pub report_offset: usize,
+    /// Button N is bit N−1 of the report after the offset (bit 0 of the first byte is button 1).
+    pub buttons: Vec<ButtonAction>,
+}
+
+impl TriggerSpec {
+    pub fn display_name(&self) -> String {
+        if self.name.is_empty() {
+            format!("HID {:04x}:{:04x}", self.vendor_id, self.product_id)
+        } else {
+            format!(
+                "{} ({:04x}:{:04x})",
+                self.name, self.vendor_id, self.product_id
+            )
+        }
+    }
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ButtonAction {
+    pub button: u32,
+    pub action: TriggerAction,
+}
+
+fn bad(key: impl Into<String>, reason: impl Into<String>) -> Result<(), Invalid> {
+    Err(Invalid {
+        key: key.into(),
+        reason: reason.into(),
+    })
+}
+
+fn rate(key: &str, v: f64) -> Result<(), Invalid> {
+    if !(v.is_finite() && (0.0..0.5).contains(&v)) {
+        return bad(key, format!("must be in [0, 0.5), got {v}"));
+    }
+    Ok(())
+}
+
+/// Check the hardware sections (called by `Profile::validate`).
+pub fn validate(p: &Profile) -> Result<(), Invalid> {
+    let falcon_kind = matches!(
+        p.device.kind,
+        DeviceKind::Falcon | DeviceKind::FalconEmulator
+    );
+    if p.device.kind == DeviceKind::Falcon
+        && p.falcon
+            .as_ref()
+            .and_then(|f| f.firmware.as_ref())
+            .is_none()
+    {
+        return bad(
+            "device.kind",
+            "kind = \"falcon\" needs `[falcon] firmware = \"…/nvent_firmware.bin\"`: the Falcon's firmware is Novint's and not shipped with hapticlab; take it from your libnifalcon source tree (firmware/) or your Novint driver install",
+        );
+    }
+    if let Some(f) = &p.falcon {
+        if f.origin_m.iter().any(|v| !v.is_finite()) {
+            return bad("falcon.origin_m", "must be three numbers (metres)");
+        }
+        if !(f.encoder_offset_deg.is_finite() && f.encoder_offset_deg.abs() <= 180.0) {
+            return bad("falcon.encoder_offset_deg", "must be within ±180°");
+        }
+        if f.firmware
+            .as_ref()
+            .is_some_and(|p| p.as_os_str().is_empty())
+        {
+            return bad("falcon.firmware", "must name the firmware file");
+        }
+        if !(1..=100).contains(&f.firmware_attempts) {
+            return bad("falcon.firmware_attempts", "must be from 1 to 100");
+        }
+        if f.index > 15 {
+            return bad("falcon.index", "must be from 0 to 15");
+        }
+        if !(f.homing_timeout_s.is_finite()
+            && f.homing_timeout_s > 0.0
+            && f.homing_timeout_s <= 3600.0)
+        {
+            return bad("falcon.homing_timeout_s", "must be in (0, 3600] s");
+        }
+        if !(f.reply_timeout_ms.is_finite()
+            && f.reply_timeout_ms > 0.0
+            && f.reply_timeout_ms <= 100.0)
+        {
+            return bad("falcon.reply_timeout_ms", "must be in (0, 100] ms");
+        }
+        let period_ms = 1000.0 / p.device.rate_hz;
+        if !(f.link_lost_after_ms.is_finite()
+            && f.link_lost_after_ms >= 2.0 * period_ms
+            && f.link_lost_after_ms <= 10_000.0)
+        {
+            return bad(
+                "falcon.link_lost_after_ms",
+                format!(
+                    "must be from two servo periods ({:.1} ms) to 10000 ms",
+                    2.0 * period_ms
+                ),
+            );
+        }
+        let e = &f.emulator;
+        rate("falcon.emulator.drop_rate", e.drop_rate)?;
+        rate("falcon.emulator.garble_rate", e.garble_rate)?;
+        rate("falcon.emulator.split_rate", e.split_rate)?;
+        if e.upload_failures > 100 {
+            return bad("falcon.emulator.upload_failures", "must be at most 100");
+        }
+        if let Some(u) = e.unplug_after_s
+            && !(u.is_finite() && u > 0.0)
+        {
+            return bad(
+                "falcon.emulator.unplug_after_s",
+                "must be a positive number of seconds",
+            );
+        }
+        if !e.firmware_loaded && f.firmware.is_none() {
+            return bad(
+                "falcon.emulator.firmware_loaded",
+                "is false, so the driver must upload firmware: name the file in `[falcon] firmware`",
+            );
+        }
+    }
+    if falcon_kind {
+        let frame = kinematics::Frame {
+            origin_m: p.falcon.as_ref().map_or(DEFAULT_ORIGIN_M, |f| f.origin_m),
+        };
+        for (i, w) in p.path.waypoints_m.iter().enumerate() {
+            let q = frame.to_falcon(*w);
+            if !kinematics::in_workspace(q) {
+                return bad(
+                    format!("path.waypoints_m[{i}]"),
+                    format!(
+                        "waypoint {} ({:.4}, {:.4}, {:.4}) m is outside the Falcon's workspace: in the Falcon's frame it is ({:.4}, {:.4}, {:.4}) m, which must lie in x, y ±0.05 m, z 0.075…0.175 m and within the legs' reach (move the waypoint or `[falcon] origin_m`)",
+                        i + 1,
+                        w[0],
+                        w[1],
+                        w[2],
+                        q[0],
+                        q[1],
+                        q[2]
+                    ),
+                );
+            }
+        }
+    }
+    for (i, t) in p.triggers.iter().enumerate() {
+        let key = format!("triggers[{i}]");
+        if t.buttons.is_empty() {
+            return bad(
+                format!("{key}.buttons"),
+                "must map at least one button to an action",
+            );
+        }
+        if t.report_offset > 64 {
+            return bad(format!("{key}.report_offset"), "must be at most 64 bytes");
+        }
+        let mut seen = std::collections::BTreeSet::new();
+        for b in &t.buttons {
+            if !(1..=256).contains(&b.button) {
+                return bad(
+                    format!("{key}.buttons"),
+                    format!("button {} must be from 1 to 256", b.button),
+                );
+            }
+            if !seen.insert(b.button) {
+                return bad(
+                    format!("{key}.buttons"),
+                    format!("button {} is mapped twice", b.button),
+                );
+            }
+        }
+    }
+    Ok(())
+}
