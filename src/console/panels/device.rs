@@ -56,7 +56,7 @@ fn live_lines(app: &App) -> Vec<Line<'_>> {
         Some(_) => row(
             "Homed",
             Span::styled(
-                "NO (LED red): move the grip in and out",
+                "NO (LED red): pull the grip all the way out, then push it back in",
                 Style::new().fg(Color::Red).add_modifier(Modifier::BOLD),
             ),
         ),
