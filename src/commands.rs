@@ -334,7 +334,8 @@ pub fn features_of(
     ex: &mut FeatureExtractor,
 ) -> Result<Vec<f64>, Failure> {
     let s = ex.settings();
-    let (axis_name, channel_name) = (s.axis.clone(), s.channel.clone());
+    let axis_name = s.axis.clone();
+    let channel_names: Vec<String> = s.all_channels().map(str::to_string).collect();
     let missing = |c: &str| {
         bad(format!(
             "{}: no column `{c}` (the recording has {})",
@@ -343,10 +344,11 @@ pub fn features_of(
         ))
     };
     let axis = rec.column(&axis_name).ok_or_else(|| missing(&axis_name))?;
-    let signal = rec
-        .column(&channel_name)
-        .ok_or_else(|| missing(&channel_name))?;
-    ex.features(axis, signal)
+    let signals = channel_names
+        .iter()
+        .map(|c| rec.column(c).ok_or_else(|| missing(c)))
+        .collect::<Result<Vec<_>, _>>()?;
+    ex.features_of_channels(axis, &signals)
         .map(|f| f.to_vec())
         .map_err(|e| bad(format!("{}: {e}", file.display())))
 }
