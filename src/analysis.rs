@@ -176,10 +176,11 @@ pub fn check_settings(settings: &Analysis) -> Result<(), String> {
         ));
     }
     let [a, b] = settings.bins;
-    if settings.band.is_none() && (a > b || b > n / 2) {
+    let m = settings.dft_points();
+    if settings.band.is_none() && (a > b || b > m / 2) {
         return Err(format!(
             "analysis.bins must be [first, last] with first <= last <= {}, got {:?}",
-            n / 2,
+            m / 2,
             settings.bins
         ));
     }

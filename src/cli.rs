@@ -134,7 +134,7 @@ pub enum Command {
     },
     /// Train and test on a split of the recordings; print the confusion matrix (Table 4.1).
     #[command(
-        after_help = "Example:\n  hapticlab evaluate recordings/thesis-sim --json > report.json"
+        after_help = "Examples:\n  hapticlab evaluate recordings/thesis-sim --json > report.json\n  hapticlab evaluate recordings/thesis-sim --folds 10 --seed 1\n  hapticlab evaluate recordings/lab --folds 5 --group-by session\n  hapticlab evaluate recordings/thesis-sim --folds 10 --sweep k=1..15"
     )]
     Evaluate {
         #[command(flatten)]
@@ -147,6 +147,8 @@ pub enum Command {
         /// Print JSON for scripts.
         #[arg(long)]
         json: bool,
+        #[command(flatten)]
+        validation: crate::study::ValidationArgs,
     },
     /// Check profiles: parse and validate every value.
     #[command(after_help = "Example:\n  hapticlab check profiles/*.toml")]

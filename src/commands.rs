@@ -119,7 +119,15 @@ pub fn run(cmd: Command) -> Result<(), Failure> {
             paths,
             shuffle_seed,
             json,
-        } => evaluate_cmd(&profile, &paths, shuffle_seed, json),
+            validation,
+        } => {
+            let method = load_profile(&profile)?.profile.evaluation.method;
+            if validation.is_active() || method != crate::profile::SplitMethod::Holdout {
+                crate::study::run_evaluate(&profile, &paths, shuffle_seed, json, &validation)
+            } else {
+                evaluate_cmd(&profile, &paths, shuffle_seed, json)
+            }
+        }
         Command::Check { profiles } => check(&profiles),
     }
 }

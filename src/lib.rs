@@ -16,3 +16,4 @@ pub mod profile;
 pub mod recorder;
 pub mod recording;
 pub mod servo;
+pub mod study;

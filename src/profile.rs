@@ -859,13 +859,15 @@ impl Profile {
                 format!("leaves {n} points in the window (at most 1048576)"),
             );
         }
-        if an.band.is_none() && (an.bins[0] > an.bins[1] || an.bins[1] > n / 2) {
+        let m = an.dft_points();
+        if an.band.is_none() && (an.bins[0] > an.bins[1] || an.bins[1] > m / 2) {
             return bad(
                 "analysis.bins",
                 format!(
-                    "must be [first, last] with first <= last <= {} (half the {} window points), got {:?}",
-                    n / 2,
-                    n,
+                    "must be [first, last] with first <= last <= {} (half the {} {} points), got {:?}",
+                    m / 2,
+                    m,
+                    if m == n { "window" } else { "Welch segment" },
                     an.bins
                 ),
             );
