@@ -150,6 +150,22 @@ pub enum Command {
         #[command(flatten)]
         validation: crate::study::ValidationArgs,
     },
+    /// A dataset's health: recordings per class, incomplete files, feature spread, outliers by file.
+    #[command(
+        after_help = "Example:\n  hapticlab inspect recordings/thesis-sim\n  hapticlab inspect recordings/lab --threshold 4 --json"
+    )]
+    Inspect {
+        #[command(flatten)]
+        profile: ProfileArg,
+        #[arg(required = true, value_name = "PATH")]
+        paths: Vec<PathBuf>,
+        /// Outlier threshold t: distance to the class centroid beyond median + t x 1.4826 x MAD.
+        #[arg(long, default_value_t = 3.0, value_name = "T")]
+        threshold: f64,
+        /// Print JSON for scripts.
+        #[arg(long)]
+        json: bool,
+    },
     /// Check profiles: parse and validate every value.
     #[command(after_help = "Example:\n  hapticlab check profiles/*.toml")]
     Check {

@@ -129,6 +129,12 @@ pub fn run(cmd: Command) -> Result<(), Failure> {
             }
         }
         Command::Check { profiles } => check(&profiles),
+        Command::Inspect {
+            profile,
+            paths,
+            threshold,
+            json,
+        } => crate::inspect::run(&profile, &paths, threshold, json),
     }
 }
 
