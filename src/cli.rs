@@ -166,6 +166,11 @@ pub enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Import CSV or WAV files from other rigs as recordings v1.
+    #[command(
+        after_help = "Examples:\n  hapticlab import rig/*.csv --out recordings/rig --time-column time --channels ax,ay --label S2 --meta session=3\n  hapticlab import raw/S1/a.csv --out recordings/rig --rate 3200 --channels a0,a1,a2,a3 --burst 4 --names acc\n  hapticlab import sound/S3/*.wav --out recordings/sound"
+    )]
+    Import(crate::import::ImportArgs),
     /// Check profiles: parse and validate every value.
     #[command(after_help = "Example:\n  hapticlab check profiles/*.toml")]
     Check {

@@ -129,6 +129,14 @@ pub fn run(cmd: Command) -> Result<(), Failure> {
             }
         }
         Command::Check { profiles } => check(&profiles),
+        Command::Import(args) => {
+            let written = crate::import::run(&args)?;
+            for p in &written {
+                println!("{}", p.display());
+            }
+            eprintln!("imported {} recording(s)", written.len());
+            Ok(())
+        }
         Command::Inspect {
             profile,
             paths,

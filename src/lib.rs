@@ -12,6 +12,7 @@ pub mod cli;
 pub mod commands;
 pub mod device;
 pub mod evaluate;
+pub mod import;
 pub mod inspect;
 pub mod profile;
 pub mod recorder;
