@@ -129,6 +129,7 @@ pub fn run(cmd: Command) -> Result<(), Failure> {
             }
         }
         Command::Check { profiles } => check(&profiles),
+        Command::Plot(args) => crate::plot::run(&args),
         Command::Import(args) => {
             let written = crate::import::run(&args)?;
             for p in &written {

@@ -14,6 +14,7 @@ pub mod device;
 pub mod evaluate;
 pub mod import;
 pub mod inspect;
+pub mod plot;
 pub mod profile;
 pub mod recorder;
 pub mod recording;
