@@ -428,6 +428,10 @@ fn prepare(
     (matrix, norms)
 }
 
+/// Training values (examples × features) from which one query is searched
+/// on several threads.
+const PARALLEL_SEARCH_VALUES: usize = 1 << 20;
+
 /// The default candidates of `k = "auto"`.
 pub const AUTO_K_CANDIDATES: [usize; 8] = [1, 3, 5, 7, 9, 11, 13, 15];
 
@@ -605,15 +609,41 @@ impl Model {
         };
         let metric = self.classifier.metric;
         let mut nearest = Vec::with_capacity(k + 1);
-        nearest_rows(
-            metric,
-            q,
-            &self.matrix,
-            &self.norms,
-            0..self.examples.len(),
-            k,
-            &mut nearest,
-        );
+        let n = self.examples.len();
+        // A large training set is searched in parallel chunks (the scan is
+        // bound by memory bandwidth, which one core does not saturate); the
+        // chunks' nearest are merged by (value, row), so ties keep the
+        // training order exactly as a single pass would.
+        let threads = if n * q.len().max(1) >= PARALLEL_SEARCH_VALUES {
+            std::thread::available_parallelism().map_or(1, |t| t.get().min(8))
+        } else {
+            1
+        };
+        if threads > 1 {
+            let per = n.div_ceil(threads);
+            let (matrix, norms) = (&self.matrix, &self.norms);
+            let parts: Vec<Vec<(f64, usize)>> = std::thread::scope(|s| {
+                let handles: Vec<_> = (0..threads)
+                    .map(|t| {
+                        s.spawn(move || {
+                            let mut part = Vec::with_capacity(k + 1);
+                            let rows = t * per..((t + 1) * per).min(n);
+                            nearest_rows(metric, q, matrix, norms, rows, k, &mut part);
+                            part
+                        })
+                    })
+                    .collect();
+                handles
+                    .into_iter()
+                    .map(|h| h.join().unwrap_or_default())
+                    .collect()
+            });
+            nearest = parts.concat();
+            nearest.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            nearest.truncate(k);
+        } else {
+            nearest_rows(metric, q, &self.matrix, &self.norms, 0..n, k, &mut nearest);
+        }
         let (order, count) = rank_classes(
             metric,
             self.classifier.weights,

@@ -131,3 +131,48 @@ fn k_auto_reads_and_writes_as_a_string() {
         "{err}"
     );
 }
+
+#[test]
+fn a_large_training_set_searched_in_parallel_gives_the_exact_neighbours() {
+    // 20,000 x 64 values: above the parallel threshold. Many exact ties
+    // (coarse values) check that equal distances keep the training order.
+    let mut state = 7u64;
+    let mut next = move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 33) % 4) as f64
+    };
+    let train: Vec<TrainingExample> = (0..20_000)
+        .map(|i| {
+            ex(
+                &format!("{i}"),
+                ["A", "B", "C"][i % 3],
+                &(0..64).map(|_| next()).collect::<Vec<_>>(),
+            )
+        })
+        .collect();
+    let q: Vec<f64> = (0..64).map(|_| next()).collect();
+    let m = Model::train(
+        "t",
+        &analysis(64),
+        &knn(25, Metric::Manhattan),
+        train.clone(),
+    )
+    .unwrap();
+    let p = m.classify(&q).unwrap();
+    let mut all: Vec<(f64, usize)> = train
+        .iter()
+        .enumerate()
+        .map(|(i, e)| {
+            (
+                e.features.iter().zip(&q).map(|(a, b)| (a - b).abs()).sum(),
+                i,
+            )
+        })
+        .collect();
+    all.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let want: Vec<String> = all[..25].iter().map(|(_, i)| i.to_string()).collect();
+    let got: Vec<String> = p.neighbours.iter().map(|n| n.file.clone()).collect();
+    assert_eq!(got, want);
+}
