@@ -459,7 +459,7 @@ fn train(profile: &ProfileArg, paths: &[PathBuf], out: &Path) -> Result<(), Fail
     model.save(out).map_err(runtime)?;
     println!(
         "trained k-NN (k = {}) on {} recordings of {} classes ({}); model saved to {}",
-        lp.profile.classifier.k,
+        model.classifier.k,
         n,
         model.labels.len(),
         model.labels.join(", "),
@@ -553,7 +553,7 @@ fn evaluate_cmd(
         println!(
             "profile {}: k-NN k = {}, {} training and {} test recordings per class{}",
             lp.profile.name,
-            lp.profile.classifier.k,
+            lp.profile.classifier.k_text(),
             eval.train_per_class,
             eval.test_per_class,
             eval.shuffle_seed
@@ -578,7 +578,7 @@ fn check(profiles: &[PathBuf]) -> Result<(), Failure> {
                 lp.profile.path.waypoints_m.len(),
                 lp.profile.textures.len(),
                 lp.profile.analysis.feature_count(),
-                lp.profile.classifier.k
+                lp.profile.classifier.k_text()
             ),
             Err(e) => errors.push(e.to_string()),
         }
