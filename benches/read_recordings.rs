@@ -76,5 +76,11 @@ fn read_recordings(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, read_recordings);
+// No plots: the crate's plotters has only the ab_glyph font backend
+// (no system fonts), and criterion's plots would find no font.
+criterion_group! {
+    name = benches;
+    config = Criterion::default().without_plots();
+    targets = read_recordings
+}
 criterion_main!(benches);

@@ -32,5 +32,11 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+// No plots: the crate's plotters has only the ab_glyph font backend
+// (no system fonts), and criterion's plots would find no font.
+criterion_group! {
+    name = benches;
+    config = Criterion::default().without_plots();
+    targets = bench
+}
 criterion_main!(benches);

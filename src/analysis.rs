@@ -41,10 +41,18 @@
 //! time axis (`t_s`) works the same way, in seconds.
 //!
 //! # Spectrum
-//! After the detrend (none, mean, or least-squares line) the window's DFT is
-//! taken unnormalised, as Matlab's `fft` gives it (the thesis's Eq. 3.4):
-//! `X_k = Σ_j x_j e^{−2πi jk/n}`. The features are `|X_k|` for
-//! `k = bins[0]..=bins[1]`.
+//! After the detrend (none, mean, or least-squares line) and the taper (none,
+//! or Hann) the window's DFT is taken unnormalised, as Matlab's `fft` gives
+//! it (the thesis's Eq. 3.4): `X_k = Σ_j x_j e^{−2πi jk/n}`. The thesis's
+//! features are `|X_k|` for `k = bins[0]..=bins[1]`; the other spectrum
+//! kinds (power, log-power, Welch) are described at [`spectrum::Spectrum`].
+//! Bin `k` lies at `k / (m · spacing)` cycles per axis unit (`m` the DFT
+//! length): Hz on a time axis, cycles/mm on a position axis once divided by
+//! 1000; `band = [lo, hi]` keeps the bins in that range instead of `bins`.
+//!
+//! # Several channels
+//! `channel` and then each of `channels` is resampled along the same axis
+//! and analysed alike; the feature vector is their features concatenated.
 
 mod resample;
 mod spectrum;
@@ -54,10 +62,11 @@ use std::fmt;
 use thiserror::Error;
 
 use crate::profile::Analysis;
+use crate::profile::SpectrumKind;
 use resample::Resampler;
-use spectrum::MagnitudeSpectrum;
+use spectrum::Spectrum;
 
-pub use spectrum::detrend;
+pub use spectrum::{detrend, taper_weights};
 
 /// Why a scan gives no features.
 #[derive(Debug, Clone, PartialEq, Error)]
@@ -167,12 +176,70 @@ pub fn check_settings(settings: &Analysis) -> Result<(), String> {
         ));
     }
     let [a, b] = settings.bins;
-    if a > b || b > n / 2 {
+    let m = settings.dft_points();
+    if settings.band.is_none() && (a > b || b > m / 2) {
         return Err(format!(
             "analysis.bins must be [first, last] with first <= last <= {}, got {:?}",
-            n / 2,
+            m / 2,
             settings.bins
         ));
+    }
+    check_options(settings).map_err(|(key, reason)| format!("{key} {reason}"))
+}
+
+/// Checks the options beyond the thesis's (spectrum kind, Welch segments,
+/// band): `Err((key, reason))`. Assumes the window and spacing are valid.
+pub fn check_options(s: &Analysis) -> Result<(), (String, String)> {
+    let bad = |key: &str, reason: String| Err((format!("analysis.{key}"), reason));
+    let n = s.points();
+    if s.spectrum == SpectrumKind::Welch {
+        let m = s.dft_points();
+        if m < 4 || m > n {
+            return bad(
+                "welch_segment",
+                format!("must be 4 to {n} points (the window's), got {m}"),
+            );
+        }
+        let o = s.overlap();
+        if !(o.is_finite() && (0.0..1.0).contains(&o)) {
+            return bad(
+                "welch_overlap",
+                format!("must be 0 <= overlap < 1, got {o}"),
+            );
+        }
+    } else if s.welch_segment.is_some() {
+        return bad(
+            "welch_segment",
+            "is only used with spectrum = \"welch\"".into(),
+        );
+    } else if s.welch_overlap.is_some() {
+        return bad(
+            "welch_overlap",
+            "is only used with spectrum = \"welch\"".into(),
+        );
+    }
+    if let Some([lo, hi]) = s.band {
+        let nyquist = s.bin_width() * (s.dft_points() / 2) as f64;
+        let unit = s.frequency_unit();
+        if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && hi >= lo) {
+            return bad(
+                "band",
+                format!(
+                    "must be [low, high] in {unit} with 0 <= low <= high, got {:?}",
+                    [lo, hi]
+                ),
+            );
+        }
+        let [a, b] = s.kept_bins();
+        if a > b {
+            return bad(
+                "band",
+                format!(
+                    "holds no DFT bin: bins are {:.4} {unit} apart up to {nyquist:.4} {unit}",
+                    s.bin_width()
+                ),
+            );
+        }
     }
     Ok(())
 }
@@ -185,9 +252,12 @@ pub struct FeatureExtractor {
     resampler: Resampler,
     resampled: Vec<f64>,
     detrended: Vec<f64>,
-    spectrum: MagnitudeSpectrum,
-    /// One-sided magnitudes, bins 0..=n/2.
-    magnitudes: Vec<f64>,
+    spectrum: Spectrum,
+    /// The one-sided spectrum of the last channel transformed.
+    values: Vec<f64>,
+    /// The concatenated features of every channel.
+    features: Vec<f64>,
+    kept: [usize; 2],
     has_spectrum: bool,
 }
 
@@ -217,13 +287,22 @@ impl FeatureExtractor {
     pub fn try_new(settings: &Analysis) -> Result<Self, AnalysisError> {
         check_settings(settings).map_err(AnalysisError::Settings)?;
         let n = settings.points();
+        let spectrum = Spectrum::new(
+            settings.spectrum,
+            settings.taper,
+            settings.detrend,
+            settings.dft_points(),
+            settings.overlap(),
+        );
         Ok(FeatureExtractor {
             settings: settings.clone(),
             resampler: Resampler::new(n, settings.window[0], settings.spacing),
             resampled: vec![0.0; n],
             detrended: vec![0.0; n],
-            spectrum: MagnitudeSpectrum::new(n),
-            magnitudes: vec![0.0; n / 2 + 1],
+            values: vec![0.0; spectrum.len()],
+            spectrum,
+            features: vec![0.0; settings.feature_count()],
+            kept: settings.kept_bins(),
             has_spectrum: false,
         })
     }
@@ -247,17 +326,47 @@ impl FeatureExtractor {
         Ok(&self.resampled)
     }
 
-    /// Resample, detrend, FFT, and return `|X_k|` for `k` in
-    /// `bins[0]..=bins[1]` (`settings.feature_count()` values).
+    /// Resample, detrend, taper, transform, and return the kept bins of one
+    /// signal (`settings.features_per_channel()` values).
     pub fn features(&mut self, axis: &[f64], signal: &[f64]) -> Result<&[f64], AnalysisError> {
+        self.transform(axis, signal)?;
+        let [a, b] = self.kept;
+        Ok(&self.values[a..=b])
+    }
+
+    fn transform(&mut self, axis: &[f64], signal: &[f64]) -> Result<(), AnalysisError> {
         self.resampler
             .run(&self.settings.axis, axis, signal, &mut self.resampled)?;
         self.detrended.copy_from_slice(&self.resampled);
         detrend(self.settings.detrend, &mut self.detrended);
-        self.spectrum.compute(&self.detrended, &mut self.magnitudes);
+        self.spectrum.compute(&self.detrended, &mut self.values);
         self.has_spectrum = true;
-        let [a, b] = self.settings.bins;
-        Ok(&self.magnitudes[a..=b])
+        Ok(())
+    }
+
+    /// The features of every channel (`channel`, then `channels`, one
+    /// signal each in that order), concatenated. The channels are
+    /// transformed last to first, so afterwards [`Self::resampled`],
+    /// [`Self::detrended`] and [`Self::spectrum`] show `channel`'s.
+    pub fn features_of_channels(
+        &mut self,
+        axis: &[f64],
+        signals: &[&[f64]],
+    ) -> Result<&[f64], AnalysisError> {
+        let per = self.settings.features_per_channel();
+        let want = 1 + self.settings.channels.len();
+        if signals.len() != want {
+            return Err(AnalysisError::Settings(format!(
+                "{want} channel(s) to analyse but {} given",
+                signals.len()
+            )));
+        }
+        let [a, b] = self.kept;
+        for (c, signal) in signals.iter().enumerate().rev() {
+            self.transform(axis, signal)?;
+            self.features[c * per..(c + 1) * per].copy_from_slice(&self.values[a..=b]);
+        }
+        Ok(&self.features)
     }
 
     /// The last window resampled (by [`Self::resample`] or
@@ -280,15 +389,17 @@ impl FeatureExtractor {
         }
     }
 
-    /// The full one-sided magnitude spectrum, bins `0..=n/2`, of the window
-    /// [`Self::features`] last transformed, for display; empty before the
-    /// first. The features are `spectrum()[bins[0]..=bins[1]]`.
+    /// The full one-sided spectrum (of the settings' kind), bins `0..=m/2`,
+    /// of the window [`Self::features`] last transformed, for display; empty
+    /// before the first. The features are `spectrum()[a..=b]` with
+    /// `[a, b] = settings.kept_bins()`.
     pub fn spectrum(&self) -> &[f64] {
-        if self.has_spectrum {
-            &self.magnitudes
-        } else {
-            &[]
-        }
+        if self.has_spectrum { &self.values } else { &[] }
+    }
+
+    /// Frequency of spectrum bin `k`, in `settings.frequency_unit()`.
+    pub fn frequency(&self, k: usize) -> f64 {
+        k as f64 * self.settings.bin_width()
     }
 
     /// Position of grid point `i` along the axis, from the scan's start.
@@ -311,6 +422,7 @@ mod tests {
             detrend: Detrend::Mean,
             spectrum: SpectrumKind::Magnitude,
             bins: [1, 49],
+            ..Analysis::default()
         }
     }
 

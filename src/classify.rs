@@ -6,10 +6,20 @@
 //! with a `format` tag. This module knows nothing of recordings or devices:
 //! examples come in as feature vectors with their file name and label.
 //!
-//! Classification: Euclidean distance to every training example, the `k`
-//! nearest vote, the majority wins. A tie between classes goes to the class
-//! whose neighbours' distances add up to less, then to the class whose label
-//! sorts first. Neighbours at equal distance keep the training order.
+//! Classification: the distance (Euclidean, Manhattan or cosine) to every
+//! training example, the `k` nearest vote (one vote each, or `1/distance`
+//! each with `weights = "distance"`; then an exact match outvotes the rest),
+//! the most votes win. A tie between classes goes to the class whose
+//! neighbours' distances add up to less, then to the class whose label sorts
+//! first. Neighbours at equal distance keep the training order.
+//!
+//! With `standardize`, every feature is shifted and scaled by the training
+//! examples' mean and standard deviation (stored in the model as `scaling`)
+//! before any distance; the examples themselves are stored as measured.
+//! With `k = "auto"`, [`Model::train`] picks k among the candidates by
+//! stratified 5-fold cross-validation inside the training examples only
+//! (the best mean accuracy; a tie goes to the smaller k) and stores the
+//! scores as `k_selection`.
 
 use std::cmp::Ordering;
 use std::path::{Path, PathBuf};
@@ -18,7 +28,7 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 use crate::analysis;
-use crate::profile::{Analysis, Classifier};
+use crate::profile::{Analysis, Classifier, Metric, Weights};
 
 /// The `format` tag of a model file this version reads and writes.
 pub const MODEL_FORMAT: &str = "hapticlab model v1";
@@ -46,6 +56,67 @@ pub struct Model {
     /// The distinct labels of the examples, sorted.
     pub labels: Vec<String>,
     pub examples: Vec<TrainingExample>,
+    /// The standardisation fitted on the examples (`classifier.standardize`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scaling: Option<Scaling>,
+    /// How `k = "auto"` chose `classifier.k`: each candidate's inner
+    /// cross-validated accuracy.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub k_selection: Option<Vec<KScore>>,
+    /// The examples' features as the distance sees them (scaled), row-major.
+    #[serde(skip)]
+    matrix: Vec<f64>,
+    /// Per example: its Euclidean norm (cosine metric only) and class index.
+    #[serde(skip)]
+    norms: Vec<f64>,
+    #[serde(skip)]
+    classes: Vec<usize>,
+}
+
+/// Per feature: `(x − mean) / scale`; `scale` is the standard deviation, or
+/// 1 where that is zero.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scaling {
+    pub mean: Vec<f64>,
+    pub scale: Vec<f64>,
+}
+
+impl Scaling {
+    pub fn fit(rows: &[&[f64]]) -> Scaling {
+        let d = rows.first().map_or(0, |r| r.len());
+        let n = rows.len().max(1) as f64;
+        let mut mean = vec![0.0; d];
+        for r in rows {
+            for (m, v) in mean.iter_mut().zip(*r) {
+                *m += v / n;
+            }
+        }
+        let mut var = vec![0.0; d];
+        for r in rows {
+            for ((s, v), m) in var.iter_mut().zip(*r).zip(&mean) {
+                *s += (v - m) * (v - m) / n;
+            }
+        }
+        let scale = var
+            .into_iter()
+            .map(|v| if v > 0.0 { v.sqrt() } else { 1.0 })
+            .collect();
+        Scaling { mean, scale }
+    }
+
+    pub fn apply(&self, x: &[f64], out: &mut [f64]) {
+        for (((o, v), m), s) in out.iter_mut().zip(x).zip(&self.mean).zip(&self.scale) {
+            *o = (v - m) / s;
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KScore {
+    pub k: usize,
+    pub accuracy: f64,
 }
 
 /// The outcome of classifying one feature vector.
@@ -204,6 +275,235 @@ fn squared_distance(a: &[f64], b: &[f64]) -> f64 {
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
+fn manhattan(a: &[f64], b: &[f64]) -> f64 {
+    let mut acc = [0.0f64; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for l in 0..4 {
+            acc[l] += (x[l] - y[l]).abs();
+        }
+    }
+    let tail: f64 = ra.iter().zip(rb).map(|(x, y)| (x - y).abs()).sum();
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut acc = [0.0f64; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for l in 0..4 {
+            acc[l] += x[l] * y[l];
+        }
+    }
+    let tail: f64 = ra.iter().zip(rb).map(|(x, y)| x * y).sum();
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+}
+
+/// The value the neighbour search ranks by (squared for Euclidean), and how
+/// it turns into the reported distance.
+fn rank_value(metric: Metric, q: &[f64], q_norm: f64, row: &[f64], row_norm: f64) -> f64 {
+    match metric {
+        Metric::Euclidean => squared_distance(q, row),
+        Metric::Manhattan => manhattan(q, row),
+        Metric::Cosine => {
+            if q_norm == 0.0 || row_norm == 0.0 {
+                1.0
+            } else {
+                (1.0 - dot(q, row) / (q_norm * row_norm)).max(0.0)
+            }
+        }
+    }
+}
+
+fn to_distance(metric: Metric, r: f64) -> f64 {
+    if metric == Metric::Euclidean {
+        r.sqrt()
+    } else {
+        r
+    }
+}
+
+/// The `k` smallest `(rank value, row)`, ascending, by bounded insertion: a
+/// later row at an equal value goes after the earlier one.
+fn nearest_rows(
+    metric: Metric,
+    q: &[f64],
+    matrix: &[f64],
+    norms: &[f64],
+    rows: impl Iterator<Item = usize>,
+    k: usize,
+    nearest: &mut Vec<(f64, usize)>,
+) {
+    nearest.clear();
+    let d = q.len();
+    let q_norm = if metric == Metric::Cosine {
+        dot(q, q).sqrt()
+    } else {
+        0.0
+    };
+    for index in rows {
+        let row = &matrix[index * d..(index + 1) * d];
+        let r = rank_value(
+            metric,
+            q,
+            q_norm,
+            row,
+            norms.get(index).copied().unwrap_or(0.0),
+        );
+        if nearest.len() == k {
+            if r >= nearest[k - 1].0 {
+                continue;
+            }
+            nearest.pop();
+        }
+        let at = nearest.partition_point(|&(v, _)| v <= r);
+        nearest.insert(at, (r, index));
+    }
+}
+
+/// The classes in the order that decides the vote (most weight first, then
+/// the smaller summed distance, then the label order), with vote counts.
+fn rank_classes(
+    metric: Metric,
+    weights: Weights,
+    nearest: &[(f64, usize)],
+    classes_of: &[usize],
+    classes: usize,
+) -> (Vec<usize>, Vec<usize>) {
+    let mut count = vec![0usize; classes];
+    let mut weight = vec![0.0f64; classes];
+    let mut summed = vec![0.0f64; classes];
+    let exact = weights == Weights::Distance && nearest.iter().any(|&(r, _)| r == 0.0);
+    for &(r, index) in nearest {
+        let c = classes_of[index];
+        let distance = to_distance(metric, r);
+        count[c] += 1;
+        summed[c] += distance;
+        weight[c] += match weights {
+            Weights::Uniform => 1.0,
+            Weights::Distance if exact => f64::from(u8::from(distance == 0.0)),
+            Weights::Distance => 1.0 / distance,
+        };
+    }
+    let mut order: Vec<usize> = (0..classes).collect();
+    order.sort_by(|&a, &b| {
+        weight[b]
+            .total_cmp(&weight[a])
+            .then_with(|| {
+                if count[a] > 0 && count[b] > 0 {
+                    summed[a].total_cmp(&summed[b])
+                } else {
+                    Ordering::Equal
+                }
+            })
+            .then(a.cmp(&b))
+    });
+    (order, count)
+}
+
+/// Rows of a row-major matrix of feature vectors, scaled as the model does.
+fn prepare(
+    examples: &[TrainingExample],
+    scaling: Option<&Scaling>,
+    metric: Metric,
+) -> (Vec<f64>, Vec<f64>) {
+    let d = examples.first().map_or(0, |e| e.features.len());
+    let mut matrix = vec![0.0; d * examples.len()];
+    for (row, ex) in matrix.chunks_exact_mut(d.max(1)).zip(examples) {
+        match scaling {
+            Some(s) => s.apply(&ex.features, row),
+            None => row.copy_from_slice(&ex.features),
+        }
+    }
+    let norms = if metric == Metric::Cosine {
+        matrix
+            .chunks_exact(d.max(1))
+            .map(|r| dot(r, r).sqrt())
+            .collect()
+    } else {
+        Vec::new()
+    };
+    (matrix, norms)
+}
+
+/// Training values (examples × features) from which one query is searched
+/// on several threads.
+const PARALLEL_SEARCH_VALUES: usize = 1 << 20;
+
+/// The default candidates of `k = "auto"`.
+pub const AUTO_K_CANDIDATES: [usize; 8] = [1, 3, 5, 7, 9, 11, 13, 15];
+
+/// Inner stratified 5-fold cross-validation of every candidate k on the
+/// (prepared) training rows; folds deal each class's rows round-robin in
+/// their order, so the choice is deterministic.
+fn select_k(
+    classifier: &Classifier,
+    matrix: &[f64],
+    norms: &[f64],
+    classes_of: &[usize],
+    classes: usize,
+) -> Vec<KScore> {
+    let n = classes_of.len();
+    let d = matrix.len() / n.max(1);
+    let mut fold_of = vec![0usize; n];
+    let mut seen = vec![0usize; classes];
+    let folds = 5.min(n).max(2);
+    for (i, &c) in classes_of.iter().enumerate() {
+        fold_of[i] = seen[c] % folds;
+        seen[c] += 1;
+    }
+    let candidates = classifier
+        .k_candidates
+        .clone()
+        .unwrap_or_else(|| AUTO_K_CANDIDATES.to_vec());
+    let kmax = candidates.iter().copied().max().unwrap_or(1);
+    let mut correct = vec![0usize; candidates.len()];
+    let mut tested = 0usize;
+    let mut nearest = Vec::new();
+    for f in 0..folds {
+        let train: Vec<usize> = (0..n).filter(|&i| fold_of[i] != f).collect();
+        if train.is_empty() {
+            continue;
+        }
+        for q in (0..n).filter(|&i| fold_of[i] == f) {
+            tested += 1;
+            let row = &matrix[q * d..(q + 1) * d];
+            nearest_rows(
+                classifier.metric,
+                row,
+                matrix,
+                norms,
+                train.iter().copied(),
+                kmax.min(train.len()),
+                &mut nearest,
+            );
+            for (ci, &k) in candidates.iter().enumerate() {
+                let k = k.min(nearest.len());
+                let (order, _) = rank_classes(
+                    classifier.metric,
+                    classifier.weights,
+                    &nearest[..k],
+                    classes_of,
+                    classes,
+                );
+                if order[0] == classes_of[q] {
+                    correct[ci] += 1;
+                }
+            }
+        }
+    }
+    candidates
+        .iter()
+        .zip(correct)
+        .map(|(&k, c)| KScore {
+            k,
+            accuracy: c as f64 / tested.max(1) as f64,
+        })
+        .collect()
+}
+
 impl Model {
     pub fn train(
         profile_name: &str,
@@ -211,16 +511,71 @@ impl Model {
         classifier: &Classifier,
         examples: Vec<TrainingExample>,
     ) -> Result<Model, ClassifyError> {
-        check_parts(analysis, classifier, &examples)?;
-        Ok(Model {
+        let mut classifier = classifier.clone();
+        let auto = classifier.k_is_auto();
+        if auto {
+            classifier.k = 1;
+        }
+        check_parts(analysis, &classifier, &examples)?;
+        let scaling = classifier.standardize.then(|| {
+            let rows: Vec<&[f64]> = examples.iter().map(|e| e.features.as_slice()).collect();
+            Scaling::fit(&rows)
+        });
+        let mut model = Model {
             format: MODEL_FORMAT.to_string(),
             software_version: env!("CARGO_PKG_VERSION").to_string(),
             profile: profile_name.to_string(),
             analysis: analysis.clone(),
-            classifier: classifier.clone(),
+            classifier,
             labels: sorted_labels(&examples),
             examples,
-        })
+            scaling,
+            k_selection: None,
+            matrix: Vec::new(),
+            norms: Vec::new(),
+            classes: Vec::new(),
+        };
+        model.prepare();
+        if auto {
+            let scores = select_k(
+                &model.classifier,
+                &model.matrix,
+                &model.norms,
+                &model.classes,
+                model.labels.len(),
+            );
+            let best = scores
+                .iter()
+                .filter(|s| s.k <= model.examples.len())
+                .fold(None::<&KScore>, |b, s| match b {
+                    Some(b)
+                        if b.accuracy >= s.accuracy && (b.accuracy > s.accuracy || b.k < s.k) =>
+                    {
+                        Some(b)
+                    }
+                    _ => Some(s),
+                })
+                .map_or(1, |s| s.k);
+            model.classifier.k = best;
+            model.k_selection = Some(scores);
+        }
+        Ok(model)
+    }
+
+    /// Builds the distance-ready copy of the examples.
+    fn prepare(&mut self) {
+        let (matrix, norms) = prepare(
+            &self.examples,
+            self.scaling.as_ref(),
+            self.classifier.metric,
+        );
+        self.matrix = matrix;
+        self.norms = norms;
+        self.classes = self
+            .examples
+            .iter()
+            .map(|e| self.labels.binary_search(&e.label).unwrap_or(0))
+            .collect();
     }
 
     /// Number of features a query must have.
@@ -243,60 +598,70 @@ impl Model {
             return Err(ClassifyError::NoExamples);
         }
         let k = self.classifier.k.clamp(1, self.examples.len());
-
-        // The k smallest squared distances, ascending, by bounded insertion:
-        // a later example at an equal distance goes after the earlier one.
-        let mut nearest: Vec<(f64, usize)> = Vec::with_capacity(k);
-        for (index, ex) in self.examples.iter().enumerate() {
-            let d2 = squared_distance(features, &ex.features);
-            if nearest.len() == k {
-                if d2 >= nearest[k - 1].0 {
-                    continue;
-                }
-                nearest.pop();
+        let mut scaled;
+        let q = match &self.scaling {
+            Some(sc) => {
+                scaled = vec![0.0; features.len()];
+                sc.apply(features, &mut scaled);
+                scaled.as_slice()
             }
-            let at = nearest.partition_point(|&(d, _)| d <= d2);
-            nearest.insert(at, (d2, index));
-        }
-
-        let classes = self.labels.len();
-        let mut count = vec![0usize; classes];
-        let mut summed = vec![0.0f64; classes];
-        let mut neighbours = Vec::with_capacity(k);
-        for &(d2, index) in &nearest {
-            let ex = &self.examples[index];
-            let class =
-                self.labels
-                    .binary_search(&ex.label)
-                    .map_err(|_| ClassifyError::UnknownLabel {
-                        file: ex.file.clone(),
-                        label: ex.label.clone(),
-                    })?;
-            let distance = d2.sqrt();
-            count[class] += 1;
-            summed[class] += distance;
-            neighbours.push(Neighbour {
-                file: ex.file.clone(),
-                label: ex.label.clone(),
-                distance,
+            None => features,
+        };
+        let metric = self.classifier.metric;
+        let mut nearest = Vec::with_capacity(k + 1);
+        let n = self.examples.len();
+        // A large training set is searched in parallel chunks (the scan is
+        // bound by memory bandwidth, which one core does not saturate); the
+        // chunks' nearest are merged by (value, row), so ties keep the
+        // training order exactly as a single pass would.
+        let threads = if n * q.len().max(1) >= PARALLEL_SEARCH_VALUES {
+            std::thread::available_parallelism().map_or(1, |t| t.get().min(8))
+        } else {
+            1
+        };
+        if threads > 1 {
+            let per = n.div_ceil(threads);
+            let (matrix, norms) = (&self.matrix, &self.norms);
+            let parts: Vec<Vec<(f64, usize)>> = std::thread::scope(|s| {
+                let handles: Vec<_> = (0..threads)
+                    .map(|t| {
+                        s.spawn(move || {
+                            let mut part = Vec::with_capacity(k + 1);
+                            let rows = t * per..((t + 1) * per).min(n);
+                            nearest_rows(metric, q, matrix, norms, rows, k, &mut part);
+                            part
+                        })
+                    })
+                    .collect();
+                handles
+                    .into_iter()
+                    .map(|h| h.join().unwrap_or_default())
+                    .collect()
             });
+            nearest = parts.concat();
+            nearest.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            nearest.truncate(k);
+        } else {
+            nearest_rows(metric, q, &self.matrix, &self.norms, 0..n, k, &mut nearest);
         }
-
-        // Most votes first; among equal votes the smaller summed distance,
-        // then the label order (classes with no vote have nothing to sum).
-        let mut order: Vec<usize> = (0..classes).collect();
-        order.sort_by(|&a, &b| {
-            count[b]
-                .cmp(&count[a])
-                .then_with(|| {
-                    if count[a] > 0 {
-                        summed[a].total_cmp(&summed[b])
-                    } else {
-                        Ordering::Equal
-                    }
-                })
-                .then(a.cmp(&b))
-        });
+        let (order, count) = rank_classes(
+            metric,
+            self.classifier.weights,
+            &nearest,
+            &self.classes,
+            self.labels.len(),
+        );
+        let neighbours = nearest
+            .iter()
+            .map(|&(r, index)| {
+                let ex = &self.examples[index];
+                Neighbour {
+                    file: ex.file.clone(),
+                    label: ex.label.clone(),
+                    distance: to_distance(metric, r),
+                }
+            })
+            .collect();
         let votes: Vec<(String, usize)> = order
             .iter()
             .map(|&c| (self.labels[c].clone(), count[c]))
@@ -354,7 +719,7 @@ impl Model {
             }
         }
         // Parse the text again (not the value) so schema errors carry a line and column.
-        let model: Model = serde_json::from_str(text).map_err(|e| ClassifyError::Schema {
+        let mut model: Model = serde_json::from_str(text).map_err(|e| ClassifyError::Schema {
             path: path.to_path_buf(),
             line: e.line(),
             column: e.column(),
@@ -371,6 +736,19 @@ impl Model {
                 "its labels are not the sorted distinct labels of its examples".to_string(),
             ));
         }
+        if let Some(sc) = &model.scaling {
+            let n = model.feature_count();
+            if sc.mean.len() != n
+                || sc.scale.len() != n
+                || sc.scale.iter().any(|v| !(v.is_finite() && *v > 0.0))
+                || sc.mean.iter().any(|v| !v.is_finite())
+            {
+                return Err(invalid(format!(
+                    "its scaling must have {n} finite means and {n} positive scales"
+                )));
+            }
+        }
+        model.prepare();
         Ok(model)
     }
 
@@ -403,8 +781,31 @@ impl Model {
         if m.spectrum != p.spectrum {
             return differ("analysis.spectrum", json(&m.spectrum), json(&p.spectrum));
         }
-        if m.bins != p.bins {
+        if m.bins != p.bins && m.band.is_none() {
             return differ("analysis.bins", json(&m.bins), json(&p.bins));
+        }
+        if m.channels != p.channels {
+            return differ("analysis.channels", json(&m.channels), json(&p.channels));
+        }
+        if m.taper != p.taper {
+            return differ("analysis.taper", json(&m.taper), json(&p.taper));
+        }
+        if m.band != p.band {
+            return differ("analysis.band", json(&m.band), json(&p.band));
+        }
+        if m.dft_points() != p.dft_points() {
+            return differ(
+                "analysis.welch_segment",
+                json(&m.welch_segment),
+                json(&p.welch_segment),
+            );
+        }
+        if m.overlap() != p.overlap() && m.spectrum == crate::profile::SpectrumKind::Welch {
+            return differ(
+                "analysis.welch_overlap",
+                json(&m.welch_overlap),
+                json(&p.welch_overlap),
+            );
         }
         Ok(())
     }

@@ -134,7 +134,7 @@ pub enum Command {
     },
     /// Train and test on a split of the recordings; print the confusion matrix (Table 4.1).
     #[command(
-        after_help = "Example:\n  hapticlab evaluate recordings/thesis-sim --json > report.json"
+        after_help = "Examples:\n  hapticlab evaluate recordings/thesis-sim --json > report.json\n  hapticlab evaluate recordings/thesis-sim --folds 10 --seed 1\n  hapticlab evaluate recordings/lab --folds 5 --group-by session\n  hapticlab evaluate recordings/thesis-sim --folds 10 --sweep k=1..15"
     )]
     Evaluate {
         #[command(flatten)]
@@ -147,6 +147,8 @@ pub enum Command {
         /// Print JSON for scripts.
         #[arg(long)]
         json: bool,
+        #[command(flatten)]
+        validation: crate::study::ValidationArgs,
     },
     /// Play recordings back through the console's dashboard (1×, 4×, 16×, single steps).
     #[command(
@@ -169,6 +171,32 @@ pub enum Command {
         #[command(flatten)]
         profile: ProfileArg,
     },
+    /// A dataset's health: recordings per class, incomplete files, feature spread, outliers by file.
+    #[command(
+        after_help = "Example:\n  hapticlab inspect recordings/thesis-sim\n  hapticlab inspect recordings/lab --threshold 4 --json"
+    )]
+    Inspect {
+        #[command(flatten)]
+        profile: ProfileArg,
+        #[arg(required = true, value_name = "PATH")]
+        paths: Vec<PathBuf>,
+        /// Outlier threshold t: distance to the class centroid beyond median + t x 1.4826 x MAD.
+        #[arg(long, default_value_t = 3.0, value_name = "T")]
+        threshold: f64,
+        /// Print JSON for scripts.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Import CSV or WAV files from other rigs as recordings v1.
+    #[command(
+        after_help = "Examples:\n  hapticlab import rig/*.csv --out recordings/rig --time-column time --channels ax,ay --label S2 --meta session=3\n  hapticlab import raw/S1/a.csv --out recordings/rig --rate 3200 --channels a0,a1,a2,a3 --burst 4 --names acc\n  hapticlab import sound/S3/*.wav --out recordings/sound"
+    )]
+    Import(crate::import::ImportArgs),
+    /// Draw figures (PNG or SVG): a trace and its spectrum, a confusion matrix, features per class, a sweep.
+    #[command(
+        after_help = "Examples:\n  hapticlab plot trace recordings/thesis-sim/S2/S2_001.csv.gz --out s2.png\n  hapticlab evaluate recordings/thesis-sim --folds 10 --json > r.json && hapticlab plot confusion r.json --out confusion.svg\n  hapticlab plot features recordings/thesis-sim --per-class 5 --out features.png\n  hapticlab evaluate recordings/thesis-sim --folds 5 --sweep k=1..15 --json > s.json && hapticlab plot sweep s.json --out sweep.png"
+    )]
+    Plot(crate::plot::PlotArgs),
     /// Check profiles: parse and validate every value.
     #[command(after_help = "Example:\n  hapticlab check profiles/*.toml")]
     Check {

@@ -130,9 +130,32 @@ pub fn run(cmd: Command) -> Result<(), Failure> {
             paths,
             shuffle_seed,
             json,
-        } => evaluate_cmd(&profile, &paths, shuffle_seed, json),
+            validation,
+        } => {
+            let method = load_profile(&profile)?.profile.evaluation.method;
+            if validation.is_active() || method != crate::profile::SplitMethod::Holdout {
+                crate::study::run_evaluate(&profile, &paths, shuffle_seed, json, &validation)
+            } else {
+                evaluate_cmd(&profile, &paths, shuffle_seed, json)
+            }
+        }
         Command::Check { profiles } => check(&profiles),
         Command::Devices { profile } => crate::devices::run(&profile),
+        Command::Plot(args) => crate::plot::run(&args),
+        Command::Import(args) => {
+            let written = crate::import::run(&args)?;
+            for p in &written {
+                println!("{}", p.display());
+            }
+            eprintln!("imported {} recording(s)", written.len());
+            Ok(())
+        }
+        Command::Inspect {
+            profile,
+            paths,
+            threshold,
+            json,
+        } => crate::inspect::run(&profile, &paths, threshold, json),
     }
 }
 
@@ -388,7 +411,8 @@ pub fn features_of(
     ex: &mut FeatureExtractor,
 ) -> Result<Vec<f64>, Failure> {
     let s = ex.settings();
-    let (axis_name, channel_name) = (s.axis.clone(), s.channel.clone());
+    let axis_name = s.axis.clone();
+    let channel_names: Vec<String> = s.all_channels().map(str::to_string).collect();
     let missing = |c: &str| {
         bad(format!(
             "{}: no column `{c}` (the recording has {})",
@@ -397,10 +421,11 @@ pub fn features_of(
         ))
     };
     let axis = rec.column(&axis_name).ok_or_else(|| missing(&axis_name))?;
-    let signal = rec
-        .column(&channel_name)
-        .ok_or_else(|| missing(&channel_name))?;
-    ex.features(axis, signal)
+    let signals = channel_names
+        .iter()
+        .map(|c| rec.column(c).ok_or_else(|| missing(c)))
+        .collect::<Result<Vec<_>, _>>()?;
+    ex.features_of_channels(axis, &signals)
         .map(|f| f.to_vec())
         .map_err(|e| bad(format!("{}: {e}", file.display())))
 }
@@ -488,7 +513,7 @@ fn train(profile: &ProfileArg, paths: &[PathBuf], out: &Path) -> Result<(), Fail
     model.save(out).map_err(runtime)?;
     println!(
         "trained k-NN (k = {}) on {} recordings of {} classes ({}); model saved to {}",
-        lp.profile.classifier.k,
+        model.classifier.k,
         n,
         model.labels.len(),
         model.labels.join(", "),
@@ -582,7 +607,7 @@ fn evaluate_cmd(
         println!(
             "profile {}: k-NN k = {}, {} training and {} test recordings per class{}",
             lp.profile.name,
-            lp.profile.classifier.k,
+            lp.profile.classifier.k_text(),
             eval.train_per_class,
             eval.test_per_class,
             eval.shuffle_seed
@@ -607,7 +632,7 @@ fn check(profiles: &[PathBuf]) -> Result<(), Failure> {
                 lp.profile.path.waypoints_m.len(),
                 lp.profile.textures.len(),
                 lp.profile.analysis.feature_count(),
-                lp.profile.classifier.k
+                lp.profile.classifier.k_text()
             ),
             Err(e) => errors.push(e.to_string()),
         }

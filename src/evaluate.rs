@@ -5,6 +5,8 @@
 //! This module classifies with a [`Model`] and counts; it never reads
 //! recordings or extracts features, and never prints.
 
+pub mod cv;
+
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
@@ -40,6 +42,8 @@ pub enum EvaluateError {
     },
     #[error("there are no test examples")]
     NoTest,
+    #[error("cannot make the folds: {0}")]
+    Folds(String),
     #[error(transparent)]
     Classify(#[from] ClassifyError),
 }

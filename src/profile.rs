@@ -339,6 +339,25 @@ pub enum SpectrumKind {
     /// |DFT| as Matlab's fft gives it (unnormalised): the thesis's feature.
     #[default]
     Magnitude,
+    /// The one-sided periodogram `|X_k|² / n` (the bins in between doubled,
+    /// so the bins sum to `Σ x² `, Parseval).
+    Power,
+    /// `log10` of the power, with a floor of 1e-300.
+    LogPower,
+    /// Welch's averaged periodogram: segments of `welch_segment` points
+    /// overlapping by `welch_overlap`, each tapered by `taper`.
+    Welch,
+}
+
+/// The taper applied to the window (or to each Welch segment) before the DFT.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum Taper {
+    /// Rectangular: no taper (the thesis).
+    #[default]
+    None,
+    /// Periodic Hann, `0.5 − 0.5 cos(2π j / n)`.
+    Hann,
 }
 
 /// How a recording becomes a feature vector.
@@ -359,7 +378,49 @@ pub struct Analysis {
     #[serde(default)]
     pub spectrum: SpectrumKind,
     /// First and last DFT bin kept, inclusive (thesis: 1..49, DC dropped).
+    /// Ignored when `band` is set.
+    #[serde(default)]
     pub bins: [usize; 2],
+    /// More signal columns, analysed like `channel` and their features
+    /// concatenated after its own, in this order.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub channels: Vec<String>,
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub taper: Taper,
+    /// The frequencies kept, [low, high] inclusive, instead of `bins`: in Hz
+    /// for a time axis (`t_s`), in cycles/mm for a position axis (`*_m`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub band: Option<[f64; 2]>,
+    /// Welch only: points per segment (default: a quarter of the window).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub welch_segment: Option<usize>,
+    /// Welch only: overlap of consecutive segments, 0 <= overlap < 1 (default 0.5).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub welch_overlap: Option<f64>,
+}
+
+fn is_default<T: Default + PartialEq>(v: &T) -> bool {
+    *v == T::default()
+}
+
+impl Default for Analysis {
+    /// The thesis's analysis.
+    fn default() -> Self {
+        Analysis {
+            channel: "y_m".into(),
+            axis: "x_m".into(),
+            window: [0.060, 0.0897],
+            spacing: 0.0003,
+            detrend: Detrend::Mean,
+            spectrum: SpectrumKind::Magnitude,
+            bins: [1, 49],
+            channels: Vec::new(),
+            taper: Taper::None,
+            band: None,
+            welch_segment: None,
+            welch_overlap: None,
+        }
+    }
 }
 
 impl Analysis {
@@ -367,8 +428,63 @@ impl Analysis {
     pub fn points(&self) -> usize {
         ((self.window[1] - self.window[0]) / self.spacing + 1e-6).floor() as usize + 1
     }
+    /// Every signal column analysed: `channel`, then `channels`.
+    pub fn all_channels(&self) -> impl Iterator<Item = &str> {
+        std::iter::once(self.channel.as_str()).chain(self.channels.iter().map(String::as_str))
+    }
+    /// Points of one DFT: the window's, or a Welch segment's.
+    pub fn dft_points(&self) -> usize {
+        let n = self.points();
+        match self.spectrum {
+            SpectrumKind::Welch => self.welch_segment.unwrap_or((n / 4).max(4)),
+            _ => n,
+        }
+    }
+    /// Welch overlap as a fraction (default one half).
+    pub fn overlap(&self) -> f64 {
+        self.welch_overlap.unwrap_or(0.5)
+    }
+    /// How a DFT bin's index turns into the unit `band` is written in: bin
+    /// `k` lies at `k · bin_width()` (Hz, or cycles/mm for a position axis).
+    pub fn bin_width(&self) -> f64 {
+        let per_axis_unit = 1.0 / (self.dft_points() as f64 * self.spacing);
+        if self.axis.ends_with("_m") {
+            per_axis_unit / 1000.0
+        } else {
+            per_axis_unit
+        }
+    }
+    /// The unit of `band` and of [`Self::bin_width`].
+    pub fn frequency_unit(&self) -> &'static str {
+        if self.axis.ends_with("_m") {
+            "cycles/mm"
+        } else if self.axis.ends_with("_s") {
+            "Hz"
+        } else {
+            "cycles per axis unit"
+        }
+    }
+    /// The first and last bin kept (inclusive), from `band` or `bins`; the
+    /// first is past the last when the band holds no bin.
+    pub fn kept_bins(&self) -> [usize; 2] {
+        match self.band {
+            None => self.bins,
+            Some([lo, hi]) => {
+                let w = self.bin_width();
+                let half = self.dft_points() / 2;
+                let first = ((lo / w) - 1e-9).ceil().max(0.0) as usize;
+                let last = (((hi / w) + 1e-9).floor().max(0.0) as usize).min(half);
+                [first, last]
+            }
+        }
+    }
+    /// Features per channel.
+    pub fn features_per_channel(&self) -> usize {
+        let [a, b] = self.kept_bins();
+        (b + 1).saturating_sub(a)
+    }
     pub fn feature_count(&self) -> usize {
-        self.bins[1] + 1 - self.bins[0]
+        self.features_per_channel() * (1 + self.channels.len())
     }
 }
 
@@ -377,14 +493,109 @@ impl Analysis {
 pub enum Metric {
     #[default]
     Euclidean,
+    /// Sum of absolute differences (L1).
+    Manhattan,
+    /// 1 − cos(angle between the vectors); a zero vector is at distance 1.
+    Cosine,
 }
+
+/// How the k nearest neighbours vote.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum Weights {
+    /// One vote each (the thesis).
+    #[default]
+    Uniform,
+    /// Each votes 1 / distance (an exact match outvotes everything else).
+    Distance,
+}
+
+/// `classifier.k = "auto"` is stored as this value of `k`.
+pub const K_AUTO: usize = usize::MAX;
 
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Classifier {
+    /// A number, or `"auto"` ([`K_AUTO`]): chosen by inner cross-validation
+    /// on the training part among `k_candidates`.
+    #[serde(deserialize_with = "k_or_auto", serialize_with = "write_k")]
     pub k: usize,
     #[serde(default)]
     pub metric: Metric,
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub weights: Weights,
+    /// Standardise every feature (mean 0, standard deviation 1) with the
+    /// mean and deviation of the training examples, stored in the model.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub standardize: bool,
+    /// The values `k = "auto"` tries (default 1, 3, 5, …, 15).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub k_candidates: Option<Vec<usize>>,
+}
+
+impl Default for Classifier {
+    /// The thesis's classifier.
+    fn default() -> Self {
+        Classifier {
+            k: 10,
+            metric: Metric::Euclidean,
+            weights: Weights::Uniform,
+            standardize: false,
+            k_candidates: None,
+        }
+    }
+}
+
+impl Classifier {
+    pub fn k_is_auto(&self) -> bool {
+        self.k == K_AUTO
+    }
+    /// `k` for people: a number or `auto`.
+    pub fn k_text(&self) -> String {
+        if self.k_is_auto() {
+            "auto".into()
+        } else {
+            self.k.to_string()
+        }
+    }
+}
+
+fn k_or_auto<'de, D: serde::Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum K {
+        N(usize),
+        S(String),
+    }
+    match K::deserialize(d)? {
+        K::N(n) if n == K_AUTO => Err(serde::de::Error::custom("k is too large")),
+        K::N(n) => Ok(n),
+        K::S(s) if s == "auto" => Ok(K_AUTO),
+        K::S(s) => Err(serde::de::Error::custom(format!(
+            "k must be a whole number or \"auto\", got {s:?}"
+        ))),
+    }
+}
+
+fn write_k<S: serde::Serializer>(k: &usize, s: S) -> Result<S::Ok, S::Error> {
+    if *k == K_AUTO {
+        s.serialize_str("auto")
+    } else {
+        s.serialize_u64(*k as u64)
+    }
+}
+
+/// How `evaluate` splits the recordings.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum SplitMethod {
+    /// One split: `train_per_class` then `test_per_class` of each class (the thesis).
+    #[default]
+    Holdout,
+    /// `folds`-fold cross-validation, stratified by class (or by group with `group_by`).
+    KFold,
+    /// Each recording (or each group, with `group_by`) tested once against all the others.
+    LeaveOneOut,
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
@@ -396,6 +607,28 @@ pub struct Evaluation {
     /// the split; otherwise they are taken in file-name order.
     #[serde(default)]
     pub shuffle_seed: Option<u64>,
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub method: SplitMethod,
+    /// Folds of `k-fold` (default 10).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub folds: Option<usize>,
+    /// A metadata key (`session`, `trial`, …): recordings sharing its value
+    /// are always on the same side of a split.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub group_by: Option<String>,
+}
+
+impl Default for Evaluation {
+    fn default() -> Self {
+        Evaluation {
+            train_per_class: 20,
+            test_per_class: 10,
+            shuffle_seed: None,
+            method: SplitMethod::Holdout,
+            folds: None,
+            group_by: None,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
@@ -844,25 +1077,60 @@ impl Profile {
                 format!("leaves {n} points in the window (at most 1048576)"),
             );
         }
-        if an.bins[0] > an.bins[1] || an.bins[1] > n / 2 {
+        let m = an.dft_points();
+        if an.band.is_none() && (an.bins[0] > an.bins[1] || an.bins[1] > m / 2) {
             return bad(
                 "analysis.bins",
                 format!(
-                    "must be [first, last] with first <= last <= {} (half the {} window points), got {:?}",
-                    n / 2,
-                    n,
+                    "must be [first, last] with first <= last <= {} (half the {} {} points), got {:?}",
+                    m / 2,
+                    m,
+                    if m == n { "window" } else { "Welch segment" },
                     an.bins
                 ),
             );
+        }
+        for (i, c) in an.channels.iter().enumerate() {
+            if c.is_empty() || *c == an.axis || an.all_channels().filter(|x| x == c).count() > 1 {
+                return bad(
+                    format!("analysis.channels[{i}]"),
+                    "must name a signal column other than the axis, once",
+                );
+            }
+        }
+        if let Err((key, reason)) = crate::analysis::check_options(an) {
+            return bad(key, reason);
         }
         // classifier and evaluation
         if self.classifier.k == 0 {
             return bad("classifier.k", "must be at least 1");
         }
+        if let Some(c) = &self.classifier.k_candidates
+            && (c.is_empty() || c.contains(&0) || c.contains(&K_AUTO))
+        {
+            return bad(
+                "classifier.k_candidates",
+                "must list whole numbers of at least 1",
+            );
+        }
+        match (self.evaluation.method, self.evaluation.folds) {
+            (SplitMethod::KFold, Some(f)) if f < 2 => {
+                return bad("evaluation.folds", "must be at least 2");
+            }
+            (SplitMethod::Holdout | SplitMethod::LeaveOneOut, Some(_)) => {
+                return bad("evaluation.folds", "is only used with method = \"k-fold\"");
+            }
+            _ => {}
+        }
+        if self.evaluation.group_by.as_deref() == Some("") {
+            return bad("evaluation.group_by", "must name a metadata key");
+        }
         if self.evaluation.train_per_class == 0 {
             return bad("evaluation.train_per_class", "must be at least 1");
         }
-        if self.classifier.k > self.evaluation.train_per_class * self.textures.len().max(1) {
+        if !self.classifier.k_is_auto()
+            && self.classifier.k > self.evaluation.train_per_class * self.textures.len().max(1)
+        {
             return bad(
                 "classifier.k",
                 format!(

@@ -20,6 +20,7 @@ fn thesis(detrend: Detrend) -> Analysis {
         detrend,
         spectrum: SpectrumKind::Magnitude,
         bins: [1, 49],
+        ..Analysis::default()
     }
 }
 

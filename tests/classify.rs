@@ -13,6 +13,7 @@ fn analysis(features: usize) -> Analysis {
         detrend: Detrend::Mean,
         spectrum: SpectrumKind::Magnitude,
         bins: [1, features],
+        ..Analysis::default()
     }
 }
 
@@ -20,6 +21,7 @@ fn knn(k: usize) -> Classifier {
     Classifier {
         k,
         metric: Metric::Euclidean,
+        ..Classifier::default()
     }
 }
 

@@ -13,6 +13,7 @@ fn analysis(features: usize) -> Analysis {
         detrend: Detrend::Mean,
         spectrum: SpectrumKind::Magnitude,
         bins: [1, features],
+        ..Analysis::default()
     }
 }
 
@@ -40,6 +41,7 @@ fn eval(train: usize, test: usize, seed: Option<u64>) -> Evaluation {
         train_per_class: train,
         test_per_class: test,
         shuffle_seed: seed,
+        ..Evaluation::default()
     }
 }
 
@@ -119,6 +121,7 @@ fn hand_made() -> (Model, Vec<TrainingExample>) {
     let classifier = Classifier {
         k: 1,
         metric: Metric::Euclidean,
+        ..Classifier::default()
     };
     let model = Model::train("t", &analysis(1), &classifier, train).unwrap();
     let test = vec![
@@ -245,6 +248,7 @@ fn the_thesis_result_prints_like_the_thesis() {
     let classifier = Classifier {
         k: 10,
         metric: Metric::Euclidean,
+        ..Classifier::default()
     };
     let model = Model::train("thesis", &analysis(1), &classifier, train).unwrap();
     let r = evaluate(&model, &test).unwrap();

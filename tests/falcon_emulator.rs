@@ -76,6 +76,7 @@ fn the_thesis_result_holds_through_the_emulated_falcon() {
         train_per_class: 8,
         test_per_class: 4,
         shuffle_seed: None,
+        ..Evaluation::default()
     };
     let split = split(examples, &eval).unwrap();
     let model = Model::train(&p.name, &p.analysis, &p.classifier, split.train).unwrap();

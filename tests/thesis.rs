@@ -63,6 +63,7 @@ fn dominant_bins_and_accuracy_match_the_thesis() {
         train_per_class: 8,
         test_per_class: 4,
         shuffle_seed: None,
+        ..Evaluation::default()
     };
     let split = split(examples, &eval).unwrap();
     assert_eq!((split.train.len(), split.test.len()), (32, 16));

@@ -1,12 +1,13 @@
-//! Detrending and the magnitude spectrum of a resampled window. Owns the
-//! FFT plan and its buffers (made once); never allocates per call.
+//! Detrending, tapers and the spectrum of a resampled window (magnitude,
+//! power, log-power, Welch). Owns the FFT plan and its buffers (made once);
+//! never allocates per call.
 
 use std::sync::Arc;
 
 use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
 
-use crate::profile::Detrend;
+use crate::profile::{Detrend, SpectrumKind, Taper};
 
 /// Remove the window's trend in place: nothing, its mean, or its
 /// least-squares straight line (against the sample index, which is the
@@ -72,6 +73,130 @@ impl MagnitudeSpectrum {
             .process_with_scratch(&mut self.buffer, &mut self.scratch);
         for (o, b) in out.iter_mut().zip(&self.buffer) {
             *o = b.norm();
+        }
+    }
+}
+
+/// The taper's weights for `m` points (periodic Hann: `0.5 − 0.5 cos(2π j / m)`).
+pub fn taper_weights(taper: Taper, m: usize) -> Vec<f64> {
+    match taper {
+        Taper::None => vec![1.0; m],
+        Taper::Hann => (0..m)
+            .map(|j| 0.5 - 0.5 * (2.0 * std::f64::consts::PI * j as f64 / m as f64).cos())
+            .collect(),
+    }
+}
+
+/// A window's one-sided spectrum (`m/2 + 1` values, `m` the DFT length) of
+/// the kind the settings name:
+/// - magnitude: `|X_k|` of the tapered window (unnormalised, the thesis's);
+/// - power: `c_k |X_k|² / Σ w_j²` with `c_k = 2` for the bins that have a
+///   mirror image (not DC, not Nyquist), else 1; without a taper the bins
+///   add up to the window's energy `Σ x_j²` (Parseval);
+/// - log-power: `log10` of the power (floored at 1e-300);
+/// - Welch: the power of each segment of `m` points (segment mean removed
+///   unless the detrend is `none`, then tapered), averaged over the segments
+///   that fit with the overlap; white noise of variance σ² gives 2σ² per bin.
+#[derive(Clone)]
+pub(crate) struct Spectrum {
+    kind: SpectrumKind,
+    detrend_segments: bool,
+    m: usize,
+    step: usize,
+    weights: Vec<f64>,
+    weight_energy: f64,
+    magnitude: MagnitudeSpectrum,
+    segment: Vec<f64>,
+    one: Vec<f64>,
+}
+
+impl Spectrum {
+    /// `m` the DFT length, `overlap` used by Welch only.
+    pub(crate) fn new(
+        kind: SpectrumKind,
+        taper: Taper,
+        detrend: Detrend,
+        m: usize,
+        overlap: f64,
+    ) -> Self {
+        let weights = taper_weights(taper, m);
+        let weight_energy = weights
+            .iter()
+            .map(|w| w * w)
+            .sum::<f64>()
+            .max(f64::MIN_POSITIVE);
+        let step = ((m as f64 * (1.0 - overlap)).round() as usize).max(1);
+        Spectrum {
+            kind,
+            detrend_segments: detrend != Detrend::None,
+            m,
+            step,
+            weights,
+            weight_energy,
+            magnitude: MagnitudeSpectrum::new(m),
+            segment: vec![0.0; m],
+            one: vec![0.0; m / 2 + 1],
+        }
+    }
+
+    /// Values in the output: `m/2 + 1`.
+    pub(crate) fn len(&self) -> usize {
+        self.m / 2 + 1
+    }
+
+    /// Welch segments that fit in `n` points (1 for the other kinds).
+    pub(crate) fn segments(&self, n: usize) -> usize {
+        match self.kind {
+            SpectrumKind::Welch if n >= self.m => 1 + (n - self.m) / self.step,
+            SpectrumKind::Welch => 0,
+            _ => 1,
+        }
+    }
+
+    fn power_scale(&self, k: usize) -> f64 {
+        let mirrored = k > 0 && !(self.m.is_multiple_of(2) && k == self.m / 2);
+        (if mirrored { 2.0 } else { 1.0 }) / self.weight_energy
+    }
+
+    /// `x` is the (detrended) window, `out` has [`Self::len`] values.
+    pub(crate) fn compute(&mut self, x: &[f64], out: &mut [f64]) {
+        debug_assert_eq!(out.len(), self.len());
+        match self.kind {
+            SpectrumKind::Welch => {
+                out.fill(0.0);
+                let count = self.segments(x.len());
+                for s in 0..count {
+                    let seg = &x[s * self.step..s * self.step + self.m];
+                    let mean = if self.detrend_segments {
+                        seg.iter().sum::<f64>() / self.m as f64
+                    } else {
+                        0.0
+                    };
+                    for ((o, &v), w) in self.segment.iter_mut().zip(seg).zip(&self.weights) {
+                        *o = (v - mean) * w;
+                    }
+                    self.magnitude.compute(&self.segment, &mut self.one);
+                    for (k, (o, a)) in out.iter_mut().zip(&self.one).enumerate() {
+                        *o += a * a * self.power_scale(k);
+                    }
+                }
+                let inv = 1.0 / count.max(1) as f64;
+                out.iter_mut().for_each(|o| *o *= inv);
+            }
+            kind => {
+                for ((o, &v), w) in self.segment.iter_mut().zip(x).zip(&self.weights) {
+                    *o = v * w;
+                }
+                self.magnitude.compute(&self.segment, out);
+                if kind != SpectrumKind::Magnitude {
+                    for (k, o) in out.iter_mut().enumerate() {
+                        *o = *o * *o * self.power_scale(k);
+                        if kind == SpectrumKind::LogPower {
+                            *o = o.max(1e-300).log10();
+                        }
+                    }
+                }
+            }
         }
     }
 }

@@ -1,0 +1,317 @@
+//! Cross-validation: k-fold, leave-one-out and grouped folds, stratified
+//! and seeded, and the report that pools their test predictions.
+//!
+//! Folds are lists of example indices to test; every other example trains.
+//! Without groups, k-fold is stratified: each class's examples are shuffled
+//! (ChaCha8, seeded with the seed and the label) and dealt round-robin into
+//! the folds, continuing from where the previous class stopped, so every
+//! fold holds each class in proportion. With groups (a metadata value per
+//! example: `session`, `trial`, …), whole groups are dealt instead: shuffled
+//! with the seed, then largest first into the fold with the fewest examples;
+//! leave-one-out with groups leaves one group out. No group ever sits on both
+//! sides of a split. Like the rest of `evaluate`, this never reads files and
+//! never prints.
+
+use std::collections::BTreeMap;
+
+use rand::SeedableRng;
+use rand::seq::SliceRandom;
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+
+use super::{ClassRate, EvaluateError, PredictionRow, class_seed, evaluate};
+use crate::classify::{Model, TrainingExample};
+use crate::profile::{Analysis, Classifier, SplitMethod};
+
+/// The test indices of each fold.
+pub type Folds = Vec<Vec<usize>>;
+
+/// Folds for k-fold (`folds` of them) or leave-one-out, over examples with
+/// these labels and (optionally) groups. Deterministic for a seed.
+pub fn make_folds(
+    labels: &[&str],
+    groups: Option<&[String]>,
+    method: SplitMethod,
+    folds: usize,
+    seed: u64,
+) -> Result<Folds, EvaluateError> {
+    let n = labels.len();
+    if n == 0 {
+        return Err(EvaluateError::NoExamples);
+    }
+    match (method, groups) {
+        (SplitMethod::Holdout, _) => Err(EvaluateError::Folds(
+            "a holdout split has no folds".to_string(),
+        )),
+        (SplitMethod::LeaveOneOut, None) => Ok((0..n).map(|i| vec![i]).collect()),
+        (SplitMethod::LeaveOneOut, Some(g)) => {
+            let mut by: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
+            for (i, key) in g.iter().enumerate() {
+                by.entry(key).or_default().push(i);
+            }
+            if by.len() < 2 {
+                return Err(EvaluateError::Folds(
+                    "leave-one-group-out needs at least 2 groups".into(),
+                ));
+            }
+            Ok(by.into_values().collect())
+        }
+        (SplitMethod::KFold, None) => {
+            if folds < 2 || folds > n {
+                return Err(EvaluateError::Folds(format!(
+                    "{folds} folds need 2 to {n} examples per fold count (there are {n} examples)"
+                )));
+            }
+            let mut by: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
+            for (i, l) in labels.iter().enumerate() {
+                by.entry(l).or_default().push(i);
+            }
+            let mut out = vec![Vec::new(); folds];
+            let mut next = 0;
+            for (label, mut idx) in by {
+                idx.shuffle(&mut ChaCha8Rng::seed_from_u64(class_seed(seed, label)));
+                for i in idx {
+                    out[next % folds].push(i);
+                    next += 1;
+                }
+            }
+            for f in &mut out {
+                f.sort_unstable();
+            }
+            Ok(out)
+        }
+        (SplitMethod::KFold, Some(g)) => {
+            let mut by: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
+            for (i, key) in g.iter().enumerate() {
+                by.entry(key).or_default().push(i);
+            }
+            if folds < 2 || folds > by.len() {
+                return Err(EvaluateError::Folds(format!(
+                    "{folds} grouped folds need at least {folds} groups, and there are {}",
+                    by.len()
+                )));
+            }
+            let mut groups: Vec<Vec<usize>> = by.into_values().collect();
+            groups.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
+            // Stable: equal sizes keep the shuffled order.
+            groups.sort_by_key(|g| std::cmp::Reverse(g.len()));
+            let mut out: Folds = vec![Vec::new(); folds];
+            for g in groups {
+                let smallest = (0..folds).min_by_key(|&f| (out[f].len(), f)).unwrap_or(0);
+                out[smallest].extend(g);
+            }
+            for f in &mut out {
+                f.sort_unstable();
+            }
+            Ok(out)
+        }
+    }
+}
+
+/// One fold's outcome.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FoldResult {
+    pub tested: usize,
+    pub accuracy: f64,
+    /// The k used (chosen by the inner cross-validation when k = "auto").
+    pub k: usize,
+}
+
+/// A cross-validation's result. Its JSON keeps the `evaluate --json`
+/// contract's keys (pooled over the folds: every example is tested once)
+/// and adds the method, the per-fold accuracies, their mean and spread, and
+/// the macro-F1.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CvReport {
+    pub labels: Vec<String>,
+    pub confusion: Vec<Vec<usize>>,
+    /// Pooled: correct / tested over all folds.
+    pub accuracy: f64,
+    pub per_class: Vec<ClassRate>,
+    /// Every file that trained in some fold.
+    pub train: Vec<String>,
+    /// Every file tested, fold by fold.
+    pub test: Vec<String>,
+    pub predictions: Vec<PredictionRow>,
+    pub method: String,
+    pub seed: u64,
+    pub folds: Vec<FoldResult>,
+    /// Mean and sample standard deviation of the folds' accuracies.
+    pub accuracy_mean: f64,
+    pub accuracy_std: f64,
+    /// Mean over the classes (with test examples) of F1 = 2PR / (P + R).
+    pub macro_f1: f64,
+    /// Per class, in `labels` order (NaN, `null` in JSON, for no test example).
+    pub f1: Vec<f64>,
+}
+
+/// Per-class F1 from a confusion matrix (rows true, columns classified as).
+pub fn f1_scores(confusion: &[Vec<usize>]) -> Vec<f64> {
+    let n = confusion.len();
+    (0..n)
+        .map(|i| {
+            let tp = confusion[i][i] as f64;
+            let actual: usize = confusion[i].iter().sum();
+            let predicted: usize = confusion.iter().map(|r| r[i]).sum();
+            if actual == 0 {
+                return f64::NAN;
+            }
+            let (p, r) = (tp / predicted.max(1) as f64, tp / actual as f64);
+            if p + r == 0.0 {
+                0.0
+            } else {
+                2.0 * p * r / (p + r)
+            }
+        })
+        .collect()
+}
+
+pub fn mean_std(x: &[f64]) -> (f64, f64) {
+    let n = x.len() as f64;
+    let mean = x.iter().sum::<f64>() / n;
+    let var = if x.len() > 1 {
+        x.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (n - 1.0)
+    } else {
+        0.0
+    };
+    (mean, var.sqrt())
+}
+
+/// Train on all but each fold, test on the fold, pool the counts. The folds
+/// run on up to `threads` threads; the result does not depend on how many.
+#[allow(clippy::too_many_arguments)]
+pub fn cross_validate(
+    examples: &[TrainingExample],
+    folds: &Folds,
+    profile_name: &str,
+    analysis: &Analysis,
+    classifier: &Classifier,
+    method: &str,
+    seed: u64,
+    threads: usize,
+) -> Result<CvReport, EvaluateError> {
+    let run = |test_idx: &Vec<usize>| -> Result<(super::Report, usize), EvaluateError> {
+        let mut is_test = vec![false; examples.len()];
+        for &i in test_idx {
+            is_test[i] = true;
+        }
+        let train: Vec<TrainingExample> = examples
+            .iter()
+            .zip(&is_test)
+            .filter(|(_, t)| !**t)
+            .map(|(e, _)| e.clone())
+            .collect();
+        let test: Vec<TrainingExample> = test_idx.iter().map(|&i| examples[i].clone()).collect();
+        let model = Model::train(profile_name, analysis, classifier, train)?;
+        Ok((evaluate(&model, &test)?, model.classifier.k))
+    };
+    let threads = threads.clamp(1, folds.len().max(1));
+    let mut results: Vec<Option<Result<(super::Report, usize), EvaluateError>>> =
+        (0..folds.len()).map(|_| None).collect();
+    std::thread::scope(|s| {
+        let chunks = results.chunks_mut(folds.len().div_ceil(threads).max(1));
+        let mut start = 0;
+        for chunk in chunks {
+            let first = start;
+            start += chunk.len();
+            let run = &run;
+            s.spawn(move || {
+                for (j, slot) in chunk.iter_mut().enumerate() {
+                    *slot = Some(run(&folds[first + j]));
+                }
+            });
+        }
+    });
+
+    let mut labels: Vec<String> = examples.iter().map(|e| e.label.clone()).collect();
+    labels.sort();
+    labels.dedup();
+    let mut confusion = vec![vec![0usize; labels.len()]; labels.len()];
+    let mut predictions = Vec::new();
+    let mut test = Vec::new();
+    let mut fold_results = Vec::new();
+    for r in results {
+        let (report, k) = r.expect("every fold ran")?;
+        for (i, li) in report.labels.iter().enumerate() {
+            for (j, lj) in report.labels.iter().enumerate() {
+                let (Ok(a), Ok(b)) = (labels.binary_search(li), labels.binary_search(lj)) else {
+                    continue;
+                };
+                confusion[a][b] += report.confusion[i][j];
+            }
+        }
+        fold_results.push(FoldResult {
+            tested: report.tested(),
+            accuracy: report.accuracy,
+            k,
+        });
+        test.extend(report.test);
+        predictions.extend(report.predictions);
+    }
+    let tested: usize = confusion.iter().flatten().sum();
+    let correct: usize = (0..labels.len()).map(|i| confusion[i][i]).sum();
+    let per_class = labels
+        .iter()
+        .enumerate()
+        .map(|(i, label)| {
+            let n: usize = confusion[i].iter().sum();
+            let sr = if n > 0 {
+                confusion[i][i] as f64 / n as f64
+            } else {
+                f64::NAN
+            };
+            ClassRate {
+                label: label.clone(),
+                n,
+                success_rate: sr,
+                error_rate: 1.0 - sr,
+            }
+        })
+        .collect();
+    let f1 = f1_scores(&confusion);
+    let present: Vec<f64> = f1.iter().copied().filter(|v| v.is_finite()).collect();
+    let macro_f1 = present.iter().sum::<f64>() / present.len().max(1) as f64;
+    let accs: Vec<f64> = fold_results.iter().map(|f| f.accuracy).collect();
+    let (accuracy_mean, accuracy_std) = mean_std(&accs);
+    Ok(CvReport {
+        accuracy: correct as f64 / tested.max(1) as f64,
+        per_class,
+        train: examples.iter().map(|e| e.file.clone()).collect(),
+        test,
+        predictions,
+        method: method.to_string(),
+        seed,
+        folds: fold_results,
+        accuracy_mean,
+        accuracy_std,
+        macro_f1,
+        f1,
+        labels,
+        confusion,
+    })
+}
+
+impl CvReport {
+    /// As [`super::Report::table`], plus the spread and the macro-F1.
+    pub fn table(&self) -> String {
+        let r = super::Report {
+            labels: self.labels.clone(),
+            confusion: self.confusion.clone(),
+            accuracy: self.accuracy,
+            per_class: self.per_class.clone(),
+            train: Vec::new(),
+            test: Vec::new(),
+            predictions: Vec::new(),
+        };
+        let mut out = r.table();
+        out.push_str(&format!(
+            "{}: {} folds, accuracy per fold {:.1} ± {:.1} % (mean ± sd), macro-F1 {:.3}\n",
+            self.method,
+            self.folds.len(),
+            100.0 * self.accuracy_mean,
+            100.0 * self.accuracy_std,
+            self.macro_f1
+        ));
+        out
+    }
+}

@@ -1,0 +1,523 @@
+//! `hapticlab import`: recordings v1 from other rigs' files.
+//!
+//! - CSV with a column mapping: a time column (seconds) or a fixed rate; the
+//!   channel columns; `--burst N` for sensors that pack N consecutive
+//!   samples of each channel into one row (the columns of one channel
+//!   consecutive, flattened in order); the label from `--label`, a
+//!   `--label-column` (constant within a file) or the file's folder name;
+//!   extra metadata `--meta key=value`.
+//! - WAV (RIFF): PCM 8/16/24/32-bit integer or 32/64-bit float, any number of
+//!   channels. Integer samples are kept as integer counts (exact), with
+//!   `full_scale` in the metadata to normalise them; float samples as they are.
+//!
+//! Each output is written to a hidden temporary file beside its final name
+//! and renamed only once complete, so a bad input leaves nothing behind.
+//! This module reads only the files it is given and writes only under `--out`.
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+
+use crate::commands::Failure;
+use crate::recording::RecordingWriter;
+
+#[derive(Debug, Args, Clone, Default)]
+pub struct ImportArgs {
+    /// CSV or WAV files to import (the format is taken from the extension).
+    #[arg(required = true, value_name = "FILE")]
+    pub files: Vec<PathBuf>,
+    /// Output folder; recordings go to OUT/<label>/<file stem>.csv.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// CSV: the column holding each row's time in seconds.
+    #[arg(long, value_name = "NAME", conflicts_with = "rate")]
+    pub time_column: Option<String>,
+    /// The sampling rate in Hz (CSV without a time column; WAV files carry their own).
+    #[arg(long, value_name = "HZ")]
+    pub rate: Option<f64>,
+    /// CSV: the channel columns, comma-separated (default: every column but the time and label columns).
+    #[arg(long, value_name = "A,B,…", value_delimiter = ',')]
+    pub channels: Vec<String>,
+    /// Names of the recorded channels (default: the CSV column names, or ch1, ch2, … for WAV and bursts).
+    #[arg(long, value_name = "A,B,…", value_delimiter = ',')]
+    pub names: Vec<String>,
+    /// CSV: samples of each channel per row (the columns of a channel consecutive).
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub burst: usize,
+    /// The texture's label.
+    #[arg(long, value_name = "LABEL", conflicts_with = "label_column")]
+    pub label: Option<String>,
+    /// CSV: the column holding the label (one value per file).
+    #[arg(long, value_name = "NAME")]
+    pub label_column: Option<String>,
+    /// Extra metadata, e.g. --meta session=3 --meta rig=\"bench A\".
+    #[arg(long, value_name = "KEY=VALUE")]
+    pub meta: Vec<String>,
+    /// CSV field separator (default: `,`, or `;` or a tab when the header has one and no comma).
+    #[arg(long, value_name = "CHAR")]
+    pub delimiter: Option<char>,
+    /// Replace existing recordings.
+    #[arg(long)]
+    pub force: bool,
+}
+
+/// A signal read from a file, ready to be written as a recording.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Imported {
+    pub label: Option<String>,
+    pub time: Vec<f64>,
+    pub names: Vec<String>,
+    /// `channels[c][sample]`.
+    pub channels: Vec<Vec<f64>>,
+    pub meta: Vec<(String, toml::Value)>,
+}
+
+fn bad(m: impl std::fmt::Display) -> Failure {
+    Failure::BadInput(m.to_string())
+}
+
+/// `key=value` with the value in TOML (a bare word is taken as a string).
+pub fn parse_meta(kv: &str) -> Result<(String, toml::Value), Failure> {
+    let (k, v) = kv
+        .split_once('=')
+        .ok_or_else(|| bad(format!("--meta {kv:?}: expected key=value")))?;
+    let k = k.trim();
+    if k.is_empty()
+        || !k
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+    {
+        return Err(bad(format!(
+            "--meta {kv:?}: the key must be letters, digits, _ or -"
+        )));
+    }
+    if ["label", "rate_hz", "end"].contains(&k) {
+        return Err(bad(format!("--meta {k}: set by the import itself")));
+    }
+    let v = v.trim();
+    let value = toml::from_str::<toml::Table>(&format!("v = {v}"))
+        .ok()
+        .and_then(|mut t| t.remove("v"))
+        .unwrap_or_else(|| toml::Value::String(v.to_string()));
+    Ok((k.to_string(), value))
+}
+
+/// Parse a CSV file's text with the mapping in `args`.
+pub fn parse_csv(text: &str, origin: &str, args: &ImportArgs) -> Result<Imported, Failure> {
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
+    let (hline, header) = lines
+        .next()
+        .ok_or_else(|| bad(format!("{origin}: no header line")))?;
+    let delim = args.delimiter.unwrap_or_else(|| {
+        if header.contains(',') {
+            ','
+        } else if header.contains(';') {
+            ';'
+        } else if header.contains('\t') {
+            '\t'
+        } else {
+            ','
+        }
+    });
+    let cols: Vec<String> = header
+        .split(delim)
+        .map(|c| c.trim().trim_matches('"').to_string())
+        .collect();
+    let find = |name: &str, what: &str| {
+        cols.iter().position(|c| c == name).ok_or_else(|| {
+            bad(format!(
+                "{origin}:{}: no {what} column `{name}` (the header has {})",
+                hline + 1,
+                cols.join(", ")
+            ))
+        })
+    };
+    let time = args
+        .time_column
+        .as_deref()
+        .map(|t| find(t, "time"))
+        .transpose()?;
+    let label_col = args
+        .label_column
+        .as_deref()
+        .map(|l| find(l, "label"))
+        .transpose()?;
+    let channel_idx: Vec<usize> = if args.channels.is_empty() {
+        (0..cols.len())
+            .filter(|i| Some(*i) != time && Some(*i) != label_col)
+            .collect()
+    } else {
+        args.channels
+            .iter()
+            .map(|c| find(c, "channel"))
+            .collect::<Result<_, _>>()?
+    };
+    let burst = args.burst.max(1);
+    if channel_idx.is_empty() || !channel_idx.len().is_multiple_of(burst) {
+        return Err(bad(format!(
+            "{origin}: {} channel column(s) cannot be split into bursts of {burst}",
+            channel_idx.len()
+        )));
+    }
+    let n_channels = channel_idx.len() / burst;
+    let names: Vec<String> = if !args.names.is_empty() {
+        if args.names.len() != n_channels {
+            return Err(bad(format!(
+                "--names gives {} name(s) but there are {n_channels} channel(s)",
+                args.names.len()
+            )));
+        }
+        args.names.clone()
+    } else if burst == 1 {
+        channel_idx.iter().map(|&i| cols[i].clone()).collect()
+    } else {
+        (1..=n_channels).map(|c| format!("ch{c}")).collect()
+    };
+    if time.is_none() && args.rate.is_none() {
+        return Err(bad(format!("{origin}: give --time-column or --rate")));
+    }
+    let mut row_times = Vec::new();
+    let mut channels = vec![Vec::new(); n_channels];
+    let mut label: Option<String> = None;
+    for (ln, line) in lines {
+        let fields: Vec<&str> = line
+            .split(delim)
+            .map(|f| f.trim().trim_matches('"'))
+            .collect();
+        if fields.len() != cols.len() {
+            return Err(bad(format!(
+                "{origin}:{}: {} fields but the header has {}",
+                ln + 1,
+                fields.len(),
+                cols.len()
+            )));
+        }
+        let num = |i: usize| {
+            fields[i]
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| {
+                    bad(format!(
+                        "{origin}:{}: column `{}`: {:?} is not a finite number",
+                        ln + 1,
+                        cols[i],
+                        fields[i]
+                    ))
+                })
+        };
+        if let Some(t) = time {
+            row_times.push(num(t)?);
+        }
+        if let Some(l) = label_col {
+            match &label {
+                None => label = Some(fields[l].to_string()),
+                Some(prev) if prev != fields[l] => {
+                    return Err(bad(format!(
+                        "{origin}:{}: the label changes from {prev:?} to {:?}; one file is one scan of one texture",
+                        ln + 1,
+                        fields[l]
+                    )));
+                }
+                _ => {}
+            }
+        }
+        for (c, ch) in channels.iter_mut().enumerate() {
+            for b in 0..burst {
+                ch.push(num(channel_idx[c * burst + b])?);
+            }
+        }
+    }
+    let rows = channels[0].len() / burst;
+    if rows == 0 {
+        return Err(bad(format!("{origin}: no data rows")));
+    }
+    let n = rows * burst;
+    let time: Vec<f64> = match (time, args.rate) {
+        (None, Some(rate)) => (0..n).map(|i| i as f64 / rate).collect(),
+        (Some(_), rate) => {
+            if row_times.windows(2).any(|w| w[1] <= w[0]) {
+                return Err(bad(format!(
+                    "{origin}: the time column must increase row by row"
+                )));
+            }
+            // Within a burst, samples are 1/rate apart; without a rate, the
+            // median row interval shared evenly.
+            let dt = match rate {
+                Some(r) => 1.0 / r,
+                None if burst == 1 => 0.0,
+                None if rows < 2 => {
+                    return Err(bad(format!(
+                        "{origin}: one row of a burst needs --rate to time its samples"
+                    )));
+                }
+                None => {
+                    let mut d: Vec<f64> = row_times.windows(2).map(|w| w[1] - w[0]).collect();
+                    d.sort_by(f64::total_cmp);
+                    d[d.len() / 2] / burst as f64
+                }
+            };
+            row_times
+                .iter()
+                .flat_map(|&t| (0..burst).map(move |b| t + b as f64 * dt))
+                .collect()
+        }
+        (None, None) => unreachable!("checked above"),
+    };
+    let mut meta = Vec::new();
+    if let Some(r) = args.rate {
+        meta.push(("rate_hz".to_string(), toml::Value::Float(r)));
+    }
+    Ok(Imported {
+        label,
+        time,
+        names,
+        channels,
+        meta,
+    })
+}
+
+fn u16_at(b: &[u8], i: usize) -> u16 {
+    u16::from_le_bytes([b[i], b[i + 1]])
+}
+fn u32_at(b: &[u8], i: usize) -> u32 {
+    u32::from_le_bytes([b[i], b[i + 1], b[i + 2], b[i + 3]])
+}
+
+/// Parse a WAV file's bytes.
+pub fn parse_wav(bytes: &[u8], origin: &str) -> Result<Imported, Failure> {
+    let err = |m: &str| bad(format!("{origin}: not a WAV file this reads: {m}"));
+    if bytes.len() < 12 || &bytes[0..4] != b"RIFF" || &bytes[8..12] != b"WAVE" {
+        return Err(err("no RIFF/WAVE header"));
+    }
+    let mut at = 12;
+    let mut fmt: Option<(u16, u16, u32, u16)> = None;
+    let mut data: Option<&[u8]> = None;
+    while at + 8 <= bytes.len() {
+        let id = &bytes[at..at + 4];
+        let len = u32_at(bytes, at + 4) as usize;
+        let body = &bytes[at + 8..(at + 8 + len).min(bytes.len())];
+        if id == b"fmt " {
+            if body.len() < 16 {
+                return Err(err("the fmt chunk is too short"));
+            }
+            let mut format = u16_at(body, 0);
+            if format == 0xFFFE && body.len() >= 26 {
+                format = u16_at(body, 24); // WAVE_FORMAT_EXTENSIBLE: the sub-format's tag
+            }
+            fmt = Some((format, u16_at(body, 2), u32_at(body, 4), u16_at(body, 14)));
+        } else if id == b"data" {
+            if body.len() < len {
+                return Err(err(&format!(
+                    "the data chunk is cut short ({} of {len} bytes)",
+                    body.len()
+                )));
+            }
+            data = Some(body);
+        }
+        at += 8 + len + (len & 1);
+    }
+    let (format, channels, rate, bits) = fmt.ok_or_else(|| err("no fmt chunk"))?;
+    let data = data.ok_or_else(|| err("no data chunk"))?;
+    if channels == 0 || rate == 0 {
+        return Err(err("zero channels or a zero sample rate"));
+    }
+    let width = usize::from(bits / 8);
+    let (kind, full_scale) = match (format, bits) {
+        (1, 8 | 16 | 24 | 32) => ("int", Some(2f64.powi(i32::from(bits) - 1))),
+        (3, 32 | 64) => ("float", None),
+        _ => {
+            return Err(err(&format!(
+                "format tag {format} with {bits} bits (PCM 8/16/24/32-bit or float 32/64-bit only)"
+            )));
+        }
+    };
+    let frame = width * usize::from(channels);
+    let n = data.len() / frame;
+    let mut out = vec![Vec::with_capacity(n); usize::from(channels)];
+    for f in 0..n {
+        for (c, ch) in out.iter_mut().enumerate() {
+            let s = &data[f * frame + c * width..f * frame + (c + 1) * width];
+            let v = match (kind, width) {
+                ("int", 1) => f64::from(s[0]) - 128.0, // 8-bit WAV is unsigned
+                ("int", 2) => f64::from(i16::from_le_bytes([s[0], s[1]])),
+                ("int", 3) => f64::from(i32::from_le_bytes([0, s[0], s[1], s[2]]) >> 8),
+                ("int", 4) => f64::from(i32::from_le_bytes([s[0], s[1], s[2], s[3]])),
+                ("float", 4) => f64::from(f32::from_le_bytes([s[0], s[1], s[2], s[3]])),
+                _ => f64::from_le_bytes([s[0], s[1], s[2], s[3], s[4], s[5], s[6], s[7]]),
+            };
+            if !v.is_finite() {
+                return Err(err(&format!(
+                    "sample {f} of channel {} is not finite",
+                    c + 1
+                )));
+            }
+            ch.push(v);
+        }
+    }
+    if n == 0 {
+        return Err(err("no samples"));
+    }
+    let rate = f64::from(rate);
+    let mut meta = vec![
+        ("rate_hz".to_string(), toml::Value::Float(rate)),
+        (
+            "wav_format".to_string(),
+            toml::Value::String(format!("{kind}{bits}")),
+        ),
+    ];
+    if let Some(fs) = full_scale {
+        meta.push(("full_scale".to_string(), toml::Value::Float(fs)));
+    }
+    Ok(Imported {
+        label: None,
+        time: (0..n).map(|i| i as f64 / rate).collect(),
+        names: (1..=channels).map(|c| format!("ch{c}")).collect(),
+        channels: out,
+        meta,
+    })
+}
+
+/// Write `imp` as a recording at `path`, through a temporary file that is
+/// renamed only when complete.
+pub fn write_recording(path: &Path, imp: &Imported, label: &str) -> Result<(), Failure> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let tmp = dir.join(format!(
+        ".{}.tmp",
+        path.file_name()
+            .map_or("import".into(), |n| n.to_string_lossy().into_owned())
+    ));
+    let mut meta = vec![
+        ("label".to_string(), toml::Value::String(label.to_string())),
+        ("device".to_string(), toml::Value::String("import".into())),
+    ];
+    meta.extend(imp.meta.iter().cloned());
+    let mut columns: Vec<&str> = vec!["t_s"];
+    columns.extend(imp.names.iter().map(String::as_str));
+    let write = || -> Result<(), Failure> {
+        let mut w = RecordingWriter::create(&tmp, &meta, &columns)
+            .map_err(|e| Failure::BadInput(format!("{}: {e}", path.display())))?;
+        let mut row = vec![0.0; columns.len()];
+        for (i, &t) in imp.time.iter().enumerate() {
+            row[0] = t;
+            for (c, ch) in imp.channels.iter().enumerate() {
+                row[c + 1] = ch[i];
+            }
+            w.write_row(&row)
+                .map_err(|e| Failure::Runtime(e.to_string()))?;
+        }
+        w.finish().map_err(|e| Failure::Runtime(e.to_string()))?;
+        std::fs::rename(&tmp, path)
+            .map_err(|e| Failure::Runtime(format!("{}: {e}", path.display())))
+    };
+    write().inspect_err(|_| {
+        let _ = std::fs::remove_file(&tmp);
+    })
+}
+
+/// `hapticlab import`: returns the recordings written.
+pub fn run(args: &ImportArgs) -> Result<Vec<PathBuf>, Failure> {
+    let extra: Vec<(String, toml::Value)> = args
+        .meta
+        .iter()
+        .map(|m| parse_meta(m))
+        .collect::<Result<_, _>>()?;
+    if let Some(r) = args.rate
+        && !(r.is_finite() && r > 0.0)
+    {
+        return Err(bad(format!(
+            "--rate must be a positive number of Hz, got {r}"
+        )));
+    }
+    if let Some(l) = &args.label {
+        crate::profile::check_label(l).map_err(|e| bad(format!("--label: {e}")))?;
+    }
+    // Parse everything first: one bad file and nothing is written.
+    let mut planned = Vec::new();
+    for f in &args.files {
+        let origin = f.display().to_string();
+        let bytes = std::fs::read(f).map_err(|e| Failure::Runtime(format!("{origin}: {e}")))?;
+        let ext = f
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_default();
+        let mut imp = match ext.as_str() {
+            "wav" | "wave" => {
+                let mut w = parse_wav(&bytes, &origin)?;
+                if !args.names.is_empty() {
+                    if args.names.len() != w.names.len() {
+                        return Err(bad(format!(
+                            "--names gives {} name(s) but {origin} has {} channel(s)",
+                            args.names.len(),
+                            w.names.len()
+                        )));
+                    }
+                    w.names = args.names.clone();
+                }
+                w
+            }
+            "csv" | "txt" | "tsv" => {
+                let text = String::from_utf8(bytes)
+                    .map_err(|_| bad(format!("{origin}: not UTF-8 text")))?;
+                parse_csv(&text, &origin, args)?
+            }
+            _ => {
+                return Err(bad(format!(
+                    "{origin}: unknown format (expected .csv or .wav)"
+                )));
+            }
+        };
+        let label = match (&args.label, imp.label.take()) {
+            (Some(l), _) => l.clone(),
+            (None, Some(l)) => l,
+            (None, None) => f
+                .canonicalize()
+                .ok()
+                .and_then(|p| {
+                    p.parent()
+                        .and_then(|d| d.file_name())
+                        .map(|n| n.to_string_lossy().into_owned())
+                })
+                .ok_or_else(|| {
+                    bad(format!(
+                        "{origin}: no --label, no --label-column and no folder to name it"
+                    ))
+                })?,
+        };
+        crate::profile::check_label(&label)
+            .map_err(|e| bad(format!("{origin}: label {label:?}: {e}")))?;
+        imp.meta
+            .push(("source".to_string(), toml::Value::String(origin.clone())));
+        imp.meta.extend(extra.iter().cloned());
+        let stem = f
+            .file_stem()
+            .map_or("import".into(), |s| s.to_string_lossy().into_owned());
+        let path = args.out.join(&label).join(format!("{stem}.csv"));
+        if path.exists() && !args.force {
+            return Err(bad(format!(
+                "{}: already exists (use --force to replace it)",
+                path.display()
+            )));
+        }
+        if planned.iter().any(|(p, _, _): &(PathBuf, _, _)| *p == path) {
+            return Err(bad(format!(
+                "two inputs would both write {}",
+                path.display()
+            )));
+        }
+        planned.push((path, imp, label));
+    }
+    let mut written = Vec::new();
+    for (path, imp, label) in &planned {
+        if let Some(d) = path.parent() {
+            std::fs::create_dir_all(d)
+                .map_err(|e| Failure::Runtime(format!("{}: {e}", d.display())))?;
+        }
+        write_recording(path, imp, label)?;
+        written.push(path.clone());
+    }
+    Ok(written)
+}

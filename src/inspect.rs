@@ -1,0 +1,287 @@
+//! `hapticlab inspect`: a dataset's health (the thesis's section 4.2) —
+//! recordings per class, incomplete or unreadable files, scans the analysis
+//! cannot use, per-class feature spread, and outliers.
+//!
+//! An outlier is a scan whose feature vector lies far from its class's
+//! centroid: features are first standardised over the whole dataset (so no
+//! feature dominates by its unit), then each scan's Euclidean distance to
+//! its class's centroid is compared with that class's distances: beyond
+//! `median + t · 1.4826 · MAD` (t = 3 by default; 1.4826 · MAD estimates a
+//! standard deviation robustly, so one wild scan cannot hide itself by
+//! inflating the spread). [`outliers`] is pure; the command reads files.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use serde::Serialize;
+
+use crate::analysis::FeatureExtractor;
+use crate::classify::{Scaling, TrainingExample};
+use crate::cli::ProfileArg;
+use crate::commands::{Failure, example_of, load_profile};
+use crate::recording;
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Outlier {
+    pub file: String,
+    pub label: String,
+    /// Distance to the class centroid (standardised features).
+    pub distance: f64,
+    /// The class's threshold it exceeds.
+    pub threshold: f64,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ClassHealth {
+    pub label: String,
+    pub recordings: usize,
+    /// Mean over the features of the within-class variance (raw features).
+    pub mean_feature_variance: f64,
+    /// Per feature: the within-class variance (raw features).
+    pub feature_variance: Vec<f64>,
+    /// Median distance to the centroid (standardised features).
+    pub median_distance: f64,
+    pub threshold: f64,
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let m = v.len() / 2;
+    if !v.len().is_multiple_of(2) {
+        v[m]
+    } else {
+        (v[m - 1] + v[m]) / 2.0
+    }
+}
+
+/// Per-class health and the outliers, class by class in label order, each
+/// class's outliers farthest first.
+pub fn outliers(examples: &[TrainingExample], t: f64) -> (Vec<ClassHealth>, Vec<Outlier>) {
+    let rows: Vec<&[f64]> = examples.iter().map(|e| e.features.as_slice()).collect();
+    let scaling = Scaling::fit(&rows);
+    let mut by: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
+    for (i, e) in examples.iter().enumerate() {
+        by.entry(&e.label).or_default().push(i);
+    }
+    let d = rows.first().map_or(0, |r| r.len());
+    let (mut health, mut out) = (Vec::new(), Vec::new());
+    for (label, idx) in by {
+        let n = idx.len() as f64;
+        let mut raw_mean = vec![0.0; d];
+        let mut centroid = vec![0.0; d];
+        let mut z = vec![0.0; d];
+        let scaled: Vec<Vec<f64>> = idx
+            .iter()
+            .map(|&i| {
+                scaling.apply(rows[i], &mut z);
+                z.clone()
+            })
+            .collect();
+        for (&i, s) in idx.iter().zip(&scaled) {
+            for f in 0..d {
+                raw_mean[f] += rows[i][f] / n;
+                centroid[f] += s[f] / n;
+            }
+        }
+        let feature_variance: Vec<f64> = (0..d)
+            .map(|f| {
+                idx.iter()
+                    .map(|&i| (rows[i][f] - raw_mean[f]).powi(2))
+                    .sum::<f64>()
+                    / (n - 1.0).max(1.0)
+            })
+            .collect();
+        let dist: Vec<f64> = scaled
+            .iter()
+            .map(|s| {
+                s.iter()
+                    .zip(&centroid)
+                    .map(|(a, b)| (a - b) * (a - b))
+                    .sum::<f64>()
+                    .sqrt()
+            })
+            .collect();
+        let med = median(&mut dist.clone());
+        let mut dev: Vec<f64> = dist.iter().map(|x| (x - med).abs()).collect();
+        let mad = median(&mut dev);
+        let threshold = med + t * 1.4826 * mad;
+        let mut found: Vec<Outlier> = idx
+            .iter()
+            .zip(&dist)
+            .filter(|(_, x)| idx.len() >= 3 && **x > threshold && **x > 1e-12)
+            .map(|(&i, &x)| Outlier {
+                file: examples[i].file.clone(),
+                label: label.to_string(),
+                distance: x,
+                threshold,
+            })
+            .collect();
+        found.sort_by(|a, b| b.distance.total_cmp(&a.distance));
+        out.extend(found);
+        health.push(ClassHealth {
+            label: label.to_string(),
+            recordings: idx.len(),
+            mean_feature_variance: feature_variance.iter().sum::<f64>() / d.max(1) as f64,
+            feature_variance,
+            median_distance: med,
+            threshold,
+        });
+    }
+    (health, out)
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Inspection {
+    pub files: usize,
+    pub classes: Vec<ClassHealth>,
+    pub incomplete: Vec<String>,
+    /// Files that could not be read, with the reason.
+    pub unreadable: Vec<(String, String)>,
+    /// Complete recordings the analysis cannot use, with the reason.
+    pub unusable: Vec<(String, String)>,
+    pub outliers: Vec<Outlier>,
+    pub threshold_factor: f64,
+}
+
+impl Inspection {
+    pub fn text(&self) -> String {
+        let mut s = format!(
+            "{} files: {} usable, {} incomplete, {} unreadable, {} unusable by the analysis\n\n",
+            self.files,
+            self.classes.iter().map(|c| c.recordings).sum::<usize>(),
+            self.incomplete.len(),
+            self.unreadable.len(),
+            self.unusable.len()
+        );
+        s.push_str("class  recordings  mean feature variance  median distance  outlier beyond\n");
+        for c in &self.classes {
+            s.push_str(&format!(
+                "{:<5}  {:>10}  {:>21.4e}  {:>15.3}  {:>14.3}\n",
+                c.label, c.recordings, c.mean_feature_variance, c.median_distance, c.threshold
+            ));
+        }
+        let counts: Vec<usize> = self.classes.iter().map(|c| c.recordings).collect();
+        if let (Some(lo), Some(hi)) = (counts.iter().min(), counts.iter().max())
+            && lo != hi
+        {
+            s.push_str(&format!(
+                "note: the classes are unbalanced ({lo} to {hi} recordings)\n"
+            ));
+        }
+        for f in &self.incomplete {
+            s.push_str(&format!("incomplete: {f} (no `# end samples` trailer)\n"));
+        }
+        for (f, e) in self.unreadable.iter().chain(&self.unusable) {
+            s.push_str(&format!("unusable: {f}: {e}\n"));
+        }
+        if self.outliers.is_empty() {
+            s.push_str(&format!(
+                "no outliers (distance to the class centroid beyond median + {} x 1.4826 x MAD)\n",
+                self.threshold_factor
+            ));
+        } else {
+            s.push_str(&format!(
+                "outliers (distance to the class centroid beyond median + {} x 1.4826 x MAD, standardised features):\n",
+                self.threshold_factor
+            ));
+            for o in &self.outliers {
+                s.push_str(&format!(
+                    "  {}  {}  distance {:.3} > {:.3}\n",
+                    o.file, o.label, o.distance, o.threshold
+                ));
+            }
+        }
+        s
+    }
+}
+
+/// `hapticlab inspect`.
+pub fn run(
+    profile: &ProfileArg,
+    paths: &[PathBuf],
+    threshold: f64,
+    json: bool,
+) -> Result<(), Failure> {
+    let lp = load_profile(profile)?;
+    if !(threshold.is_finite() && threshold > 0.0) {
+        return Err(Failure::BadInput(format!(
+            "--threshold must be a positive number, got {threshold}"
+        )));
+    }
+    let files = recording::collect_files(paths).map_err(|e| Failure::BadInput(e.to_string()))?;
+    if files.is_empty() {
+        return Err(Failure::BadInput(
+            "no recordings (*.csv, *.csv.gz) found".into(),
+        ));
+    }
+    let mut fx = FeatureExtractor::new(&lp.profile.analysis);
+    let mut examples = Vec::new();
+    let (mut incomplete, mut unreadable, mut unusable) = (Vec::new(), Vec::new(), Vec::new());
+    for f in &files {
+        let name = f.display().to_string();
+        match recording::read(f) {
+            Err(e) => unreadable.push((name, e.to_string())),
+            Ok(rec) if !rec.is_complete() => incomplete.push(name),
+            Ok(rec) => match example_of(&rec, f, &mut fx) {
+                Ok(e) => examples.push(e),
+                Err(e) => unusable.push((name, e.message().to_string())),
+            },
+        }
+    }
+    let (classes, outliers) = outliers(&examples, threshold);
+    let report = Inspection {
+        files: files.len(),
+        classes,
+        incomplete,
+        unreadable,
+        unusable,
+        outliers,
+        threshold_factor: threshold,
+    };
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string(&report).map_err(|e| Failure::Runtime(e.to_string()))?
+        );
+    } else {
+        print!("{}", report.text());
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ex(file: &str, label: &str, f: Vec<f64>) -> TrainingExample {
+        TrainingExample {
+            file: file.into(),
+            label: label.into(),
+            features: f,
+        }
+    }
+
+    #[test]
+    fn a_wild_scan_is_flagged_and_the_rest_are_not() {
+        let mut v = Vec::new();
+        for i in 0..20 {
+            let j = (i * 7 % 5) as f64 * 0.01;
+            v.push(ex(&format!("a{i}"), "A", vec![1.0 + j, 2.0 - j]));
+            v.push(ex(&format!("b{i}"), "B", vec![5.0 - j, 1.0 + j]));
+        }
+        v.push(ex("wild", "A", vec![3.0, 0.0]));
+        let (health, out) = outliers(&v, 3.0);
+        assert_eq!(out.len(), 1, "{out:?}");
+        assert_eq!(out[0].file, "wild");
+        assert_eq!(health[0].recordings, 21);
+        assert!(health[1].mean_feature_variance < health[0].mean_feature_variance);
+        // A class of identical scans has no outlier.
+        let same: Vec<_> = (0..5)
+            .map(|i| ex(&format!("s{i}"), "S", vec![1.0]))
+            .collect();
+        assert!(outliers(&same, 3.0).1.is_empty());
+    }
+}

@@ -1,0 +1,639 @@
+//! `hapticlab plot`: figures for papers, as PNG or SVG (by the output's
+//! extension), drawn with plotters and the bundled DejaVu Sans font (no
+//! system fonts needed).
+//!
+//! - `trace FILE`: the recording's signal along the analysis axis with the
+//!   analysis window shaded, and its spectrum with the kept bins marked
+//!   (the thesis's Figs 4.5–4.8);
+//! - `confusion REPORT.json`: the confusion matrix of `evaluate --json` as a
+//!   grey heat map with the counts written in;
+//! - `features PATH… --per-class N`: the features of N recordings of each
+//!   class, one panel per class (Fig 4.3);
+//! - `sweep SWEEP.json`: accuracy against the swept value from
+//!   `evaluate --sweep … --json`, with the spread across folds.
+//!
+//! Everything is black, greys and line styles, so it prints in grey. This
+//! module reads its inputs and writes only the figure.
+
+use std::path::{Path, PathBuf};
+
+use clap::{Args, Subcommand};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use crate::analysis::FeatureExtractor;
+use crate::cli::ProfileArg;
+use crate::commands::{Failure, features_of, label_of, load_profile};
+use crate::recording;
+
+static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
+
+#[derive(Debug, Args, Clone)]
+pub struct PlotArgs {
+    #[command(subcommand)]
+    pub figure: Figure,
+    /// The figure to write: .png or .svg.
+    #[arg(long, global = true, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+    /// Figure size in pixels, WIDTHxHEIGHT.
+    #[arg(long, global = true, default_value = "1000x700", value_name = "WxH")]
+    pub size: String,
+}
+
+#[derive(Debug, Subcommand, Clone)]
+pub enum Figure {
+    /// A recording's trace with its analysis window, and its spectrum (Figs 4.5–4.8).
+    Trace {
+        #[command(flatten)]
+        profile: ProfileArg,
+        #[arg(value_name = "FILE")]
+        file: PathBuf,
+    },
+    /// The confusion matrix of `evaluate --json` as a heat map.
+    Confusion {
+        #[arg(value_name = "REPORT.json")]
+        report: PathBuf,
+    },
+    /// The features of N recordings per class (Fig 4.3).
+    Features {
+        #[command(flatten)]
+        profile: ProfileArg,
+        #[arg(required = true, value_name = "PATH")]
+        paths: Vec<PathBuf>,
+        #[arg(long, default_value_t = 5, value_name = "N")]
+        per_class: usize,
+    },
+    /// Accuracy against the swept value, from `evaluate --sweep … --json`.
+    Sweep {
+        #[arg(value_name = "SWEEP.json")]
+        sweep: PathBuf,
+    },
+}
+
+fn bad(m: impl std::fmt::Display) -> Failure {
+    Failure::BadInput(m.to_string())
+}
+
+fn fail<E: std::fmt::Debug>(e: E) -> Failure {
+    Failure::Runtime(format!("cannot draw the figure: {e:?}"))
+}
+
+/// Axis unit of a column name, for labels.
+fn unit_of(column: &str) -> (&'static str, f64) {
+    if column.ends_with("_m") {
+        ("mm", 1000.0)
+    } else if column.ends_with("_s") {
+        ("s", 1.0)
+    } else if column.ends_with("_n") {
+        ("N", 1.0)
+    } else {
+        ("", 1.0)
+    }
+}
+
+/// The greys and dash patterns series cycle through.
+const GREYS: [RGBColor; 4] = [
+    RGBColor(0, 0, 0),
+    RGBColor(90, 90, 90),
+    RGBColor(150, 150, 150),
+    RGBColor(200, 200, 200),
+];
+
+type Area<DB> = DrawingArea<DB, Shift>;
+
+pub fn run(args: &PlotArgs) -> Result<(), Failure> {
+    let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
+    let out = args
+        .out
+        .clone()
+        .ok_or_else(|| bad("--out FILE (.png or .svg) is required"))?;
+    let (w, h) = args
+        .size
+        .split_once('x')
+        .and_then(|(w, h)| Some((w.parse::<u32>().ok()?, h.parse::<u32>().ok()?)))
+        .filter(|&(w, h)| (200..=10000).contains(&w) && (200..=10000).contains(&h))
+        .ok_or_else(|| {
+            bad(format!(
+                "--size {:?}: expected WIDTHxHEIGHT, 200 to 10000 each",
+                args.size
+            ))
+        })?;
+    let ext = out
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    let data = Data::load(&args.figure)?;
+    if let Some(d) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(d)
+            .map_err(|e| Failure::Runtime(format!("{}: {e}", d.display())))?;
+    }
+    match ext.as_str() {
+        "png" => {
+            let root = BitMapBackend::new(&out, (w, h)).into_drawing_area();
+            data.draw(&root)?;
+            root.present().map_err(fail)?;
+        }
+        "svg" => {
+            let root = SVGBackend::new(&out, (w, h)).into_drawing_area();
+            data.draw(&root)?;
+            root.present().map_err(fail)?;
+        }
+        _ => {
+            return Err(bad(format!(
+                "{}: the figure must end in .png or .svg",
+                out.display()
+            )));
+        }
+    }
+    eprintln!("wrote {}", out.display());
+    Ok(())
+}
+
+/// What a figure shows, loaded before any drawing.
+enum Data {
+    Trace {
+        title: String,
+        axis_name: String,
+        channel: String,
+        axis: Vec<f64>,
+        signal: Vec<f64>,
+        window: [f64; 2],
+        resampled: Vec<(f64, f64)>,
+        spectrum: Vec<(f64, f64)>,
+        kept: [usize; 2],
+        freq_unit: String,
+        kind: String,
+    },
+    Confusion {
+        labels: Vec<String>,
+        confusion: Vec<Vec<f64>>,
+        accuracy: f64,
+    },
+    Features {
+        classes: Vec<(String, Vec<Vec<f64>>)>,
+        kind: String,
+        first_bin: usize,
+    },
+    Sweep {
+        key: String,
+        method: String,
+        points: Vec<(String, f64, f64)>,
+    },
+}
+
+fn read_json(p: &Path) -> Result<serde_json::Value, Failure> {
+    let text = std::fs::read_to_string(p)
+        .map_err(|e| Failure::Runtime(format!("{}: {e}", p.display())))?;
+    serde_json::from_str(&text).map_err(|e| bad(format!("{}: not JSON: {e}", p.display())))
+}
+
+impl Data {
+    fn load(fig: &Figure) -> Result<Data, Failure> {
+        match fig {
+            Figure::Trace { profile, file } => {
+                let lp = load_profile(profile)?;
+                let a = &lp.profile.analysis;
+                let rec = recording::read(file).map_err(bad)?;
+                let mut fx = FeatureExtractor::new(a);
+                features_of(&rec, file, &mut fx)?;
+                let axis_raw = rec.column(&a.axis).unwrap_or_default();
+                let signal = rec.column(&a.channel).unwrap_or_default().to_vec();
+                // Distance along travel from the first sample, as the analysis sees it.
+                let (o, l) = (axis_raw[0], axis_raw[axis_raw.len() - 1]);
+                let s = if l >= o { 1.0 } else { -1.0 };
+                let axis: Vec<f64> = axis_raw.iter().map(|x| s * (x - o)).collect();
+                let resampled = fx
+                    .resampled()
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &v)| (fx.grid_position(i), v))
+                    .collect();
+                let spectrum = fx
+                    .spectrum()
+                    .iter()
+                    .enumerate()
+                    .map(|(k, &v)| (fx.frequency(k), v))
+                    .collect();
+                Ok(Data::Trace {
+                    title: format!("{} ({})", file.display(), label_of(&rec, file)?),
+                    axis_name: a.axis.clone(),
+                    channel: a.channel.clone(),
+                    axis,
+                    signal,
+                    window: a.window,
+                    resampled,
+                    spectrum,
+                    kept: a.kept_bins(),
+                    freq_unit: a.frequency_unit().to_string(),
+                    kind: format!("{:?}", a.spectrum).to_lowercase(),
+                })
+            }
+            Figure::Confusion { report } => {
+                let v = read_json(report)?;
+                let labels: Vec<String> =
+                    serde_json::from_value(v["labels"].clone()).map_err(|_| {
+                        bad(format!(
+                            "{}: no `labels` (expected `evaluate --json` output)",
+                            report.display()
+                        ))
+                    })?;
+                let confusion: Vec<Vec<f64>> = serde_json::from_value(v["confusion"].clone())
+                    .map_err(|_| bad(format!("{}: no `confusion` matrix", report.display())))?;
+                if confusion.len() != labels.len()
+                    || confusion.iter().any(|r| r.len() != labels.len())
+                {
+                    return Err(bad(format!(
+                        "{}: the confusion matrix is not {n}x{n}",
+                        report.display(),
+                        n = labels.len()
+                    )));
+                }
+                Ok(Data::Confusion {
+                    labels,
+                    confusion,
+                    accuracy: v["accuracy"].as_f64().unwrap_or(f64::NAN),
+                })
+            }
+            Figure::Features {
+                profile,
+                paths,
+                per_class,
+            } => {
+                let lp = load_profile(profile)?;
+                let mut fx = FeatureExtractor::new(&lp.profile.analysis);
+                let files = recording::collect_files(paths).map_err(bad)?;
+                let mut classes: Vec<(String, Vec<Vec<f64>>)> = Vec::new();
+                for f in &files {
+                    let rec = recording::read(f).map_err(bad)?;
+                    if !rec.is_complete() {
+                        continue;
+                    }
+                    let label = label_of(&rec, f)?;
+                    let i = match classes.iter().position(|(l, _)| *l == label) {
+                        Some(i) => i,
+                        None => {
+                            classes.push((label, Vec::new()));
+                            classes.len() - 1
+                        }
+                    };
+                    if classes[i].1.len() < *per_class {
+                        classes[i].1.push(features_of(&rec, f, &mut fx)?);
+                    }
+                }
+                if classes.is_empty() {
+                    return Err(bad("no complete recordings to plot"));
+                }
+                classes.sort_by(|a, b| a.0.cmp(&b.0));
+                Ok(Data::Features {
+                    classes,
+                    kind: format!("{:?}", lp.profile.analysis.spectrum).to_lowercase(),
+                    first_bin: lp.profile.analysis.kept_bins()[0],
+                })
+            }
+            Figure::Sweep { sweep } => {
+                let v = read_json(sweep)?;
+                let points = v["points"]
+                    .as_array()
+                    .ok_or_else(|| {
+                        bad(format!(
+                            "{}: no `points` (expected `evaluate --sweep … --json` output)",
+                            sweep.display()
+                        ))
+                    })?
+                    .iter()
+                    .map(|p| {
+                        (
+                            p["value"].as_str().unwrap_or("?").to_string(),
+                            p["accuracy"].as_f64().unwrap_or(f64::NAN),
+                            p["accuracy_std"].as_f64().unwrap_or(0.0),
+                        )
+                    })
+                    .collect::<Vec<_>>();
+                if points.is_empty() {
+                    return Err(bad(format!("{}: the sweep has no points", sweep.display())));
+                }
+                Ok(Data::Sweep {
+                    key: v["key"].as_str().unwrap_or("value").to_string(),
+                    method: v["method"].as_str().unwrap_or("").to_string(),
+                    points,
+                })
+            }
+        }
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &Area<DB>) -> Result<(), Failure>
+    where
+        DB::ErrorType: 'static,
+    {
+        root.fill(&WHITE).map_err(fail)?;
+        let font = ("sans-serif", 18);
+        match self {
+            Data::Trace {
+                title,
+                axis_name,
+                channel,
+                axis,
+                signal,
+                window,
+                resampled,
+                spectrum,
+                kept,
+                freq_unit,
+                kind,
+            } => {
+                let root = root.titled(title, ("sans-serif", 20)).map_err(fail)?;
+                let (top, bottom) = root.split_vertically(root.dim_in_pixel().1 / 2);
+                let (xu, xs) = unit_of(axis_name);
+                let (yu, ys) = unit_of(channel);
+                let xmax = axis.iter().fold(f64::MIN, |m, v| m.max(*v)) * xs;
+                let (ymin, ymax) = signal.iter().fold((f64::MAX, f64::MIN), |(a, b), v| {
+                    (a.min(*v * ys), b.max(*v * ys))
+                });
+                let pad = (ymax - ymin).max(1e-12) * 0.05;
+                let mut c = ChartBuilder::on(&top)
+                    .margin(10)
+                    .x_label_area_size(45)
+                    .y_label_area_size(70)
+                    .build_cartesian_2d(0.0..xmax.max(window[1] * xs), (ymin - pad)..(ymax + pad))
+                    .map_err(fail)?;
+                c.configure_mesh()
+                    .disable_mesh()
+                    .x_desc(
+                        format!("distance along {axis_name} from the scan's start ({xu})")
+                            .replace(" ()", ""),
+                    )
+                    .y_desc(if yu.is_empty() {
+                        channel.clone()
+                    } else {
+                        format!("{channel} ({yu})")
+                    })
+                    .label_style(font)
+                    .draw()
+                    .map_err(fail)?;
+                c.draw_series(std::iter::once(Rectangle::new(
+                    [(window[0] * xs, ymin - pad), (window[1] * xs, ymax + pad)],
+                    RGBColor(225, 225, 225).filled(),
+                )))
+                .map_err(fail)?
+                .label("analysis window")
+                .legend(|(x, y)| {
+                    Rectangle::new(
+                        [(x, y - 6), (x + 20, y + 6)],
+                        RGBColor(225, 225, 225).filled(),
+                    )
+                });
+                c.draw_series(LineSeries::new(
+                    axis.iter().zip(signal).map(|(a, v)| (a * xs, v * ys)),
+                    GREYS[1].stroke_width(1),
+                ))
+                .map_err(fail)?
+                .label("recorded trace")
+                .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], GREYS[1]));
+                c.draw_series(LineSeries::new(
+                    resampled.iter().map(|(a, v)| (a * xs, v * ys)),
+                    BLACK.stroke_width(2),
+                ))
+                .map_err(fail)?
+                .label("resampled")
+                .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK.stroke_width(2)));
+                c.configure_series_labels()
+                    .background_style(WHITE.mix(0.9))
+                    .border_style(BLACK)
+                    .label_font(font)
+                    .draw()
+                    .map_err(fail)?;
+
+                let fmax = spectrum.last().map_or(1.0, |p| p.0).max(1e-12);
+                let (smin, smax) = spectrum
+                    .iter()
+                    .fold((f64::MAX, f64::MIN), |(a, b), (_, v)| {
+                        (a.min(*v), b.max(*v))
+                    });
+                let smin = smin.min(0.0);
+                let mut c = ChartBuilder::on(&bottom)
+                    .margin(10)
+                    .x_label_area_size(45)
+                    .y_label_area_size(70)
+                    .build_cartesian_2d(
+                        0.0..fmax,
+                        smin..(smax + (smax - smin).abs().max(1e-30) * 0.05),
+                    )
+                    .map_err(fail)?;
+                c.configure_mesh()
+                    .disable_mesh()
+                    .x_desc(format!("frequency ({freq_unit})"))
+                    .y_desc(format!("{kind} spectrum"))
+                    .label_style(font)
+                    .draw()
+                    .map_err(fail)?;
+                c.draw_series(spectrum.iter().enumerate().map(|(k, &(f, v))| {
+                    let inside = k >= kept[0] && k <= kept[1];
+                    let style = if inside {
+                        BLACK.filled()
+                    } else {
+                        GREYS[2].filled()
+                    };
+                    let w = fmax / spectrum.len() as f64 * 0.35;
+                    Rectangle::new([(f - w, smin), (f + w, v)], style)
+                }))
+                .map_err(fail)?
+                .label("bins kept as features")
+                .legend(|(x, y)| Rectangle::new([(x, y - 6), (x + 20, y + 6)], BLACK.filled()));
+                c.draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+                    .map_err(fail)?
+                    .label("bins left out")
+                    .legend(|(x, y)| {
+                        Rectangle::new([(x, y - 6), (x + 20, y + 6)], GREYS[2].filled())
+                    });
+                c.configure_series_labels()
+                    .background_style(WHITE.mix(0.9))
+                    .border_style(BLACK)
+                    .label_font(font)
+                    .draw()
+                    .map_err(fail)?;
+            }
+            Data::Confusion {
+                labels,
+                confusion,
+                accuracy,
+            } => {
+                let n = labels.len();
+                let title = format!("Confusion matrix (accuracy {:.1} %)", 100.0 * accuracy);
+                let root = root.titled(&title, ("sans-serif", 22)).map_err(fail)?;
+                let mut c = ChartBuilder::on(&root)
+                    .margin(20)
+                    .x_label_area_size(50)
+                    .y_label_area_size(80)
+                    .build_cartesian_2d(
+                        (0..n.saturating_sub(1)).into_segmented(),
+                        (0..n.saturating_sub(1)).into_segmented(),
+                    )
+                    .map_err(fail)?;
+                let l2 = labels.clone();
+                let l3 = labels.clone();
+                c.configure_mesh()
+                    .disable_mesh()
+                    .x_labels(n + 1)
+                    .y_labels(n + 1)
+                    .x_label_formatter(&move |v| match v {
+                        SegmentValue::CenterOf(i) => l2.get(*i).cloned().unwrap_or_default(),
+                        _ => String::new(),
+                    })
+                    .y_label_formatter(&move |v| match v {
+                        SegmentValue::CenterOf(i) if *i < n => l3[n - 1 - *i].clone(),
+                        _ => String::new(),
+                    })
+                    .x_desc("classified as")
+                    .y_desc("true class")
+                    .label_style(font)
+                    .draw()
+                    .map_err(fail)?;
+                for (i, row) in confusion.iter().enumerate() {
+                    let total: f64 = row.iter().sum::<f64>().max(1.0);
+                    for (j, &v) in row.iter().enumerate() {
+                        let frac = v / total;
+                        let g = (255.0 * (1.0 - 0.85 * frac)) as u8;
+                        let y = n - 1 - i;
+                        c.draw_series(std::iter::once(Rectangle::new(
+                            [
+                                (SegmentValue::Exact(j), SegmentValue::Exact(y)),
+                                (SegmentValue::Exact(j + 1), SegmentValue::Exact(y + 1)),
+                            ],
+                            RGBColor(g, g, g).filled(),
+                        )))
+                        .map_err(fail)?;
+                        let text_colour = if frac > 0.5 { WHITE } else { BLACK };
+                        let style = ("sans-serif", 20)
+                            .into_font()
+                            .color(&text_colour)
+                            .pos(Pos::new(HPos::Center, VPos::Center));
+                        c.draw_series(std::iter::once(Text::new(
+                            format!("{v:.0} ({:.0} %)", 100.0 * frac),
+                            (SegmentValue::CenterOf(j), SegmentValue::CenterOf(y)),
+                            style,
+                        )))
+                        .map_err(fail)?;
+                    }
+                }
+            }
+            Data::Features {
+                classes,
+                kind,
+                first_bin,
+            } => {
+                let panels = root.split_evenly((classes.len().div_ceil(2), 2.min(classes.len())));
+                let ymax = classes
+                    .iter()
+                    .flat_map(|(_, v)| v.iter().flatten())
+                    .fold(f64::MIN, |m, v| m.max(*v));
+                let ymin = classes
+                    .iter()
+                    .flat_map(|(_, v)| v.iter().flatten())
+                    .fold(f64::MAX, |m, v| m.min(*v))
+                    .min(0.0);
+                for ((label, rows), panel) in classes.iter().zip(panels.iter()) {
+                    let d = rows.first().map_or(1, Vec::len);
+                    let mut c = ChartBuilder::on(panel)
+                        .caption(
+                            format!("{label}: {} recordings", rows.len()),
+                            ("sans-serif", 18),
+                        )
+                        .margin(8)
+                        .x_label_area_size(40)
+                        .y_label_area_size(70)
+                        .build_cartesian_2d(
+                            *first_bin as f64..(first_bin + d - 1).max(first_bin + 1) as f64,
+                            ymin..ymax * 1.05,
+                        )
+                        .map_err(fail)?;
+                    c.configure_mesh()
+                        .disable_mesh()
+                        .x_desc("feature (DFT bin)")
+                        .y_desc(format!("{kind} of the signal"))
+                        .label_style(("sans-serif", 14))
+                        .draw()
+                        .map_err(fail)?;
+                    for (i, r) in rows.iter().enumerate() {
+                        c.draw_series(LineSeries::new(
+                            r.iter()
+                                .enumerate()
+                                .map(|(k, v)| ((first_bin + k) as f64, *v)),
+                            GREYS[i % 3].stroke_width(1),
+                        ))
+                        .map_err(fail)?;
+                    }
+                }
+            }
+            Data::Sweep {
+                key,
+                method,
+                points,
+            } => {
+                let n = points.len();
+                let title = format!("Accuracy against {key} ({method})");
+                let root = root.titled(&title, ("sans-serif", 20)).map_err(fail)?;
+                let mut c = ChartBuilder::on(&root)
+                    .margin(20)
+                    .x_label_area_size(50)
+                    .y_label_area_size(70)
+                    .build_cartesian_2d(-0.5..(n as f64 - 0.5), 0.0..100.0)
+                    .map_err(fail)?;
+                let names: Vec<String> = points.iter().map(|p| p.0.clone()).collect();
+                c.configure_mesh()
+                    .light_line_style(WHITE)
+                    .x_labels(n.min(30))
+                    .x_label_formatter(&move |x| {
+                        let i = x.round();
+                        if (x - i).abs() < 1e-6 && i >= 0.0 {
+                            names.get(i as usize).cloned().unwrap_or_default()
+                        } else {
+                            String::new()
+                        }
+                    })
+                    .x_desc(key.clone())
+                    .y_desc("accuracy (%)")
+                    .label_style(font)
+                    .draw()
+                    .map_err(fail)?;
+                c.draw_series(points.iter().enumerate().map(|(i, p)| {
+                    let (lo, hi) = (100.0 * (p.1 - p.2), 100.0 * (p.1 + p.2));
+                    PathElement::new(
+                        [(i as f64, lo.max(0.0)), (i as f64, hi.min(100.0))],
+                        GREYS[1].stroke_width(2),
+                    )
+                }))
+                .map_err(fail)?
+                .label("± sd across folds")
+                .legend(|(x, y)| {
+                    PathElement::new([(x + 10, y - 8), (x + 10, y + 8)], GREYS[1].stroke_width(2))
+                });
+                c.draw_series(LineSeries::new(
+                    points
+                        .iter()
+                        .enumerate()
+                        .map(|(i, p)| (i as f64, 100.0 * p.1)),
+                    BLACK.stroke_width(2),
+                ))
+                .map_err(fail)?
+                .label("pooled accuracy")
+                .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK.stroke_width(2)));
+                c.draw_series(
+                    points
+                        .iter()
+                        .enumerate()
+                        .map(|(i, p)| Circle::new((i as f64, 100.0 * p.1), 4, BLACK.filled())),
+                )
+                .map_err(fail)?;
+                c.configure_series_labels()
+                    .position(SeriesLabelPosition::LowerRight)
+                    .background_style(WHITE.mix(0.9))
+                    .border_style(BLACK)
+                    .label_font(font)
+                    .draw()
+                    .map_err(fail)?;
+            }
+        }
+        Ok(())
+    }
+}

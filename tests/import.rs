@@ -1,0 +1,169 @@
+//! Import round trips: CSV (time column, fixed rate, bursts, label sources,
+//! metadata) and WAV (16/24-bit integer, 32-bit float, several channels);
+//! a bad input leaves nothing behind.
+
+use std::path::Path;
+
+use hapticlab::import::{ImportArgs, run};
+use hapticlab::recording;
+
+fn args(files: &[&Path], out: &Path) -> ImportArgs {
+    ImportArgs {
+        files: files.iter().map(|p| p.to_path_buf()).collect(),
+        out: out.to_path_buf(),
+        burst: 1,
+        ..ImportArgs::default()
+    }
+}
+
+#[test]
+fn csv_with_a_time_column_and_a_label_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("scan7.csv");
+    std::fs::write(&f, "# from rig B\ntime;fz;acc;texture\n0.0;1.5;-0.25;S3\n0.002;1.25;0.5;S3\n0.004;1.0;0.75;S3\n").unwrap();
+    let mut a = args(&[&f], &dir.path().join("out"));
+    a.time_column = Some("time".into());
+    a.label_column = Some("texture".into());
+    a.meta = vec!["session=3".into(), "rig=bench-A".into()];
+    let written = run(&a).unwrap();
+    assert_eq!(written, [dir.path().join("out/S3/scan7.csv")]);
+    let rec = recording::read(&written[0]).unwrap();
+    assert!(rec.is_complete());
+    assert_eq!(rec.label(), Some("S3"));
+    assert_eq!(rec.columns, ["t_s", "fz", "acc"]);
+    assert_eq!(rec.column("t_s").unwrap(), [0.0, 0.002, 0.004]);
+    assert_eq!(rec.column("acc").unwrap(), [-0.25, 0.5, 0.75]);
+    assert_eq!(rec.meta_f64("session"), Some(3.0));
+    assert_eq!(rec.meta_str("rig"), Some("bench-A"));
+    // Importing again refuses to overwrite.
+    assert!(run(&a).unwrap_err().message().contains("--force"));
+}
+
+#[test]
+fn csv_bursts_are_flattened_in_order_and_timed_by_the_rate() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("S2");
+    std::fs::create_dir(&folder).unwrap();
+    let f = folder.join("b.csv");
+    // Two channels, 3 samples each per row.
+    std::fs::write(&f, "a0,a1,a2,b0,b1,b2\n1,2,3,10,20,30\n4,5,6,40,50,60\n").unwrap();
+    let mut a = args(&[&f], &dir.path().join("out"));
+    a.rate = Some(100.0);
+    a.burst = 3;
+    a.names = vec!["acc".into(), "force".into()];
+    let written = run(&a).unwrap();
+    // The label is the folder's name.
+    let rec = recording::read(&written[0]).unwrap();
+    assert_eq!(rec.label(), Some("S2"));
+    assert_eq!(rec.column("acc").unwrap(), [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+    assert_eq!(
+        rec.column("force").unwrap(),
+        [10.0, 20.0, 30.0, 40.0, 50.0, 60.0]
+    );
+    let t = rec.column("t_s").unwrap();
+    assert!((t[5] - 0.05).abs() < 1e-9);
+    assert_eq!(rec.meta_f64("rate_hz"), Some(100.0));
+}
+
+#[test]
+fn a_bad_csv_gives_a_clear_message_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = dir.path().join("good.csv");
+    std::fs::write(&good, "t,v\n0,1\n1,2\n").unwrap();
+    let badf = dir.path().join("bad.csv");
+    std::fs::write(&badf, "t,v\n0,1\n1,oops\n").unwrap();
+    let out = dir.path().join("out");
+    let mut a = args(&[&good, &badf], &out);
+    a.time_column = Some("t".into());
+    a.label = Some("S1".into());
+    let e = run(&a).unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+    assert!(
+        e.message()
+            .contains("bad.csv:3: column `v`: \"oops\" is not a finite number"),
+        "{}",
+        e.message()
+    );
+    assert!(!out.exists(), "nothing written");
+    a.time_column = None;
+    assert!(
+        run(&a)
+            .unwrap_err()
+            .message()
+            .contains("--time-column or --rate")
+    );
+}
+
+/// A WAV file: `format` 1 (PCM) or 3 (float), interleaved frames.
+fn wav(format: u16, channels: u16, rate: u32, bits: u16, data: &[u8]) -> Vec<u8> {
+    let mut b = Vec::new();
+    b.extend(b"RIFF");
+    b.extend((36 + data.len() as u32).to_le_bytes());
+    b.extend(b"WAVEfmt ");
+    b.extend(16u32.to_le_bytes());
+    b.extend(format.to_le_bytes());
+    b.extend(channels.to_le_bytes());
+    b.extend(rate.to_le_bytes());
+    let block = channels * bits / 8;
+    b.extend((rate * u32::from(block)).to_le_bytes());
+    b.extend(block.to_le_bytes());
+    b.extend(bits.to_le_bytes());
+    b.extend(b"data");
+    b.extend((data.len() as u32).to_le_bytes());
+    b.extend(data);
+    b
+}
+
+#[test]
+fn wav_16_and_24_bit_integer_and_float_round_trip() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    // 16-bit stereo.
+    let s16: [i16; 6] = [0, -32768, 32767, 1, -2, 300];
+    let d: Vec<u8> = s16.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let f16 = dir.path().join("two.wav");
+    std::fs::write(&f16, wav(1, 2, 8000, 16, &d)).unwrap();
+    // 24-bit mono.
+    let s24: [i32; 3] = [-8_388_608, 8_388_607, -5];
+    let d: Vec<u8> = s24
+        .iter()
+        .flat_map(|v| v.to_le_bytes()[..3].to_vec())
+        .collect();
+    let f24 = dir.path().join("deep.wav");
+    std::fs::write(&f24, wav(1, 1, 48000, 24, &d)).unwrap();
+    // 32-bit float mono.
+    let sf: [f32; 3] = [0.5, -0.25, 0.125];
+    let d: Vec<u8> = sf.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let ff = dir.path().join("float.wav");
+    std::fs::write(&ff, wav(3, 1, 44100, 32, &d)).unwrap();
+
+    let mut a = args(&[&f16, &f24, &ff], &out);
+    a.label = Some("S4".into());
+    let w = run(&a).unwrap();
+    let r = recording::read(&w[0]).unwrap();
+    assert_eq!(r.columns, ["t_s", "ch1", "ch2"]);
+    assert_eq!(r.column("ch1").unwrap(), [0.0, 32767.0, -2.0]);
+    assert_eq!(r.column("ch2").unwrap(), [-32768.0, 1.0, 300.0]);
+    assert_eq!(r.meta_f64("full_scale"), Some(32768.0));
+    assert_eq!(r.column("t_s").unwrap()[2], 0.00025);
+    let r = recording::read(&w[1]).unwrap();
+    assert_eq!(r.column("ch1").unwrap(), [-8_388_608.0, 8_388_607.0, -5.0]);
+    assert_eq!(r.meta_str("wav_format"), Some("int24"));
+    let r = recording::read(&w[2]).unwrap();
+    assert_eq!(r.column("ch1").unwrap(), [0.5, -0.25, 0.125]);
+
+    // A truncated WAV is refused by name.
+    let cut = dir.path().join("cut.wav");
+    let mut bytes = wav(1, 1, 8000, 16, &[0, 0, 1, 0]);
+    bytes.truncate(bytes.len() - 2);
+    std::fs::write(&cut, bytes).unwrap();
+    let mut a = args(&[&cut], &out);
+    a.label = Some("S4".into());
+    let e = run(&a).unwrap_err();
+    assert!(
+        e.message()
+            .contains("cut.wav: not a WAV file this reads: the data chunk is cut short"),
+        "{}",
+        e.message()
+    );
+}

@@ -1,0 +1,260 @@
+//! Honest validation: folds that never leak a group, stratification,
+//! seeded reproducibility, macro-F1, sweeps.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::process::Command;
+
+use hapticlab::classify::TrainingExample;
+use hapticlab::evaluate::cv::{cross_validate, f1_scores, make_folds};
+use hapticlab::profile::{Analysis, Classifier, LoadedProfile, SplitMethod};
+use hapticlab::study::{parse_sweep, with_key};
+
+fn ex(file: String, label: &str, features: Vec<f64>) -> TrainingExample {
+    TrainingExample {
+        file,
+        label: label.into(),
+        features,
+    }
+}
+
+fn analysis(features: usize) -> Analysis {
+    Analysis {
+        window: [0.0, 0.0897],
+        bins: [1, features],
+        ..Analysis::default()
+    }
+}
+
+/// 12 sessions of 5 scans; every scan of a session is nearly the same point,
+/// and the session's label is arbitrary: only leakage can classify it.
+fn sessions() -> (Vec<TrainingExample>, Vec<String>) {
+    let (mut ex_, mut groups) = (Vec::new(), Vec::new());
+    for s in 0..12 {
+        let label = ["A", "B", "C"][(s * 7 + s / 3) % 3];
+        for i in 0..5 {
+            ex_.push(ex(
+                format!("s{s}/{i}.csv"),
+                label,
+                vec![s as f64 * 10.0 + i as f64 * 0.01],
+            ));
+            groups.push(format!("session-{s}"));
+        }
+    }
+    (ex_, groups)
+}
+
+#[test]
+fn grouped_folds_never_put_a_group_on_both_sides() {
+    let (examples, groups) = sessions();
+    let labels: Vec<&str> = examples.iter().map(|e| e.label.as_str()).collect();
+    for (method, folds) in [
+        (SplitMethod::KFold, 4),
+        (SplitMethod::KFold, 12),
+        (SplitMethod::LeaveOneOut, 0),
+    ] {
+        for seed in 0..5 {
+            let f = make_folds(&labels, Some(&groups), method, folds, seed).unwrap();
+            let mut tested = vec![0; examples.len()];
+            for fold in &f {
+                let test_groups: BTreeSet<&str> =
+                    fold.iter().map(|&i| groups[i].as_str()).collect();
+                for (i, g) in groups.iter().enumerate() {
+                    if !fold.contains(&i) {
+                        assert!(!test_groups.contains(g.as_str()), "{g} leaks in {method:?}");
+                    }
+                }
+                for &i in fold {
+                    tested[i] += 1;
+                }
+            }
+            assert!(tested.iter().all(|&t| t == 1), "each example tested once");
+        }
+    }
+    // Too few groups for the folds is an error, not a silent leak.
+    assert!(make_folds(&labels, Some(&groups), SplitMethod::KFold, 13, 0).is_err());
+}
+
+#[test]
+fn grouping_removes_the_optimism_of_leaky_folds() {
+    let (examples, groups) = sessions();
+    let labels: Vec<&str> = examples.iter().map(|e| e.label.as_str()).collect();
+    let knn = Classifier {
+        k: 1,
+        ..Classifier::default()
+    };
+    let a = analysis(1);
+    let leaky = make_folds(&labels, None, SplitMethod::KFold, 5, 1).unwrap();
+    let r = cross_validate(&examples, &leaky, "t", &a, &knn, "k-fold", 1, 2).unwrap();
+    assert_eq!(r.accuracy, 1.0, "a session's twin is always in training");
+    let honest = make_folds(&labels, Some(&groups), SplitMethod::KFold, 4, 1).unwrap();
+    let r = cross_validate(&examples, &honest, "t", &a, &knn, "grouped", 1, 2).unwrap();
+    assert!(r.accuracy < 0.7, "grouped accuracy {}", r.accuracy);
+}
+
+#[test]
+fn stratified_folds_hold_each_class_in_proportion() {
+    let labels: Vec<&str> = (0..103).map(|i| ["A", "B", "C", "D"][i % 4]).collect();
+    let f = make_folds(&labels, None, SplitMethod::KFold, 10, 7).unwrap();
+    assert_eq!(f.len(), 10);
+    let mut all: Vec<usize> = f.concat();
+    all.sort_unstable();
+    assert_eq!(all, (0..103).collect::<Vec<_>>());
+    for fold in &f {
+        let mut per: BTreeMap<&str, usize> = BTreeMap::new();
+        for &i in fold {
+            *per.entry(labels[i]).or_default() += 1;
+        }
+        assert!(per.values().all(|&n| (2..=3).contains(&n)), "{per:?}");
+    }
+    let loo = make_folds(&labels, None, SplitMethod::LeaveOneOut, 0, 0).unwrap();
+    assert_eq!(loo.len(), 103);
+}
+
+#[test]
+fn a_seeded_evaluation_gives_the_same_numbers_twice() {
+    let examples: Vec<TrainingExample> = (0..60)
+        .map(|i| {
+            let l = ["A", "B", "C"][i % 3];
+            let x = (i % 3) as f64 + ((i * 37 % 11) as f64 - 5.0) * 0.15;
+            ex(format!("{i}.csv"), l, vec![x, (i * 13 % 7) as f64 * 0.1])
+        })
+        .collect();
+    let labels: Vec<&str> = examples.iter().map(|e| e.label.as_str()).collect();
+    let knn = Classifier {
+        k: 3,
+        ..Classifier::default()
+    };
+    let run = |seed, threads| {
+        let f = make_folds(&labels, None, SplitMethod::KFold, 6, seed).unwrap();
+        cross_validate(
+            &examples,
+            &f,
+            "t",
+            &analysis(2),
+            &knn,
+            "k-fold",
+            seed,
+            threads,
+        )
+        .unwrap()
+    };
+    let (a, b) = (run(42, 1), run(42, 2));
+    assert_eq!(a, b);
+    assert_eq!(
+        serde_json::to_string(&a).unwrap(),
+        serde_json::to_string(&b).unwrap()
+    );
+    assert_ne!(a.test, run(43, 1).test, "another seed deals other folds");
+    assert_eq!(a.folds.len(), 6);
+    assert!(a.accuracy_std >= 0.0 && a.macro_f1 > 0.0);
+}
+
+#[test]
+fn macro_f1_from_a_confusion_matrix() {
+    // A: 8 of 10 right, 2 called B; B: 5 of 5 right.
+    let c = vec![vec![8, 2], vec![0, 5]];
+    let f = f1_scores(&c);
+    assert!((f[0] - 2.0 * 1.0 * 0.8 / 1.8).abs() < 1e-12);
+    assert!((f[1] - 2.0 * (5.0 / 7.0) / (5.0 / 7.0 + 1.0)).abs() < 1e-12);
+    assert!(f1_scores(&[vec![0, 0], vec![1, 1]])[0].is_nan());
+}
+
+#[test]
+fn sweep_values_and_keys() {
+    let (k, v) = parse_sweep("k=1..15").unwrap();
+    assert_eq!((k.as_str(), v.len()), ("k", 15));
+    assert_eq!(parse_sweep("k=1..15:2").unwrap().1.len(), 8);
+    let (_, v) = parse_sweep("band=[0.0,0.5],[0.5,1.0]").unwrap();
+    assert_eq!(v.len(), 2);
+    assert!(v[0].is_array());
+    let (_, v) = parse_sweep("metric=euclidean,cosine").unwrap();
+    assert_eq!(v[1].as_str(), Some("cosine"));
+    let err = parse_sweep("speed=0.01,0.02").err().unwrap();
+    assert!(
+        err.message().contains("simulate one dataset per value"),
+        "{}",
+        err.message()
+    );
+    assert!(parse_sweep("k").is_err());
+
+    let p = LoadedProfile::thesis().profile;
+    let q = with_key(&p, "k", &toml::Value::Integer(3)).unwrap();
+    assert_eq!(q.classifier.k, 3);
+    let q = with_key(&p, "spectrum", &toml::Value::String("welch".into())).unwrap_err();
+    assert!(q.message().contains("analysis.bins"), "{}", q.message());
+    let q = with_key(&p, "taper", &toml::Value::String("hann".into())).unwrap();
+    assert_eq!(q.analysis.taper, hapticlab::profile::Taper::Hann);
+    assert!(with_key(&p, "nonsense", &toml::Value::Integer(1)).is_err());
+}
+
+#[test]
+fn evaluate_cli_cross_validates_reproducibly() {
+    let run = || {
+        let out = Command::new(env!("CARGO_BIN_EXE_hapticlab"))
+            .args([
+                "evaluate",
+                "recordings/thesis-sim",
+                "--folds",
+                "5",
+                "--seed",
+                "9",
+                "--json",
+            ])
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        out.stdout
+    };
+    let a = run();
+    assert_eq!(a, run());
+    let v: serde_json::Value = serde_json::from_slice(&a).unwrap();
+    for key in [
+        "labels",
+        "confusion",
+        "accuracy",
+        "per_class",
+        "train",
+        "test",
+        "predictions",
+        "folds",
+        "accuracy_std",
+        "macro_f1",
+    ] {
+        assert!(v.get(key).is_some(), "{key}");
+    }
+    assert_eq!(v["folds"].as_array().unwrap().len(), 5);
+    assert_eq!(v["test"].as_array().unwrap().len(), 120);
+
+    let out = Command::new(env!("CARGO_BIN_EXE_hapticlab"))
+        .args([
+            "evaluate",
+            "recordings/thesis-sim",
+            "--folds",
+            "3",
+            "--sweep",
+            "k=1..5:2",
+        ])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(
+        text.lines()
+            .filter(|l| l.starts_with(['1', '3', '5']))
+            .count(),
+        3,
+        "{text}"
+    );
+    let out = Command::new(env!("CARGO_BIN_EXE_hapticlab"))
+        .args(["evaluate", "recordings/thesis-sim", "--group-by", "nope"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+}
