@@ -338,12 +338,9 @@ fn start_triggers(lp: &LoadedProfile) -> Option<crate::triggers::TriggerWatcher>
     (connected > 0).then_some(w)
 }
 
-/// Recordings under `paths`, read and turned into feature vectors. Incomplete
-/// recordings are skipped with a warning; a malformed one is an error.
-pub fn load_examples(
-    paths: &[PathBuf],
-    extractor: &mut FeatureExtractor,
-) -> Result<Vec<TrainingExample>, Failure> {
+/// The recordings under `paths` (files as given, folders walked), sorted;
+/// finding none is bad input.
+pub fn recording_files(paths: &[PathBuf]) -> Result<Vec<PathBuf>, Failure> {
     let files = recording::collect_files(paths).map_err(bad)?;
     if files.is_empty() {
         return Err(bad(format!(
@@ -355,6 +352,16 @@ pub fn load_examples(
                 .join(", ")
         )));
     }
+    Ok(files)
+}
+
+/// Recordings under `paths`, read and turned into feature vectors. Incomplete
+/// recordings are skipped with a warning; a malformed one is an error.
+pub fn load_examples(
+    paths: &[PathBuf],
+    extractor: &mut FeatureExtractor,
+) -> Result<Vec<TrainingExample>, Failure> {
+    let files = recording_files(paths)?;
     let pb = progress_bar(files.len() as u64, "reading");
     let mut out = Vec::with_capacity(files.len());
     for f in &files {

@@ -92,17 +92,7 @@ impl Dataset {
         analysis: &Analysis,
         threads: usize,
     ) -> Result<Dataset, Failure> {
-        let files = recording::collect_files(paths).map_err(bad)?;
-        if files.is_empty() {
-            return Err(bad(format!(
-                "no recordings (*.csv, *.csv.gz) found in {}",
-                paths
-                    .iter()
-                    .map(|p| p.display().to_string())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )));
-        }
+        let files = crate::commands::recording_files(paths)?;
         let names: Vec<String> = std::iter::once(analysis.axis.clone())
             .chain(analysis.all_channels().map(str::to_string))
             .collect();
