@@ -4,7 +4,9 @@
 //! renders a full 200×60 console frame thirty times a second. Not a statistical micro-benchmark: one long run,
 //! reported. `HAPTICLAB_SOAK_S` sets the duration (default 60 s);
 //! `HAPTICLAB_RT=1` asks for the profile's real-time setup (SCHED_FIFO 80,
-//! memory locked), as `device.realtime` does.
+//! memory locked), as `device.realtime` does. To find where late ticks come
+//! from, `HAPTICLAB_NO_SCAN=1` holds the probe instead of scanning and
+//! `HAPTICLAB_NO_DRAW=1` drains telemetry without drawing.
 //!
 //! cargo bench --bench servo_realtime
 
@@ -27,7 +29,9 @@ fn main() {
         .and_then(|v| v.parse().ok())
         .unwrap_or(60.0);
     let mut lp = LoadedProfile::thesis();
-    let rt = std::env::var("HAPTICLAB_RT").is_ok_and(|v| v == "1");
+    let flag = |name: &str| std::env::var(name).is_ok_and(|v| v == "1");
+    let rt = flag("HAPTICLAB_RT");
+    let (no_scan, no_draw) = (flag("HAPTICLAB_NO_SCAN"), flag("HAPTICLAB_NO_DRAW"));
     if rt {
         lp.profile.device.realtime = Some(hapticlab::profile::Realtime {
             priority: 80,
@@ -50,7 +54,7 @@ fn main() {
     let mut terminal = ratatui::Terminal::new(ratatui::backend::TestBackend::new(200, 60))
         .expect("a test terminal");
     while started.elapsed() < Duration::from_secs_f64(secs) {
-        if next_scan {
+        if next_scan && !no_scan {
             scans += 1;
             handle.send(Command::StartScan {
                 path: dir.path().join(format!("scan_{scans:03}.csv")),
@@ -61,9 +65,11 @@ fn main() {
         // A console-like consumer: drain telemetry and draw thirty times a second.
         std::thread::sleep(Duration::from_millis(33));
         let _ = handle.telemetry.try_iter().count();
-        terminal
-            .draw(|f| f.render_widget(&console, f.area()))
-            .expect("draw");
+        if !no_draw {
+            terminal
+                .draw(|f| f.render_widget(&console, f.area()))
+                .expect("draw");
+        }
         for e in handle.events.try_iter() {
             match e {
                 ServoEvent::ScanEnded { samples: n, .. } => {
@@ -79,11 +85,21 @@ fn main() {
     let (_, stats) = result.expect("the servo thread ran");
     let complete = saved.iter().filter(|s| s.complete).count();
     println!(
-        "servo_realtime: {secs:.0} s on the simulator, thesis path, scans recorded{}",
-        if rt {
-            ", SCHED_FIFO requested"
+        "servo_realtime: {secs:.0} s on the simulator, {}, {}, {}",
+        if no_scan {
+            "probe held (no scans)"
         } else {
-            ", normal priority"
+            "thesis path, scans recorded"
+        },
+        if no_draw {
+            "no drawing"
+        } else {
+            "console frame drawn at 30 fps"
+        },
+        if rt {
+            "SCHED_FIFO requested"
+        } else {
+            "normal priority"
         }
     );
     println!("  {}", stats.summary());
