@@ -411,19 +411,12 @@ impl FeatureExtractor {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::profile::{Detrend, SpectrumKind};
 
+    /// The thesis's analysis (the default), as the profile states it.
     fn thesis() -> Analysis {
-        Analysis {
-            channel: "y_m".into(),
-            axis: "x_m".into(),
-            window: [0.060, 0.0897],
-            spacing: 0.0003,
-            detrend: Detrend::Mean,
-            spectrum: SpectrumKind::Magnitude,
-            bins: [1, 49],
-            ..Analysis::default()
-        }
+        let a = Analysis::default();
+        assert_eq!(a, crate::profile::LoadedProfile::thesis().profile.analysis);
+        a
     }
 
     /// A scan from 0 to `len` along x in `samples` even steps.
