@@ -32,6 +32,11 @@ fn main() {
     let flag = |name: &str| std::env::var(name).is_ok_and(|v| v == "1");
     let rt = flag("HAPTICLAB_RT");
     let (no_scan, no_draw) = (flag("HAPTICLAB_NO_SCAN"), flag("HAPTICLAB_NO_DRAW"));
+    // `HAPTICLAB_SPIN_US=N`: wake N µs early and spin to each deadline (device.spin_us).
+    let spin_us: u32 = std::env::var("HAPTICLAB_SPIN_US")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0);
     if rt {
         lp.profile.device.realtime = Some(hapticlab::profile::Realtime {
             priority: 80,
@@ -39,6 +44,7 @@ fn main() {
             cpu: None,
         });
     }
+    lp.profile.device.spin_us = spin_us;
     let profile = lp.profile.clone();
     let base = lp.base_dir.clone();
     let handle = spawn(&lp.profile, move || {
@@ -85,7 +91,7 @@ fn main() {
     let (_, stats) = result.expect("the servo thread ran");
     let complete = saved.iter().filter(|s| s.complete).count();
     println!(
-        "servo_realtime: {secs:.0} s on the simulator, {}, {}, {}",
+        "servo_realtime: {secs:.0} s on the simulator, {}, {}, {}, spin {spin_us} µs",
         if no_scan {
             "probe held (no scans)"
         } else {

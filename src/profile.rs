@@ -272,6 +272,11 @@ pub struct Device {
     /// Ask the OS for real-time scheduling of the servo thread (opt-in).
     #[serde(default)]
     pub realtime: Option<Realtime>,
+    /// Wake this many microseconds before each deadline and spin to it: trades
+    /// CPU (spin / period of a core) for punctual ticks where the OS wakes
+    /// threads late. 0 (the default) sleeps all the way.
+    #[serde(default)]
+    pub spin_us: u32,
 }
 
 /// Real-time setup of the servo thread: SCHED_FIFO at `priority`, memory
@@ -929,6 +934,16 @@ impl Profile {
             return bad(
                 "device.realtime.priority",
                 format!("must be from 1 to 99, got {}", rt.priority),
+            );
+        }
+        if f64::from(d.spin_us) * 1e-6 * d.rate_hz >= 0.9 {
+            return bad(
+                "device.spin_us",
+                format!(
+                    "{} µs is most of the {:.0} µs period; keep it under 90 %",
+                    d.spin_us,
+                    1e6 / d.rate_hz
+                ),
             );
         }
         if !(d.missed_deadline_fraction > 0.0 && d.missed_deadline_fraction <= 10.0) {

@@ -583,7 +583,7 @@ where
                 }
             }
             let device = make();
-            let clock = clock::RealClock::start();
+            let clock = clock::RealClock::start().with_spin(profile.device.spin_us);
             let mut servo = ServoLoop::new(device, clock, &profile, sink, links);
             let halt = servo.run();
             let stats = servo.stats();

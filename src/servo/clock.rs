@@ -22,6 +22,8 @@ pub trait Clock: Send {
 
 pub struct RealClock {
     epoch: libc::timespec,
+    /// Seconds before a deadline to stop sleeping and spin.
+    spin: f64,
 }
 
 fn monotonic() -> libc::timespec {
@@ -41,7 +43,16 @@ impl RealClock {
         unsafe {
             libc::prctl(libc::PR_SET_TIMERSLACK, 1 as libc::c_ulong);
         }
-        RealClock { epoch: monotonic() }
+        RealClock {
+            epoch: monotonic(),
+            spin: 0.0,
+        }
+    }
+
+    /// Wake `spin_us` before each deadline and spin to it.
+    pub fn with_spin(mut self, spin_us: u32) -> RealClock {
+        self.spin = f64::from(spin_us) * 1e-6;
+        self
     }
 
     fn since_epoch(&self, ts: libc::timespec) -> f64 {
@@ -51,6 +62,31 @@ impl RealClock {
 
 impl Clock for RealClock {
     fn wait_until(&mut self, deadline_s: f64) -> f64 {
+        self.sleep_until(deadline_s - self.spin);
+        if self.spin > 0.0 {
+            loop {
+                let now = self.now();
+                if now >= deadline_s {
+                    return now;
+                }
+                std::hint::spin_loop();
+            }
+        }
+        self.now()
+    }
+
+    fn now(&self) -> f64 {
+        self.since_epoch(monotonic())
+    }
+
+    fn is_virtual(&self) -> bool {
+        false
+    }
+}
+
+impl RealClock {
+    fn sleep_until(&self, deadline_s: f64) {
+        let deadline_s = deadline_s.max(0.0);
         let whole = deadline_s.floor();
         let mut sec = self.epoch.tv_sec + whole as libc::time_t;
         let mut nsec = self.epoch.tv_nsec + ((deadline_s - whole) * 1e9) as libc::c_long;
@@ -76,15 +112,6 @@ impl Clock for RealClock {
                 break;
             }
         }
-        self.now()
-    }
-
-    fn now(&self) -> f64 {
-        self.since_epoch(monotonic())
-    }
-
-    fn is_virtual(&self) -> bool {
-        false
     }
 }
 
@@ -208,5 +235,11 @@ mod tests {
         // A deadline in the past returns at once.
         let t2 = c.wait_until(0.0);
         assert!(t2 >= t);
+        // Spinning the last 300 µs still never returns before the deadline.
+        let mut s = RealClock::start().with_spin(300);
+        for k in 1..=20 {
+            let d = k as f64 * 0.001;
+            assert!(s.wait_until(d) >= d);
+        }
     }
 }
