@@ -363,28 +363,6 @@ pub struct LiveHooks<'a> {
     pub triggers: Option<crossbeam_channel::Receiver<TriggerEvent>>,
 }
 
-/// Live scans in real time on the profile's device: `count` runs of the path,
-/// each recorded to the next free `out/<label>/<label>_NNN.csv`. `texture`
-/// picks the simulated texture (default: the label). Stops early, keeping
-/// what was recorded, when `stop` is raised (signals).
-pub fn scan_live(
-    lp: &LoadedProfile,
-    req: &LiveScans,
-    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
-    on_scan: &mut dyn FnMut(&ScanReport),
-) -> Result<Vec<ScanReport>, AcquireError> {
-    scan_live_with(
-        lp,
-        req,
-        stop,
-        LiveHooks {
-            on_scan,
-            on_note: &mut |_| {},
-            triggers: None,
-        },
-    )
-}
-
 /// Wait until the device is homed, telling the user how once. `Ok(false)`
 /// when the loop ended or a signal came first.
 fn wait_for_homing(
@@ -445,7 +423,11 @@ fn trigger_note(e: &TriggerEvent) -> Option<String> {
     }
 }
 
-/// As [`scan_live`], with notes and hands-free triggers.
+/// Live scans in real time on the profile's device: `count` runs of the path,
+/// each recorded to the next free `out/<label>/<label>_NNN.csv`. `texture`
+/// picks the simulated texture (default: the label). Stops early, keeping
+/// what was recorded, when `stop` is raised (signals). `hooks` reports each
+/// scan and the device's notes, and carries hands-free triggers.
 pub fn scan_live_with(
     lp: &LoadedProfile,
     req: &LiveScans,
