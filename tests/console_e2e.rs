@@ -2,7 +2,8 @@
 //! vt100): start the console on a fast test profile, run a scan, predict it,
 //! read the label off the screen, quit, and check the terminal was restored.
 //! A second run is ended by SIGTERM mid-scan: the scan must be kept on disk
-//! as aborted and the terminal restored.
+//! as aborted and the terminal restored. A third runs the same profile on
+//! the emulated Falcon, through the real driver: homed, then a scan.
 
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
@@ -245,4 +246,61 @@ fn sighup_quits_cleanly() {
     let status = s.wait_exit(Duration::from_secs(15));
     assert!(status.success(), "{status:?}");
     assert!(s.restored(), "the alternate screen was not left");
+}
+
+/// The fast profile on the emulated Falcon (the real driver's packets,
+/// kinematics and homing over a byte-level emulator).
+fn fast_emulator_profile(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(fast_profile()).unwrap();
+    assert!(text.contains("kind = \"sim\""));
+    let text = text.replace("kind = \"sim\"", "kind = \"falcon-emulator\"")
+        + "\n[falcon]\norigin_m = [0.0, 0.0, 0.16]\n\n[falcon.emulator]\nfirmware_loaded = true\nauto_home = true\n";
+    let path = dir.join("console-fast-emulator.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn the_console_drives_the_emulated_falcon_once_homed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path().join("ds");
+    let profile = fast_emulator_profile(tmp.path());
+    let mut s = Session::start(
+        &[
+            "console",
+            "--profile",
+            profile.to_str().unwrap(),
+            "--dataset",
+            ds.to_str().unwrap(),
+        ],
+        tmp.path(),
+    );
+    s.wait_for("falcon-emulator", Duration::from_secs(20));
+    // The simulated hand pulls the grip out and pushes it in.
+    s.wait_for("Homed    yes", Duration::from_secs(20));
+    s.send("s");
+    s.wait_for("scan complete", Duration::from_secs(30));
+    s.send("q");
+    s.wait_for("Quit?", Duration::from_secs(5));
+    s.send("y");
+    let status = s.wait_exit(Duration::from_secs(15));
+    assert!(status.success(), "{status:?}");
+    assert!(s.restored(), "the alternate screen was not left");
+    let scans: Vec<_> = std::fs::read_dir(ds.join(".unsaved"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert_eq!(scans.len(), 1);
+    let rec = hapticlab::recording::read(&scans[0]).unwrap();
+    assert!(rec.is_complete(), "the scan ran to its end");
+    assert_eq!(
+        rec.meta_str("device"),
+        Some("falcon-emulator"),
+        "recorded through the Falcon driver"
+    );
+    // The stroke was traced: x covers the scan leg.
+    let x = rec.column("x_m").unwrap();
+    let span =
+        x.iter().cloned().fold(f64::MIN, f64::max) - x.iter().cloned().fold(f64::MAX, f64::min);
+    assert!(span > 0.025, "x spans only {span} m");
 }

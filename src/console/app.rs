@@ -17,6 +17,7 @@ use std::path::PathBuf;
 
 use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
 
+use crate::acquire::HOMING_HELP;
 use crate::classify::Model;
 use crate::profile::{LoadedProfile, WORKSPACE_MAX_M, WORKSPACE_MIN_M, check_label};
 use crate::servo::Mode;
@@ -152,6 +153,11 @@ impl App {
             status,
             quit: false,
         }
+    }
+
+    /// Whether the device is homed (as far as the telemetry has told).
+    pub fn homed(&self) -> bool {
+        self.live.latest.as_ref().is_none_or(|t| t.homed)
     }
 
     pub fn info(&mut self, text: impl Into<String>) {
@@ -363,6 +369,10 @@ impl App {
             Key::Start => {
                 if self.scan_running {
                     return busy_scan(self);
+                }
+                if !self.homed() {
+                    self.warn(HOMING_HELP);
+                    return vec![];
                 }
                 self.scan_running = true;
                 self.info(format!(
@@ -700,6 +710,9 @@ impl App {
                     .ok()
                     .filter(|n| (1..=500).contains(n))
                     .ok_or_else(|| "give a number of scans from 1 to 500".to_string())?;
+                if !self.homed() {
+                    return Err(HOMING_HELP.to_string());
+                }
                 self.queue_left = n - 1;
                 self.queued_run = true;
                 self.scan_running = true;

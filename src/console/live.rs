@@ -9,10 +9,8 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::acquire::{next_free_index, scan_file, scan_metadata, scan_seed};
+use crate::acquire::{next_free_index, open_device, scan_file, scan_metadata, scan_seed};
 use crate::analysis::FeatureExtractor;
-use crate::device::HapticDevice;
-use crate::device::sim::SimDevice;
 use crate::profile::{DeviceKind, LoadedProfile};
 use crate::recorder::{COLUMNS, SavedScan};
 use crate::recording::{self, RecordingWriter};
@@ -26,22 +24,28 @@ pub struct Lab {
     lp: LoadedProfile,
     handle: Option<ServoHandle>,
     pub dataset: PathBuf,
-    /// The simulator's texture.
+    /// The simulator's texture (none on a real Falcon: its texture is
+    /// whatever the lab put under the probe).
     pub texture: Option<String>,
     mounts: usize,
     extractor: FeatureExtractor,
+    /// What opening the device said (firmware, homing), for the message line.
+    notes: Vec<String>,
 }
 
 impl Lab {
-    /// Start the servo on the profile's device, `texture` under the probe.
+    /// Start the servo on the profile's device, `texture` under the probe
+    /// (simulated devices only).
     pub fn start(lp: &LoadedProfile, dataset: &Path, texture: Option<&str>) -> Result<Lab, String> {
+        let simulated = lp.profile.device.kind != DeviceKind::Falcon;
         let mut lab = Lab {
             lp: lp.clone(),
             handle: None,
             dataset: dataset.to_path_buf(),
-            texture: texture.map(str::to_string),
+            texture: texture.filter(|_| simulated).map(str::to_string),
             mounts: 0,
             extractor: FeatureExtractor::new(&lp.profile.analysis),
+            notes: Vec::new(),
         };
         lab.spawn()?;
         Ok(lab)
@@ -53,25 +57,16 @@ impl Lab {
 
     fn spawn(&mut self) -> Result<(), String> {
         let p = &self.lp.profile;
-        let device: Box<dyn HapticDevice> = match p.device.kind {
-            DeviceKind::Sim => {
-                let seed = scan_seed(
-                    p.simulator.seed,
-                    self.texture.as_deref().unwrap_or(""),
-                    self.mounts,
-                );
-                Box::new(
-                    SimDevice::new(p, &self.lp.base_dir, self.texture.as_deref(), seed)
-                        .map_err(|e| e.to_string())?,
-                )
-            }
-            other => {
-                return Err(format!(
-                    "device kind {:?} is not available in this build yet; use kind = \"sim\"",
-                    other.name()
-                ));
-            }
-        };
+        let seed = scan_seed(
+            p.simulator.seed,
+            self.texture.as_deref().unwrap_or(""),
+            self.mounts,
+        );
+        let notes = &mut self.notes;
+        let device = open_device(&self.lp, self.texture.as_deref(), seed, &mut |m| {
+            notes.push(m.to_string())
+        })
+        .map_err(|e| e.to_string())?;
         self.mounts += 1;
         let handle = servo::spawn(p, move || device)
             .map_err(|e| format!("cannot start the servo thread: {e}"))?;
@@ -82,6 +77,10 @@ impl Lab {
     /// Restart the simulator with another texture (only while idle): the
     /// old loop is shut down, its device made safe.
     pub fn mount(&mut self, texture: &str, app: &mut App) -> Result<(), String> {
+        if self.lp.profile.device.kind == DeviceKind::Falcon {
+            // The lab changes a real texture by hand; the Falcon stays homed.
+            return Ok(());
+        }
         if let Some(h) = self.handle.take() {
             let (_, saved) = h.shutdown();
             for s in saved {
@@ -122,6 +121,9 @@ impl Lab {
 
     /// Once per frame: telemetry, events and saved scans into the app.
     pub fn drain(&mut self, app: &mut App) -> Vec<Action> {
+        for n in self.notes.drain(..) {
+            app.info(n);
+        }
         let Some(h) = &self.handle else {
             return vec![];
         };

@@ -112,6 +112,11 @@ impl SimDevice {
         self.pos
     }
 
+    /// The probe's true velocity, m/s.
+    pub fn true_velocity(&self) -> [f64; 3] {
+        self.vel
+    }
+
     /// The force the texture last pushed back with, newtons.
     pub fn contact_force(&self) -> [f64; 3] {
         self.contact

@@ -280,3 +280,33 @@ fn replay_keys_drive_the_player() {
     a.handle_key(code(KeyCode::Esc));
     assert!(a.replay.is_none(), "Esc returns to the live device");
 }
+
+#[test]
+fn no_measurement_until_the_falcon_is_homed_and_the_user_is_told_how() {
+    let mut a = App::new(
+        LoadedProfile::thesis(),
+        KeyMap::default(),
+        Source::Live {
+            backend: "falcon-emulator".into(),
+        },
+        "ds".into(),
+    );
+    let mut t = fixtures::telemetry(0.0, Mode::Manual);
+    t.homed = false;
+    a.on_telemetry(&t);
+    assert!(a.status.text.contains("pull the grip"), "{}", a.status.text);
+    assert_eq!(a.handle_key(key('s')), vec![]);
+    assert!(!a.scan_running);
+    assert!(a.status.text.contains("not homed"), "{}", a.status.text);
+    // Queued scans are refused the same way.
+    a.handle_key(key('n'));
+    assert_eq!(type_text(&mut a, "3"), vec![]);
+    assert_eq!(a.handle_key(code(KeyCode::Enter)), vec![]);
+    assert!(!a.scan_running);
+    let mut t = fixtures::telemetry(0.5, Mode::Manual);
+    t.homed = true;
+    a.on_telemetry(&t);
+    assert!(a.status.text.contains("homed"), "{}", a.status.text);
+    a.overlay = None;
+    assert_eq!(a.handle_key(key('s')), vec![Action::StartScan]);
+}

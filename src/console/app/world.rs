@@ -4,6 +4,7 @@
 
 use std::path::PathBuf;
 
+use crate::acquire::HOMING_HELP;
 use crate::servo::{ServoEvent, Telemetry};
 
 use super::super::dataset::{JobResult, ModelInfo};
@@ -14,6 +15,11 @@ use super::{Action, App};
 impl App {
     /// One telemetry frame from the servo.
     pub fn on_telemetry(&mut self, t: &Telemetry) {
+        match (self.live.latest.as_ref().map(|l| l.homed), t.homed) {
+            (None, false) => self.warn(HOMING_HELP),
+            (Some(false), true) => self.info("homed: the LEDs are blue; forces are on"),
+            _ => {}
+        }
         self.live.push(t);
         self.speed_scale = t.speed_scale;
     }

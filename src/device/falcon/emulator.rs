@@ -30,14 +30,28 @@ use super::packet::{self, PacketReader, ReplyPacket};
 use super::{FalconTransport, TransportError, ftdi};
 use crate::device::HapticDevice;
 use crate::device::sim::SimDevice;
+use crate::profile::{WORKSPACE_MAX_M, WORKSPACE_MIN_M};
 
 /// Falcon z (m) the grip must pass, pulled out, then pushed in, to home.
 pub const HOME_OUT_Z_M: f64 = 0.155;
 pub const HOME_IN_Z_M: f64 = 0.095;
 /// The simulated hand that homes the device: a spring towards each end.
 const HAND_STIFFNESS: f64 = 60.0;
-const HAND_DAMPING: f64 = 2.0;
-const HAND_MAX_N: f64 = 4.0;
+const HAND_DAMPING: f64 = 5.0;
+const HAND_MAX_N: f64 = 1.0;
+/// Once homed, the hand brings the grip this close to the middle of the
+/// workspace, this slowly, and lets go (or sooner, when the motors push).
+const HAND_LET_GO_M: f64 = 0.005;
+const HAND_LET_GO_M_PER_S: f64 = 0.01;
+/// The middle of the workspace (profile frame).
+const WORKSPACE_CENTRE_M: [f64; 3] = [
+    (WORKSPACE_MIN_M[0] + WORKSPACE_MAX_M[0]) / 2.0,
+    (WORKSPACE_MIN_M[1] + WORKSPACE_MAX_M[1]) / 2.0,
+    (WORKSPACE_MIN_M[2] + WORKSPACE_MAX_M[2]) / 2.0,
+];
+/// Beyond the arms' reach the mechanism holds the grip back, stiffly.
+const REACH_STIFFNESS_N_PER_M: f64 = 20_000.0;
+const REACH_DAMPING_N_S_PER_M: f64 = 20.0;
 /// Uploads shorter than this never start a firmware.
 const MIN_IMAGE: usize = 1024;
 
@@ -98,6 +112,8 @@ pub struct EmulatorCounters {
     pub split: u64,
     /// The largest motor command seen (absolute).
     pub max_motor: i16,
+    /// Steps the grip spent beyond the arms' reach (held back there).
+    pub unreachable: u64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -136,11 +152,13 @@ pub struct EmulatedFalcon {
     flags: u8,
     homed: bool,
     seen_out: bool,
+    /// The simulated hand has let go of the grip after homing it.
+    released: bool,
+    /// The last grip position (profile frame) the arms could reach.
+    reachable: [f64; 3],
     offsets: [i16; 3],
     last_counts: [i16; 3],
     t: f64,
-    last_pos: Option<[f64; 3]>,
-    last_t: f64,
     unplugged: bool,
     pub counters: EmulatorCounters,
 }
@@ -171,11 +189,11 @@ impl EmulatedFalcon {
             flags: 0,
             homed: false,
             seen_out: false,
+            released: false,
+            reachable: WORKSPACE_CENTRE_M,
             offsets,
             last_counts: [0; 3],
             t: 0.0,
-            last_pos: None,
-            last_t: 0.0,
             unplugged: false,
             counters: EmulatorCounters::default(),
             cfg,
@@ -221,6 +239,7 @@ impl EmulatedFalcon {
         self.fw = Firmware::Boot(Boot::Idle);
         self.homed = false;
         self.seen_out = false;
+        self.released = false;
         self.motor = [0; 3];
         self.sim.make_safe();
         self.replies_due = 0;
@@ -319,13 +338,14 @@ impl EmulatedFalcon {
         }
     }
 
-    fn homing(&mut self) {
-        if self.fw != Firmware::Running || self.flags & packet::FLAG_HOMING == 0 {
-            self.sim.set_hand_force([0.0; 3]);
-            return;
-        }
+    /// The forces on the grip from outside the motors: the simulated hand
+    /// (homing it, then bringing it back to the middle of the workspace and
+    /// letting go, as a user does) and the arms' reach, which stops the grip
+    /// like an end stop where the simulator's box would let it wander off.
+    fn outside_forces(&mut self) {
+        let homing = self.fw == Firmware::Running && self.flags & packet::FLAG_HOMING != 0;
         let z = self.falcon_position()[2];
-        if !self.homed {
+        if homing && !self.homed {
             if z >= HOME_OUT_Z_M {
                 self.seen_out = true;
             }
@@ -333,26 +353,50 @@ impl EmulatedFalcon {
                 self.homed = true;
             }
         }
-        let mut hand = [0.0; 3];
-        if self.cfg.auto_home && !self.homed {
-            let target_z = if self.seen_out {
-                HOME_IN_Z_M - 0.004
+        let p = self.sim.true_position();
+        let v = self.sim.true_velocity();
+        let target = if !self.cfg.auto_home || self.released {
+            None
+        } else if !self.homed {
+            // Out past the homing mark, then in past the other.
+            homing.then(|| {
+                let z = if self.seen_out {
+                    HOME_IN_Z_M - 0.004
+                } else {
+                    HOME_OUT_Z_M + 0.004
+                };
+                self.cfg.frame.to_profile([0.0, 0.0, z])
+            })
+        } else {
+            let c = WORKSPACE_CENTRE_M;
+            let off = (0..3).map(|a| (p[a] - c[a]).powi(2)).sum::<f64>().sqrt();
+            let speed = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+            // Or as soon as the motors take over.
+            let driven = self.motor.iter().any(|&m| m != 0);
+            if driven || (off < HAND_LET_GO_M && speed < HAND_LET_GO_M_PER_S) {
+                self.released = true;
+                None
             } else {
-                HOME_OUT_Z_M + 0.004
-            };
-            let target = self.cfg.frame.to_profile([0.0, 0.0, target_z]);
-            let p = self.sim.true_position();
-            let dt = self.t - self.last_t;
-            let v = match self.last_pos {
-                Some(q) if dt > 0.0 => [0, 1, 2].map(|a| (p[a] - q[a]) / dt),
-                _ => [0.0; 3],
-            };
+                Some(c)
+            }
+        };
+        let mut hand = [0.0; 3];
+        if let Some(target) = target {
             for a in 0..3 {
                 hand[a] = HAND_STIFFNESS * (target[a] - p[a]) - HAND_DAMPING * v[a];
             }
             let n = (hand[0] * hand[0] + hand[1] * hand[1] + hand[2] * hand[2]).sqrt();
             if n > HAND_MAX_N {
                 hand = hand.map(|h| h * HAND_MAX_N / n);
+            }
+        }
+        if kinematics::inverse(self.cfg.frame.to_falcon(p)).is_ok() {
+            self.reachable = p;
+        } else {
+            self.counters.unreachable += 1;
+            for a in 0..3 {
+                hand[a] += REACH_STIFFNESS_N_PER_M * (self.reachable[a] - p[a])
+                    - REACH_DAMPING_N_S_PER_M * v[a];
             }
         }
         self.sim.set_hand_force(hand);
@@ -470,14 +514,12 @@ impl FalconTransport for EmulatedFalcon {
         if !(t_s.is_finite() && t_s > self.t) {
             return;
         }
-        self.last_t = self.t;
-        self.last_pos = Some(self.sim.true_position());
         self.t = t_s;
         if !self.unplugged && self.cfg.unplug_after_s.is_some_and(|u| t_s >= u) {
             self.unplug();
         }
         if !self.unplugged {
-            self.homing();
+            self.outside_forces();
         } else {
             self.sim.set_hand_force([0.0; 3]);
         }
@@ -489,6 +531,7 @@ impl FalconTransport for EmulatedFalcon {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::device::Reading;
     use crate::device::falcon::{FalconConfig, FalconDevice, firmware};
     use crate::profile::LoadedProfile;
     use std::path::Path;
@@ -631,6 +674,84 @@ mod tests {
             );
         }
         assert!(dev.transport().counters.max_motor > 0);
+    }
+
+    /// Drive `dev` for `seconds` with `force` of each reading.
+    fn drive(
+        dev: &mut FalconDevice<EmulatedFalcon>,
+        from_s: f64,
+        seconds: f64,
+        force: impl Fn(&Reading) -> [f64; 3],
+    ) -> f64 {
+        let mut t = from_s;
+        for _ in 0..(seconds * 1000.0) as usize {
+            t += 0.001;
+            let r = dev.read(t).unwrap();
+            dev.command(force(&r)).unwrap();
+        }
+        t
+    }
+
+    /// The reading at rest is the true grip position, within encoder steps.
+    fn assert_reading_follows(dev: &mut FalconDevice<EmulatedFalcon>, t: f64) {
+        let r = dev.read(t + 0.001).unwrap();
+        assert!(r.homed);
+        let truth = dev.transport().sim().true_position();
+        for a in 0..3 {
+            assert!(
+                (r.pos_m[a] - truth[a]).abs() < 3e-4,
+                "the reading {:?} is not the grip at {truth:?}",
+                r.pos_m
+            );
+        }
+    }
+
+    #[test]
+    fn once_homed_the_hand_lets_go_in_the_middle_and_the_reading_follows() {
+        let e = emulator(EmulatorConfig::default());
+        let mut dev = FalconDevice::open(e, FalconConfig::default(), &mut |_| {}).unwrap();
+        // Manual mode: no forces asked for, ever.
+        let t = drive(&mut dev, 0.0, 10.0, |_| [0.0; 3]);
+        let emu = dev.transport();
+        assert!(emu.is_homed());
+        assert!(emu.released, "the hand never let go");
+        // Let go in the middle; with no texture under it, the probe's weight
+        // takes it down to the floor (y), but it stays put across (x, z).
+        let p = emu.sim().true_position();
+        for a in [0, 2] {
+            assert!(
+                (p[a] - WORKSPACE_CENTRE_M[a]).abs() < 0.01,
+                "left at {p:?}, not in the middle"
+            );
+        }
+        assert_eq!(emu.counters.unreachable, 0);
+        assert_reading_follows(&mut dev, t);
+    }
+
+    #[test]
+    fn past_the_arms_reach_the_grip_is_held_back_and_still_read() {
+        let e = emulator(EmulatorConfig::default());
+        let mut dev = FalconDevice::open(e, FalconConfig::default(), &mut |_| {}).unwrap();
+        let t = drive(&mut dev, 0.0, 3.0, |_| [0.0; 3]);
+        assert!(dev.transport().is_homed());
+        // Push hard outwards (+z, away from the Falcon's body), towards the
+        // simulator's box wall, which lies beyond what the arms reach.
+        let t = drive(&mut dev, t, 2.0, |_| [0.0, 0.0, 6.0]);
+        let emu = dev.transport();
+        assert!(
+            emu.counters.unreachable > 0,
+            "the grip never left the reach"
+        );
+        let p = emu.sim().true_position();
+        let overshoot = (0..3)
+            .map(|a| (p[a] - emu.reachable[a]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        assert!(
+            overshoot < 5e-4,
+            "the grip went {overshoot} m past its reach"
+        );
+        assert_reading_follows(&mut dev, t);
     }
 
     #[test]
