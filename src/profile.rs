@@ -272,9 +272,10 @@ pub struct Device {
     /// Ask the OS for real-time scheduling of the servo thread (opt-in).
     #[serde(default)]
     pub realtime: Option<Realtime>,
-    /// Wake this many microseconds before each deadline and spin to it: trades
-    /// CPU (spin / period of a core) for punctual ticks where the OS wakes
-    /// threads late. 0 (the default) sleeps all the way.
+    /// While the loop drives the probe (Target and Test modes) or a scan
+    /// records, wake this many microseconds before each deadline and spin to
+    /// it: trades CPU (spin / period of a core, never in Manual mode) for
+    /// punctual ticks where the OS wakes threads late. 0 sleeps all the way.
     #[serde(default)]
     pub spin_us: u32,
 }

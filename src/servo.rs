@@ -138,6 +138,11 @@ pub struct Links {
     pub stop: Option<Arc<AtomicBool>>,
 }
 
+/// Catching up after a stall, ticks come no closer than this many periods.
+const CATCH_UP_MIN_PERIOD: f64 = 0.5;
+/// Further behind than this many periods, the loop skips instead.
+const CATCH_UP_LIMIT: f64 = 20.0;
+
 pub struct ServoLoop<D: HapticDevice, C: Clock> {
     device: D,
     clock: C,
@@ -367,16 +372,26 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
             return Err(h);
         }
 
-        // Wait for the next absolute deadline.
+        // Wait for the next absolute deadline. After a stall the loop catches
+        // up on that schedule with periods no shorter than half a period (so
+        // the mean rate holds and the controller's rate estimate stays sane);
+        // beyond CATCH_UP_LIMIT periods behind it skips the passed deadlines.
         self.deadline_index += 1;
         let deadline = self.deadline_index as f64 * self.period;
-        let now = self.clock.wait_until(deadline);
-        let late = now - deadline;
-        let missed = late > self.missed_fraction * self.period;
-        if late > self.period {
-            // Skip the deadlines already passed rather than burst to catch up;
-            // each skipped one counts as missed.
-            let skipped = (late / self.period).floor() as u64;
+        let target = match self.last_t {
+            Some(prev) => deadline.max(prev + CATCH_UP_MIN_PERIOD * self.period),
+            None => deadline,
+        };
+        // Spin to punctual ticks only while the loop drives the probe or a
+        // scan records (spinning costs CPU; the idle console stays cheap).
+        self.clock
+            .set_precise(self.mode != Mode::Manual || self.sink.is_active());
+        let now = self.clock.wait_until(target);
+        let missed = now - target > self.missed_fraction * self.period;
+        let behind = now - deadline;
+        if behind > CATCH_UP_LIMIT * self.period {
+            // Each skipped deadline counts as missed.
+            let skipped = (behind / self.period).floor() as u64;
             self.deadline_index += skipped;
             self.stats.missed += skipped;
             if self.sink.is_active() {

@@ -18,12 +18,16 @@ pub trait Clock: Send {
     /// Seconds since the clock's start.
     fn now(&self) -> f64;
     fn is_virtual(&self) -> bool;
+    /// Whether ticks should be as punctual as the clock can make them (a
+    /// real clock spins before deadlines then, if configured to).
+    fn set_precise(&mut self, _on: bool) {}
 }
 
 pub struct RealClock {
     epoch: libc::timespec,
-    /// Seconds before a deadline to stop sleeping and spin.
+    /// Seconds before a deadline to stop sleeping and spin, when precise.
     spin: f64,
+    precise: bool,
 }
 
 fn monotonic() -> libc::timespec {
@@ -46,10 +50,12 @@ impl RealClock {
         RealClock {
             epoch: monotonic(),
             spin: 0.0,
+            precise: false,
         }
     }
 
-    /// Wake `spin_us` before each deadline and spin to it.
+    /// Wake `spin_us` before each deadline and spin to it, while precise
+    /// ticks are asked for ([`Clock::set_precise`]).
     pub fn with_spin(mut self, spin_us: u32) -> RealClock {
         self.spin = f64::from(spin_us) * 1e-6;
         self
@@ -62,8 +68,9 @@ impl RealClock {
 
 impl Clock for RealClock {
     fn wait_until(&mut self, deadline_s: f64) -> f64 {
-        self.sleep_until(deadline_s - self.spin);
-        if self.spin > 0.0 {
+        let spin = if self.precise { self.spin } else { 0.0 };
+        self.sleep_until(deadline_s - spin);
+        if spin > 0.0 {
             loop {
                 let now = self.now();
                 if now >= deadline_s {
@@ -81,6 +88,10 @@ impl Clock for RealClock {
 
     fn is_virtual(&self) -> bool {
         false
+    }
+
+    fn set_precise(&mut self, on: bool) {
+        self.precise = on;
     }
 }
 
@@ -237,6 +248,7 @@ mod tests {
         assert!(t2 >= t);
         // Spinning the last 300 µs still never returns before the deadline.
         let mut s = RealClock::start().with_spin(300);
+        s.set_precise(true);
         for k in 1..=20 {
             let d = k as f64 * 0.001;
             assert!(s.wait_until(d) >= d);
