@@ -171,8 +171,7 @@ pub enum Command {
         #[command(flatten)]
         profile: ProfileArg,
     },
-    /// Check what this PC needs for the profile (Falcon USB access, firmware, real-time
-    /// limits, terminal, dataset folder) and say how to fix each failing item.
+    /// Is this PC ready for the profile? Falcon USB access, firmware, real-time limits, terminal, dataset folder; the fix for each.
     #[command(
         after_help = "Exit code 0 when nothing failed, 1 when a check failed.\n\nExamples:\n  hapticlab doctor --profile profiles/thesis-falcon.toml --dataset recordings/session1\n  hapticlab doctor --json"
     )]

@@ -35,6 +35,14 @@ pub fn dataset_checks(needs: &Needs, d: &DatasetFacts, root: bool) -> Vec<Check>
                 ancestor.display()
             ),
         ),
+        (_, Err(e)) if d.read_only => with_fix(
+            check(
+                "dataset",
+                Status::Fail,
+                format!("{dir}: its disk is mounted read-only ({e})"),
+            ),
+            "choose a folder on a writable disk with `--dataset`",
+        ),
         (DirState::Exists, Err(e)) => with_fix(
             check("dataset", Status::Fail, format!("{dir}: cannot write: {e}")),
             format!(

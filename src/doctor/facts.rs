@@ -85,6 +85,8 @@ pub struct DatasetFacts {
     pub write: Result<(), String>,
     /// Free bytes for an unprivileged user on the folder's filesystem.
     pub free_bytes: Option<u64>,
+    /// That filesystem is mounted read-only.
+    pub read_only: bool,
 }
 
 impl Facts {
@@ -292,7 +294,8 @@ fn write_probe(dir: &Path) -> Result<(), String> {
     removed.map_err(|e| format!("the test file could not be removed: {e}"))
 }
 
-fn free_bytes(dir: &Path) -> Option<u64> {
+/// Free bytes for unprivileged users, and whether it is mounted read-only.
+fn filesystem(dir: &Path) -> Option<(u64, bool)> {
     use std::os::unix::ffi::OsStrExt;
     let c = std::ffi::CString::new(dir.as_os_str().as_bytes()).ok()?;
     // SAFETY: a zeroed statvfs is valid; statvfs fills it from a NUL-terminated path.
@@ -301,7 +304,10 @@ fn free_bytes(dir: &Path) -> Option<u64> {
         if libc::statvfs(c.as_ptr(), &mut s) != 0 {
             return None;
         }
-        Some(s.f_bavail as u64 * s.f_frsize as u64)
+        Some((
+            s.f_bavail as u64 * s.f_frsize as u64,
+            s.f_flag & libc::ST_RDONLY != 0,
+        ))
     }
 }
 
@@ -309,12 +315,12 @@ impl DatasetFacts {
     pub fn gather(dir: &Path) -> DatasetFacts {
         let state = dir_state(dir);
         let (write, free) = match &state {
-            DirState::Exists => (write_probe(dir), free_bytes(dir)),
-            DirState::Missing { ancestor } => (write_probe(ancestor), free_bytes(ancestor)),
+            DirState::Exists => (write_probe(dir), filesystem(dir)),
+            DirState::Missing { ancestor } => (write_probe(ancestor), filesystem(ancestor)),
             DirState::NotADirectory { blocker } => (
                 Err(format!("{} is a file", blocker.display())),
                 blocker.parent().and_then(|p| {
-                    free_bytes(if p.as_os_str().is_empty() {
+                    filesystem(if p.as_os_str().is_empty() {
                         Path::new(".")
                     } else {
                         p
@@ -326,7 +332,8 @@ impl DatasetFacts {
             dir: dir.to_path_buf(),
             state,
             write,
-            free_bytes: free,
+            free_bytes: free.map(|(bytes, _)| bytes),
+            read_only: free.is_some_and(|(_, ro)| ro),
         }
     }
 }

@@ -6,7 +6,7 @@ use crate::profile::Realtime;
 
 /// A finite RLIMIT_MEMLOCK of at least this much is taken as enough for
 /// mlockall: it locks every mapping of the process (code, heap, each
-/// thread's stack), and a scan's process maps a few hundred MiB.
+/// thread's stack): `scan` on the simulator maps about 150 MiB, the console more.
 pub const MEMLOCK_ENOUGH_BYTES: u64 = 1 << 30;
 /// The limits.d file the fixes suggest; the lab's users are in `plugdev`
 /// already for the Falcon's udev rule.

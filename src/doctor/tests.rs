@@ -86,6 +86,7 @@ fn dataset(state: DirState, write: Result<(), String>, free: Option<u64>) -> Dat
         state,
         write,
         free_bytes: free,
+        read_only: false,
     }
 }
 
@@ -586,6 +587,22 @@ fn a_dataset_path_under_a_file_or_unwritable_fails() {
         fix(&c[0]).contains("sudo mkdir -p recordings/session-2026-11-22"),
         "{c:?}"
     );
+}
+
+#[test]
+fn a_read_only_disk_is_named_as_such() {
+    let ro = DatasetFacts {
+        read_only: true,
+        ..dataset(
+            DirState::Exists,
+            Err("Read-only file system (os error 30)".into()),
+            Some(50 << 30),
+        )
+    };
+    let c = dataset_checks(&thesis(), &ro, false);
+    assert_eq!(c[0].status, Status::Fail, "{c:?}");
+    assert!(c[0].finding.contains("mounted read-only"), "{c:?}");
+    assert!(!fix(&c[0]).contains("chown"), "{c:?}");
 }
 
 #[test]

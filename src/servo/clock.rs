@@ -271,6 +271,27 @@ mod tests {
     }
 
     #[test]
+    fn a_refused_part_of_the_realtime_request_is_named() {
+        // On a scratch thread: a granted SCHED_FIFO must not outlive the test.
+        let notes = std::thread::spawn(|| {
+            request_realtime(&crate::profile::Realtime {
+                priority: 1,
+                lock_memory: false,
+                cpu: Some(1 << 20),
+            })
+        })
+        .join()
+        .unwrap();
+        let pin: Vec<&String> = notes.iter().filter(|n| n.starts_with("pinning")).collect();
+        assert_eq!(pin.len(), 1, "{notes:?}");
+        assert!(
+            pin[0].contains("core 1048576") && pin[0].ends_with("running unpinned"),
+            "{notes:?}"
+        );
+        assert!(pin_to_cpu(1 << 20).is_err());
+    }
+
+    #[test]
     fn real_clock_sleeps_to_absolute_deadlines() {
         let mut c = RealClock::start();
         let t0 = c.now();
