@@ -200,7 +200,10 @@ pub fn firmware_check(needs: &Needs, firmware: Option<&Result<usize, FirmwareFil
             let (finding, fix) = match e {
                 FirmwareFileError::Missing { path, reason } => (
                     format!("{}: cannot read the firmware: {reason}", path.display()),
-                    WHERE_TO_GET.to_string(),
+                    format!(
+                        "{WHERE_TO_GET} (this profile looks for it at {}); if the file is there, make it readable for the lab's user",
+                        path.display()
+                    ),
                 ),
                 FirmwareFileError::WrongSize { path, len } => (
                     format!(

@@ -279,6 +279,10 @@ fn firmware_goes_through_the_drivers_own_validation() {
     assert_eq!(c.status, Status::Fail, "{c:?}");
     assert!(c.finding.contains("cannot read"), "{c:?}");
     assert!(fix(&c).contains("libnifalcon"), "{c:?}");
+    assert!(
+        fix(&c).contains(&format!("looks for it at {}", path.display())),
+        "{c:?}"
+    );
     // The wrong size.
     std::fs::write(&path, [0u8; 100]).unwrap();
     let c = firmware_check(&needs, Some(&read(&path)));
