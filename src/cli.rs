@@ -171,6 +171,20 @@ pub enum Command {
         #[command(flatten)]
         profile: ProfileArg,
     },
+    /// Is this PC ready for the profile? Falcon USB access, firmware, real-time limits, terminal, dataset folder; the fix for each.
+    #[command(
+        after_help = "Exit code 0 when nothing failed, 1 when a check failed.\n\nExamples:\n  hapticlab doctor --profile profiles/thesis-falcon.toml --dataset recordings/session1\n  hapticlab doctor --json"
+    )]
+    Doctor {
+        #[command(flatten)]
+        profile: ProfileArg,
+        /// The dataset folder to check (default: the console's, recordings/session-<date>).
+        #[arg(long, value_name = "DIR")]
+        dataset: Option<PathBuf>,
+        /// Print JSON for scripts: {checks: [{name, status, finding, fix}], ok}.
+        #[arg(long)]
+        json: bool,
+    },
     /// A dataset's health: recordings per class, incomplete files, feature spread, outliers by file.
     #[command(
         after_help = "Example:\n  hapticlab inspect recordings/thesis-sim\n  hapticlab inspect recordings/lab --threshold 4 --json"

@@ -141,6 +141,11 @@ pub fn run(cmd: Command) -> Result<(), Failure> {
         }
         Command::Check { profiles } => check(&profiles),
         Command::Devices { profile } => crate::devices::run(&profile),
+        Command::Doctor {
+            profile,
+            dataset,
+            json,
+        } => crate::doctor::run(&profile, dataset, json),
         Command::Plot(args) => crate::plot::run(&args),
         Command::Import(args) => {
             let written = crate::import::run(&args)?;

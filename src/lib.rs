@@ -13,6 +13,7 @@ pub mod commands;
 pub mod console;
 pub mod device;
 pub mod devices;
+pub mod doctor;
 pub mod evaluate;
 pub mod import;
 pub mod inspect;

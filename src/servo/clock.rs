@@ -130,47 +130,91 @@ impl RealClock {
 /// note for the user for each part the system refused (none when all took).
 pub fn request_realtime(rt: &crate::profile::Realtime) -> Vec<String> {
     let mut refused = Vec::new();
+    if let Err(e) = set_fifo_priority(rt.priority) {
+        refused.push(format!(
+            "real-time scheduling (SCHED_FIFO {}) refused: {e}; running at normal priority (see `ulimit -r`, or grant CAP_SYS_NICE)",
+            rt.priority
+        ));
+    }
+    if rt.lock_memory
+        && let Err(e) = lock_memory()
+    {
+        refused.push(format!(
+            "locking memory refused: {e}; running unlocked (see `ulimit -l`)"
+        ));
+    }
+    if let Some(cpu) = rt.cpu
+        && let Err(e) = pin_to_cpu(cpu)
+    {
+        refused.push(format!(
+            "pinning the servo thread to core {cpu} refused: {e}; running unpinned"
+        ));
+    }
+    refused
+}
+
+#[cfg(not(target_os = "linux"))]
+fn linux_only() -> std::io::Error {
+    std::io::Error::new(std::io::ErrorKind::Unsupported, "only supported on Linux")
+}
+
+/// SCHED_FIFO at `priority` for the calling thread.
+pub fn set_fifo_priority(priority: u8) -> std::io::Result<()> {
     #[cfg(target_os = "linux")]
     {
         let param = libc::sched_param {
-            sched_priority: i32::from(rt.priority),
+            sched_priority: i32::from(priority),
         };
         // SAFETY: pid 0 is the calling thread; `param` is a valid sched_param.
         if unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) } != 0 {
-            refused.push(format!(
-                "real-time scheduling (SCHED_FIFO {}) refused: {}; running at normal priority (see `ulimit -r`, or grant CAP_SYS_NICE)",
-                rt.priority,
-                std::io::Error::last_os_error()
-            ));
+            return Err(std::io::Error::last_os_error());
         }
-        // SAFETY: mlockall takes flags only.
-        if rt.lock_memory && unsafe { libc::mlockall(libc::MCL_CURRENT | libc::MCL_FUTURE) } != 0 {
-            refused.push(format!(
-                "locking memory refused: {}; running unlocked (see `ulimit -l`)",
-                std::io::Error::last_os_error()
-            ));
-        }
-        if let Some(cpu) = rt.cpu {
-            // SAFETY: a zeroed cpu_set_t is empty; CPU_SET stays within it for cpu < CPU_SETSIZE.
-            let ok = cpu < libc::CPU_SETSIZE as usize
-                && unsafe {
-                    let mut set: libc::cpu_set_t = std::mem::zeroed();
-                    libc::CPU_SET(cpu, &mut set);
-                    libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set) == 0
-                };
-            if !ok {
-                refused.push(format!(
-                    "pinning the servo thread to core {cpu} refused: {}; running unpinned",
-                    std::io::Error::last_os_error()
-                ));
-            }
-        }
+        Ok(())
     }
     #[cfg(not(target_os = "linux"))]
-    refused.push(format!(
-        "real-time scheduling is only supported on Linux; running at normal priority ({rt:?})"
-    ));
-    refused
+    {
+        let _ = priority;
+        Err(linux_only())
+    }
+}
+
+/// Lock the whole process's memory, now and to come (mlockall).
+pub fn lock_memory() -> std::io::Result<()> {
+    #[cfg(target_os = "linux")]
+    {
+        // SAFETY: mlockall takes flags only.
+        if unsafe { libc::mlockall(libc::MCL_CURRENT | libc::MCL_FUTURE) } != 0 {
+            return Err(std::io::Error::last_os_error());
+        }
+        Ok(())
+    }
+    #[cfg(not(target_os = "linux"))]
+    Err(linux_only())
+}
+
+/// Pin the calling thread to core `cpu`.
+pub fn pin_to_cpu(cpu: usize) -> std::io::Result<()> {
+    #[cfg(target_os = "linux")]
+    {
+        if cpu >= libc::CPU_SETSIZE as usize {
+            return Err(std::io::Error::from_raw_os_error(libc::EINVAL));
+        }
+        // SAFETY: a zeroed cpu_set_t is empty; CPU_SET stays within it for cpu < CPU_SETSIZE.
+        let ok = unsafe {
+            let mut set: libc::cpu_set_t = std::mem::zeroed();
+            libc::CPU_SET(cpu, &mut set);
+            libc::sched_setaffinity(0, std::mem::size_of::<libc::cpu_set_t>(), &set) == 0
+        };
+        if !ok {
+            return Err(std::io::Error::last_os_error());
+        }
+        Ok(())
+    }
+    #[cfg(not(target_os = "linux"))]
+    {
+        let _ = cpu;
+        Err(linux_only())
+    }
 }
 
 pub struct VirtualClock {
@@ -235,6 +279,27 @@ mod tests {
         assert!((600..=1100).contains(&late_ticks), "{late_ticks}");
         // No drift: the last tick is within a quarter period of its deadline.
         assert!(prev - 10.0 < 0.00026);
+    }
+
+    #[test]
+    fn a_refused_part_of_the_realtime_request_is_named() {
+        // On a scratch thread: a granted SCHED_FIFO must not outlive the test.
+        let notes = std::thread::spawn(|| {
+            request_realtime(&crate::profile::Realtime {
+                priority: 1,
+                lock_memory: false,
+                cpu: Some(1 << 20),
+            })
+        })
+        .join()
+        .unwrap();
+        let pin: Vec<&String> = notes.iter().filter(|n| n.starts_with("pinning")).collect();
+        assert_eq!(pin.len(), 1, "{notes:?}");
+        assert!(
+            pin[0].contains("core 1048576") && pin[0].ends_with("running unpinned"),
+            "{notes:?}"
+        );
+        assert!(pin_to_cpu(1 << 20).is_err());
     }
 
     #[test]
