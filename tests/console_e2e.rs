@@ -28,6 +28,20 @@ struct Session {
 }
 
 impl Session {
+    /// `hapticlab console --profile PROFILE --dataset DS`, run in `cwd`.
+    fn console(profile: &Path, ds: &Path, cwd: &Path) -> Session {
+        Session::start(
+            &[
+                "console",
+                "--profile",
+                profile.to_str().unwrap(),
+                "--dataset",
+                ds.to_str().unwrap(),
+            ],
+            cwd,
+        )
+    }
+
     fn start(args: &[&str], cwd: &Path) -> Session {
         let pty = native_pty_system()
             .openpty(PtySize {
@@ -148,16 +162,7 @@ fn scan_predict_and_quit_in_a_pseudo_terminal() {
     let ds = tmp.path().join("ds");
     simulate(&ds);
     let profile = fast_profile();
-    let mut s = Session::start(
-        &[
-            "console",
-            "--profile",
-            profile.to_str().unwrap(),
-            "--dataset",
-            ds.to_str().unwrap(),
-        ],
-        tmp.path(),
-    );
+    let mut s = Session::console(&profile, &ds, tmp.path());
     s.wait_for("Device", Duration::from_secs(20));
     s.wait_for("Homed    yes", Duration::from_secs(10));
     // Label S2: the simulator mounts texture S2.
@@ -194,16 +199,7 @@ fn sigterm_mid_scan_keeps_the_scan_and_restores_the_terminal() {
     let tmp = tempfile::tempdir().unwrap();
     let ds = tmp.path().join("ds");
     let profile = fast_profile();
-    let mut s = Session::start(
-        &[
-            "console",
-            "--profile",
-            profile.to_str().unwrap(),
-            "--dataset",
-            ds.to_str().unwrap(),
-        ],
-        tmp.path(),
-    );
+    let mut s = Session::console(&profile, &ds, tmp.path());
     s.wait_for("Homed    yes", Duration::from_secs(20));
     s.send("s");
     s.wait_for("% recorded", Duration::from_secs(20));
@@ -229,16 +225,7 @@ fn sighup_quits_cleanly() {
     let tmp = tempfile::tempdir().unwrap();
     let profile = fast_profile();
     let ds = tmp.path().join("ds");
-    let mut s = Session::start(
-        &[
-            "console",
-            "--profile",
-            profile.to_str().unwrap(),
-            "--dataset",
-            ds.to_str().unwrap(),
-        ],
-        tmp.path(),
-    );
+    let mut s = Session::console(&profile, &ds, tmp.path());
     s.wait_for("Homed    yes", Duration::from_secs(20));
     let pid = s.child.process_id().unwrap();
     // SAFETY: kill(2) on our own child's pid.
@@ -265,16 +252,7 @@ fn the_console_drives_the_emulated_falcon_once_homed() {
     let tmp = tempfile::tempdir().unwrap();
     let ds = tmp.path().join("ds");
     let profile = fast_emulator_profile(tmp.path());
-    let mut s = Session::start(
-        &[
-            "console",
-            "--profile",
-            profile.to_str().unwrap(),
-            "--dataset",
-            ds.to_str().unwrap(),
-        ],
-        tmp.path(),
-    );
+    let mut s = Session::console(&profile, &ds, tmp.path());
     s.wait_for("falcon-emulator", Duration::from_secs(20));
     // The simulated hand pulls the grip out and pushes it in.
     s.wait_for("Homed    yes", Duration::from_secs(20));

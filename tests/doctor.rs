@@ -7,7 +7,7 @@
 use std::fs;
 use std::io::Read;
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 use std::time::Duration;
 
 use portable_pty::{CommandBuilder, PtySize, native_pty_system};
@@ -18,31 +18,9 @@ const BIN: &str = env!("CARGO_BIN_EXE_hapticlab");
 const REPO: &str = env!("CARGO_MANIFEST_DIR");
 const WORDS: [&str; 4] = ["ok", "warn", "FAIL", "note"];
 
-struct Run {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-}
-
-impl std::fmt::Debug for Run {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "exit {:?}\n--- stdout ---\n{}\n--- stderr ---\n{}",
-            self.code, self.stdout, self.stderr
-        )
-    }
-}
-
-impl From<Output> for Run {
-    fn from(o: Output) -> Run {
-        Run {
-            code: o.status.code(),
-            stdout: String::from_utf8_lossy(&o.stdout).into_owned(),
-            stderr: String::from_utf8_lossy(&o.stderr).into_owned(),
-        }
-    }
-}
+#[path = "common/run.rs"]
+mod run;
+use run::Run;
 
 /// `hapticlab doctor ARGS` from the repository, with a known terminal type.
 fn doctor(args: &[&str]) -> Run {
