@@ -74,7 +74,7 @@ fn row(dir: &Path) -> Result<String, String> {
     let est = read(&dir.join("estimates.json"))?;
     let num = |v: &Value, path: &[&str]| -> Result<f64, String> {
         path.iter()
-            .fold(Some(v), |v, k| v.and_then(|v| v.get(k)))
+            .try_fold(v, |v, k| v.get(k))
             .and_then(Value::as_f64)
             .ok_or_else(|| format!("no {} in the estimates", path.join(".")))
     };
