@@ -410,6 +410,25 @@ fn wait_for_homing(
     }
 }
 
+/// Make `dir` and check a file can be created in it (then remove it).
+pub fn check_writable(dir: &Path) -> Result<(), AcquireError> {
+    let probe = dir.join(format!(".hapticlab-write-check-{}", std::process::id()));
+    let result = std::fs::create_dir_all(dir).and_then(|()| {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&probe)
+            .map(drop)
+    });
+    let _ = std::fs::remove_file(&probe);
+    result.map_err(|e| {
+        AcquireError::Runtime(format!(
+            "cannot record into {}: {e}; nothing was scanned: choose a writable folder with --out (or fix this one's permissions)",
+            dir.display()
+        ))
+    })
+}
+
 fn trigger_note(e: &TriggerEvent) -> Option<String> {
     match e {
         TriggerEvent::Action { .. } => None,
@@ -454,6 +473,8 @@ pub fn scan_live_with(
         *seed,
     );
     check_label(label).map_err(AcquireError::BadInput)?;
+    // Before the device moves: the recordings must have somewhere to go.
+    check_writable(&out.join(label))?;
     let p = &lp.profile;
     let device = open_device(lp, Some(texture.unwrap_or(label)), seed, on_note)?;
     let kind = device.kind();

@@ -238,6 +238,8 @@ fn scan(
             )));
         }
     }
+    // Before anything moves: the recordings must have somewhere to go.
+    acquire::check_writable(&out.join(label)).map_err(Failure::from)?;
     let stop = Arc::new(AtomicBool::new(false));
     for sig in [
         signal_hook::consts::SIGINT,
@@ -268,7 +270,7 @@ fn scan(
         n += 1;
         let s = &r.saved;
         let state = match (&s.aborted, &s.error) {
-            (_, Some(e)) => format!("NOT SAVED: {e}"),
+            (_, Some(e)) => format!("recording failed: {e}"),
             (Some(reason), None) if s.rows == 0 => {
                 format!("aborted before the scan leg began ({reason}); nothing recorded")
             }
@@ -284,7 +286,16 @@ fn scan(
             println!("  loop: {}", r.stats.summary());
         }
         if s.aborted.is_some() || s.error.is_some() {
-            failed = Some(state);
+            let kept = if s.rows > 0 {
+                format!(
+                    "; the {} samples so far are kept in {}, marked incomplete (train, evaluate and features skip it with a warning)",
+                    s.rows,
+                    s.path.display()
+                )
+            } else {
+                String::new()
+            };
+            failed = Some(format!("{state}; forces are off{kept}"));
         }
     };
     let hooks = acquire::LiveHooks {

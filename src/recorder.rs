@@ -206,10 +206,13 @@ struct Open {
     writer: Option<RecordingWriter>,
     path: PathBuf,
     error: Option<String>,
+    /// Rows kept on disk when a write failed.
+    kept: usize,
 }
 
 impl Open {
-    /// Append a block and flush; the first failure closes the writer and is kept.
+    /// Append a block and flush. The first failure closes the recording, cut
+    /// back to its last whole rows and marked aborted, and is kept.
     fn write(&mut self, block: &[Sample], row: &mut [f64; 7]) {
         let Some(w) = self.writer.as_mut() else {
             return;
@@ -224,9 +227,33 @@ impl Open {
             })
             .and_then(|()| w.flush());
         if let Err(e) = result {
-            self.error = Some(e.to_string());
-            self.writer = None;
+            let w = self.writer.take().expect("checked above");
+            let (kept, cut) =
+                w.abort_after_error(&format!("the recording could not be written: {e}"));
+            self.kept = kept;
+            self.error = Some(match cut {
+                None => format!("{e}{}", storage_hint(&e)),
+                Some(c) => format!(
+                    "{e}{}; cutting the file back to whole rows failed too: {c}",
+                    storage_hint(&e)
+                ),
+            });
         }
+    }
+}
+
+/// Advice for an error that says the disk (or the file size limit) is full.
+fn storage_hint(e: &crate::recording::RecordingError) -> &'static str {
+    match e {
+        crate::recording::RecordingError::Io { source, .. }
+            if matches!(
+                source.kind(),
+                std::io::ErrorKind::StorageFull | std::io::ErrorKind::FileTooLarge
+            ) =>
+        {
+            " (the disk is full or the file size limit is reached: free some space, or record to another disk with --out)"
+        }
+        _ => "",
     }
 }
 
@@ -259,11 +286,13 @@ fn writer_loop(
                         }),
                         path,
                         error: None,
+                        kept: 0,
                     },
                     Err(e) => Open {
                         writer: None,
                         path,
-                        error: Some(e.to_string()),
+                        error: Some(format!("{e}{}", storage_hint(&e))),
+                        kept: 0,
                     },
                 });
             }
@@ -292,7 +321,7 @@ fn writer_loop(
 
 fn close(o: Open, aborted: Option<String>, saved: &Sender<SavedScan>) {
     let mut error = o.error;
-    let mut rows = 0;
+    let mut rows = o.kept;
     let mut complete = false;
     if let Some(w) = o.writer {
         rows = w.rows();

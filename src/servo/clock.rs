@@ -18,6 +18,9 @@ pub trait Clock: Send {
     /// Seconds since the clock's start.
     fn now(&self) -> f64;
     fn is_virtual(&self) -> bool;
+    /// Sit out a stall of `secs` inside a tick (a device read that blocked):
+    /// the real clock sleeps, the virtual clock moves on.
+    fn stall(&mut self, secs: f64);
 }
 
 pub struct RealClock {
@@ -81,6 +84,12 @@ impl Clock for RealClock {
 
     fn is_virtual(&self) -> bool {
         false
+    }
+
+    fn stall(&mut self, secs: f64) {
+        if secs.is_finite() && secs > 0.0 {
+            std::thread::sleep(std::time::Duration::from_secs_f64(secs));
+        }
     }
 }
 
@@ -199,6 +208,12 @@ impl Clock for VirtualClock {
 
     fn is_virtual(&self) -> bool {
         true
+    }
+
+    fn stall(&mut self, secs: f64) {
+        if secs.is_finite() && secs > 0.0 {
+            self.now += secs;
+        }
     }
 }
 

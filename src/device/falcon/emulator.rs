@@ -54,6 +54,12 @@ pub struct EmulatorConfig {
     pub split_rate: f64,
     /// Emulator time (s) at which the cable is pulled.
     pub unplug_after_s: Option<f64>,
+    /// Emulator time (s) at which one USB read fails with an I/O error.
+    pub read_error_after_s: Option<f64>,
+    /// From this emulator time (s), `stalls` reads in a row block for `stall_ms`.
+    pub stall_after_s: Option<f64>,
+    pub stall_ms: f64,
+    pub stalls: u32,
     /// A simulated hand pulls the grip out and pushes it in to home it.
     pub auto_home: bool,
     /// The boot loader answers the handshake with a leading 0x00.
@@ -74,6 +80,10 @@ impl Default for EmulatorConfig {
             garble_rate: 0.0,
             split_rate: 0.0,
             unplug_after_s: None,
+            read_error_after_s: None,
+            stall_after_s: None,
+            stall_ms: 0.0,
+            stalls: 1,
             auto_home: true,
             leading_zero: false,
             seed: 1,
@@ -142,6 +152,9 @@ pub struct EmulatedFalcon {
     last_pos: Option<[f64; 3]>,
     last_t: f64,
     unplugged: bool,
+    read_error_done: bool,
+    stalls_done: u32,
+    stall: Option<Duration>,
     pub counters: EmulatorCounters,
 }
 
@@ -177,6 +190,9 @@ impl EmulatedFalcon {
             last_pos: None,
             last_t: 0.0,
             unplugged: false,
+            read_error_done: false,
+            stalls_done: 0,
+            stall: None,
             counters: EmulatorCounters::default(),
             cfg,
         }
@@ -192,6 +208,11 @@ impl EmulatedFalcon {
 
     pub fn is_homed(&self) -> bool {
         self.homed
+    }
+
+    /// The motor commands the firmware is applying (zero once made safe or unplugged).
+    pub fn motor(&self) -> [i16; 3] {
+        self.motor
     }
 
     /// Pull the cable now.
@@ -439,6 +460,13 @@ impl FalconTransport for EmulatedFalcon {
 
     fn read(&mut self, buf: &mut [u8], _timeout: Duration) -> Result<usize, TransportError> {
         self.check()?;
+        if !self.read_error_done && self.cfg.read_error_after_s.is_some_and(|a| self.t >= a) {
+            self.read_error_done = true;
+            return Err(TransportError::Io(format!(
+                "the emulated Falcon's USB read failed at {:.3} s, as `[falcon.emulator] read_error_after_s` asks (on a real one: check the USB cable and hub)",
+                self.t
+            )));
+        }
         while self.replies_due > 0 {
             self.replies_due -= 1;
             let r = self.reply();
@@ -476,6 +504,10 @@ impl FalconTransport for EmulatedFalcon {
         if !self.unplugged && self.cfg.unplug_after_s.is_some_and(|u| t_s >= u) {
             self.unplug();
         }
+        if self.stalls_done < self.cfg.stalls && self.cfg.stall_after_s.is_some_and(|a| t_s >= a) {
+            self.stalls_done += 1;
+            self.stall = Some(Duration::from_secs_f64(self.cfg.stall_ms / 1000.0));
+        }
         if !self.unplugged {
             self.homing();
         } else {
@@ -483,6 +515,10 @@ impl FalconTransport for EmulatedFalcon {
         }
         // The physics runs whether or not anyone listens.
         let _ = self.sim.read(t_s);
+    }
+
+    fn take_stall(&mut self) -> Option<Duration> {
+        self.stall.take()
     }
 }
 
