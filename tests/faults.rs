@@ -416,6 +416,8 @@ fn scan_with_fault(profile: &Path, data: &Path, reason: &str) -> Recording {
         rec.meta
     );
     assert!(rec.len() > 50, "{} samples kept", rec.len());
+    // Said up front: this profile injects faults.
+    assert!(r.stderr.contains("injects device faults"), "{r:?}");
     rec
 }
 

@@ -413,6 +413,53 @@ mod tests {
     }
 
     #[test]
+    fn injected_faults_come_at_their_time() {
+        let mut p = thesis();
+        let f = &mut p.simulator.faults;
+        f.read_error_after_s = Some(0.010);
+        f.stall_after_s = Some(0.020);
+        f.stall_ms = 5.0;
+        f.stalls = 2;
+        f.nan_after_s = Some(0.030);
+        f.vanish_after_s = Some(0.040);
+        let mut dev = SimDevice::new(&p, Path::new("."), None, 1).unwrap();
+        let mut errors = Vec::new();
+        let mut stalls = Vec::new();
+        let mut nans = Vec::new();
+        for i in 1..=50 {
+            let t = i as f64 * 0.001;
+            match dev.read(t) {
+                Ok(r) if r.pos_m[0].is_nan() => nans.push(i),
+                Ok(_) => {}
+                Err(e) => errors.push((i, e)),
+            }
+            if let Some(d) = dev.take_stall() {
+                assert_eq!(d, std::time::Duration::from_millis(5));
+                stalls.push(i);
+            }
+            let _ = dev.command([1.0, 0.0, 0.0]);
+        }
+        assert_eq!(stalls, [20, 21]);
+        assert_eq!(nans, [30]);
+        assert!(matches!(errors[0], (10, DeviceError::Io(_))), "{errors:?}");
+        // Gone for good from 40 ms: reads and commands fail, forces are zero.
+        assert_eq!(errors.len(), 1 + 11, "{errors:?}");
+        assert!(
+            errors[1..]
+                .iter()
+                .all(|(i, e)| *i >= 40 && matches!(e, DeviceError::Disconnected(_)))
+        );
+        assert!(dev.command([1.0, 0.0, 0.0]).is_err());
+        assert_eq!(dev.applied_force(), [0.0; 3]);
+        // The emulated Falcon's physics carries none of them.
+        let mut clean = SimDevice::new(&p, Path::new("."), None, 1)
+            .unwrap()
+            .without_faults();
+        assert!((1..=50).all(|i| clean.read(i as f64 * 0.001).is_ok()));
+        assert_eq!(clean.take_stall(), None);
+    }
+
+    #[test]
     fn unknown_textures_are_named() {
         let p = thesis();
         let e = SimDevice::new(&p, Path::new("."), Some("S9"), 1)
