@@ -479,6 +479,10 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
             // The path ended without a scan leg having run.
             self.end_scan(Some("the path ended before the scan leg".into()));
         }
+        if self.sink.write_failed() {
+            // A full disk: no point stroking on; the recorder has the details.
+            self.stop_motion("the recording could not be written");
+        }
 
         self.stats.tick(now, missed);
         if self.sink.is_active() {

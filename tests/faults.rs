@@ -656,6 +656,16 @@ fn a_full_disk_is_a_clear_error_and_earlier_recordings_are_untouched() {
             && msg.contains("marked incomplete"),
         "{msg}"
     );
+    // The scan stopped when the write failed (at the second block of 250
+    // samples), not at the end of its 850-sample stroke.
+    let ticks: usize = r
+        .stdout
+        .lines()
+        .find_map(|l| l.trim_start().strip_prefix("loop: "))
+        .and_then(|l| l.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no loop line: {r:?}"));
+    assert!((500..700).contains(&ticks), "{ticks} ticks: {r:?}");
     // The new recording is cut back to whole rows and reads as incomplete.
     let len = std::fs::metadata(&file).unwrap().len();
     assert!(len <= limit, "{len} bytes");
