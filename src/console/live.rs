@@ -147,6 +147,12 @@ impl Lab {
             actions.extend(self.deliver(s, app));
         }
         if finished {
+            // Wait for the recorder to finish the last scan, and show it.
+            if let Some(h) = self.handle.take() {
+                for s in h.shutdown().1 {
+                    actions.extend(self.deliver(s, app));
+                }
+            }
             // The reason stays on screen: a device fault ends the loop.
             let why = self
                 .last_stop
@@ -156,7 +162,6 @@ impl Lab {
             app.error(format!(
                 "the servo loop stopped{why}; the device is safe (forces off), any scan kept as incomplete. Quit with q"
             ));
-            self.handle = None;
         }
         actions
     }
@@ -281,16 +286,10 @@ mod tests {
             "{}",
             app.status.text
         );
-        // The recorder finishes the file just after the loop ends.
-        let rec = loop {
-            match recording::read(&path) {
-                Ok(r) if r.aborted().is_some() => break r,
-                _ => {
-                    assert!(Instant::now() < give_up, "no aborted recording");
-                    std::thread::sleep(Duration::from_millis(20));
-                }
-            }
-        };
+        // The scan was read back and shown (the recorder was waited for).
+        let shown = app.last_scan.as_ref().expect("the aborted scan is shown");
+        assert!(!shown.complete);
+        let rec = recording::read(&path).unwrap();
         assert!(!rec.is_complete());
         assert!(
             rec.aborted().unwrap().contains("vanished"),

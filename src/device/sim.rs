@@ -11,7 +11,12 @@
 //! with sub-steps, advanced to whatever time the caller reads at, so the same
 //! model runs in virtual time (datasets) and real time (live use).
 //!
-//! Deterministic from its seed. Never sleeps, never allocates after `new`.
+//! Faults on demand (`[simulator.faults]`): a failed read, reads that stall
+//! (handed to the servo loop's clock through `take_stall`), a NaN position,
+//! and vanishing for good, each at a given loop time.
+//!
+//! Deterministic from its seed. Never sleeps, never allocates after `new`
+//! (but for the message of an injected fault).
 
 use std::path::Path;
 

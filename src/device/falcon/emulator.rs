@@ -13,10 +13,12 @@
 //! pushed fully in — by a simulated hand when `auto_home` is on.
 //!
 //! Faults on demand: replies dropped, garbled or split in two, uploads that
-//! fail (a corrupted echo) a set number of times, and unplugging at a given
+//! fail (a corrupted echo) a set number of times, unplugging at a given
 //! time (every call then fails as a vanished USB device does, and the motors
-//! stop). It never sleeps: a read that finds nothing returns at once, so the
-//! same emulator runs in virtual and in real time.
+//! stop), a USB read that fails at a given time, and exchanges that stall
+//! (handed to the servo loop's clock through `take_stall`). It never sleeps:
+//! a read that finds nothing returns at once, so the same emulator runs in
+//! virtual and in real time.
 
 use std::collections::VecDeque;
 use std::time::Duration;
