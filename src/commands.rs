@@ -643,14 +643,17 @@ fn check(profiles: &[PathBuf]) -> Result<(), Failure> {
     for p in profiles {
         match LoadedProfile::load(p) {
             Ok(lp) => println!(
-                "{}: ok — profile {:?}, device {}, {} waypoints, {} textures, {} features, k = {}",
+                "{}: ok — profile {:?}, device {}, {} waypoints, {} textures, {} features, k = {}{}",
                 p.display(),
                 lp.profile.name,
                 lp.profile.device.kind.name(),
                 lp.profile.path.waypoints_m.len(),
                 lp.profile.textures.len(),
                 lp.profile.analysis.feature_count(),
-                lp.profile.classifier.k_text()
+                lp.profile.classifier.k_text(),
+                acquire::injected_faults(&lp)
+                    .map(|f| format!("; injects faults: {f}"))
+                    .unwrap_or_default()
             ),
             Err(e) => errors.push(e.to_string()),
         }

@@ -464,6 +464,14 @@ fn scan_reports_a_read_error_and_batch_commands_skip_the_scan() {
 fn scan_reports_a_nan_reading() {
     let dir = tempfile::tempdir().unwrap();
     let prof = profile_with(dir.path(), QUICK_SIM, with_sim_faults("nan_after_s = 0.5"));
+    // `check` says the profile injects faults.
+    let r = output(hapticlab().args(["check", p(&prof)]));
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(
+        r.stdout
+            .contains("; injects faults: [simulator.faults] nan_after_s = 0.5"),
+        "{r:?}"
+    );
     let rec = scan_with_fault(&prof, &dir.path().join("D"), "is not a number");
     for c in &rec.data {
         assert!(c.iter().all(|v| v.is_finite()));
