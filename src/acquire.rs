@@ -515,7 +515,7 @@ pub fn scan_live_with(
     let p = &lp.profile;
     if let Some(faults) = injected_faults(lp) {
         on_note(&format!(
-            "note: {} injects device faults ({faults}): scans stop where they say",
+            "note: {} injects device faults ({faults}), to rehearse failures",
             lp.origin
         ));
     }
