@@ -410,6 +410,62 @@ fn wait_for_homing(
     }
 }
 
+/// The profile's injected faults for its device, named, if it has any.
+pub fn injected_faults(lp: &LoadedProfile) -> Option<String> {
+    let p = &lp.profile;
+    let named = |keys: &[(&str, Option<f64>)]| -> Vec<String> {
+        keys.iter()
+            .filter_map(|(k, v)| v.map(|t| format!("{k} = {t}")))
+            .collect()
+    };
+    let (section, faults) = match p.device.kind {
+        DeviceKind::Sim => {
+            let f = &p.simulator.faults;
+            (
+                "[simulator.faults]",
+                named(&[
+                    ("read_error_after_s", f.read_error_after_s),
+                    ("stall_after_s", f.stall_after_s),
+                    ("nan_after_s", f.nan_after_s),
+                    ("vanish_after_s", f.vanish_after_s),
+                ]),
+            )
+        }
+        DeviceKind::FalconEmulator => {
+            let e = p.falcon.clone().unwrap_or_default().emulator;
+            (
+                "[falcon.emulator]",
+                named(&[
+                    ("read_error_after_s", e.read_error_after_s),
+                    ("stall_after_s", e.stall_after_s),
+                    ("unplug_after_s", e.unplug_after_s),
+                ]),
+            )
+        }
+        DeviceKind::Falcon => return None,
+    };
+    (!faults.is_empty()).then(|| format!("{section} {}", faults.join(", ")))
+}
+
+/// Make `dir` and check a file can be created in it (then remove it).
+pub fn check_writable(dir: &Path) -> Result<(), AcquireError> {
+    let probe = dir.join(format!(".hapticlab-write-check-{}", std::process::id()));
+    let result = std::fs::create_dir_all(dir).and_then(|()| {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&probe)
+            .map(drop)
+    });
+    let _ = std::fs::remove_file(&probe);
+    result.map_err(|e| {
+        AcquireError::Runtime(format!(
+            "cannot record into {}: {e}; nothing was scanned: choose a writable folder with --out (or fix this one's permissions)",
+            dir.display()
+        ))
+    })
+}
+
 fn trigger_note(e: &TriggerEvent) -> Option<String> {
     match e {
         TriggerEvent::Action { .. } => None,
@@ -454,7 +510,15 @@ pub fn scan_live_with(
         *seed,
     );
     check_label(label).map_err(AcquireError::BadInput)?;
+    // Before the device moves: the recordings must have somewhere to go.
+    check_writable(&out.join(label))?;
     let p = &lp.profile;
+    if let Some(faults) = injected_faults(lp) {
+        on_note(&format!(
+            "note: {} injects device faults ({faults}), to rehearse failures",
+            lp.origin
+        ));
+    }
     let device = open_device(lp, Some(texture.unwrap_or(label)), seed, on_note)?;
     let kind = device.kind();
     let handle = crate::servo::spawn(p, move || device)

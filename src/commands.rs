@@ -243,6 +243,8 @@ fn scan(
             )));
         }
     }
+    // Before anything moves: the recordings must have somewhere to go.
+    acquire::check_writable(&out.join(label)).map_err(Failure::from)?;
     let stop = Arc::new(AtomicBool::new(false));
     for sig in [
         signal_hook::consts::SIGINT,
@@ -273,7 +275,7 @@ fn scan(
         n += 1;
         let s = &r.saved;
         let state = match (&s.aborted, &s.error) {
-            (_, Some(e)) => format!("NOT SAVED: {e}"),
+            (_, Some(e)) => format!("recording failed: {e}"),
             (Some(reason), None) if s.rows == 0 => {
                 format!("aborted before the scan leg began ({reason}); nothing recorded")
             }
@@ -289,7 +291,16 @@ fn scan(
             println!("  loop: {}", r.stats.summary());
         }
         if s.aborted.is_some() || s.error.is_some() {
-            failed = Some(state);
+            let kept = if s.rows > 0 {
+                format!(
+                    "; the {} samples so far are kept in {}, marked incomplete (train, evaluate and features skip it with a warning)",
+                    s.rows,
+                    s.path.display()
+                )
+            } else {
+                String::new()
+            };
+            failed = Some(format!("{state}; forces are off{kept}"));
         }
     };
     let hooks = acquire::LiveHooks {
@@ -637,14 +648,17 @@ fn check(profiles: &[PathBuf]) -> Result<(), Failure> {
     for p in profiles {
         match LoadedProfile::load(p) {
             Ok(lp) => println!(
-                "{}: ok — profile {:?}, device {}, {} waypoints, {} textures, {} features, k = {}",
+                "{}: ok — profile {:?}, device {}, {} waypoints, {} textures, {} features, k = {}{}",
                 p.display(),
                 lp.profile.name,
                 lp.profile.device.kind.name(),
                 lp.profile.path.waypoints_m.len(),
                 lp.profile.textures.len(),
                 lp.profile.analysis.feature_count(),
-                lp.profile.classifier.k_text()
+                lp.profile.classifier.k_text(),
+                acquire::injected_faults(&lp)
+                    .map(|f| format!("; injects faults: {f}"))
+                    .unwrap_or_default()
             ),
             Err(e) => errors.push(e.to_string()),
         }

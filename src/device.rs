@@ -67,6 +67,13 @@ pub trait HapticDevice: Send {
     fn link_stats(&self) -> Option<LinkStats> {
         None
     }
+    /// How long the last read stalled, for simulated devices with an injected
+    /// stall (`stall_after_s`): the servo loop's clock then sits the stall
+    /// out — really in real time, virtually in virtual time — as it would a
+    /// USB read that blocked. Devices never sleep themselves. Taken once.
+    fn take_stall(&mut self) -> Option<std::time::Duration> {
+        None
+    }
 }
 
 impl<D: HapticDevice + ?Sized> HapticDevice for Box<D> {
@@ -84,5 +91,8 @@ impl<D: HapticDevice + ?Sized> HapticDevice for Box<D> {
     }
     fn link_stats(&self) -> Option<LinkStats> {
         (**self).link_stats()
+    }
+    fn take_stall(&mut self) -> Option<std::time::Duration> {
+        (**self).take_stall()
     }
 }

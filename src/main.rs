@@ -13,6 +13,13 @@ fn main() {
             std::process::exit(code);
         }
     };
+    // Past a file size limit (`ulimit -f`) a write should fail with EFBIG,
+    // which the recorder reports and survives, rather than kill the process.
+    #[cfg(unix)]
+    // SAFETY: setting a signal's disposition to "ignore" has no preconditions.
+    unsafe {
+        libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
+    }
     // The console on the built-in thesis profile is the default.
     let command = cli.command.unwrap_or(hapticlab::cli::Command::Console {
         profile: hapticlab::cli::ProfileArg {

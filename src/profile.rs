@@ -725,6 +725,13 @@ pub struct Simulator {
     pub period_jitter_s: f64,
     /// Physics sub-steps per servo tick.
     pub substeps: u32,
+    /// Injected faults (`[simulator.faults]`, device.kind = "sim" only).
+    #[serde(skip_serializing_if = "is_default_faults")]
+    pub faults: hardware::SimFaults,
+}
+
+fn is_default_faults(f: &hardware::SimFaults) -> bool {
+    *f == hardware::SimFaults::default()
 }
 
 impl Default for Simulator {
@@ -746,6 +753,7 @@ impl Default for Simulator {
             period_jitter_fraction: 0.1,
             period_jitter_s: 0.000_02,
             substeps: 4,
+            faults: hardware::SimFaults::default(),
         }
     }
 }
@@ -1258,6 +1266,7 @@ impl Profile {
         if !(1..=64).contains(&s.substeps) {
             return bad("simulator.substeps", "must be from 1 to 64");
         }
+        hardware::validate_sim_faults(self)?;
         self.console.bindings()?;
         hardware::validate(self)
     }

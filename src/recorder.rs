@@ -10,6 +10,8 @@
 //! written without its trailer, so it reads back as incomplete.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::thread::JoinHandle;
 
 use crossbeam_channel::{Receiver, Sender, TrySendError, bounded, unbounded};
@@ -36,6 +38,7 @@ enum ToWriter {
     Begin {
         path: PathBuf,
         meta: Vec<(String, toml::Value)>,
+        id: u64,
     },
     Block(Vec<Sample>),
     End {
@@ -65,6 +68,10 @@ pub struct ScanSink {
     rows: u64,
     /// Blocks allocated because the pool ran dry.
     pub grown: u64,
+    /// This scan's number (from 1), and the number of the last scan whose
+    /// recording the writer could not write (0: none).
+    scan_id: u64,
+    failed: Arc<AtomicU64>,
 }
 
 /// The writer thread's handle: results of saved scans.
@@ -94,9 +101,13 @@ fn start_with(sync_each: bool) -> (Recorder, ScanSink) {
             .expect("the pool channel holds POOL blocks");
     }
     let (saved_tx, saved_rx) = unbounded();
+    let failed = Arc::new(AtomicU64::new(0));
     let thread = std::thread::Builder::new()
         .name("recorder".into())
-        .spawn(move || writer_loop(rx, free_tx, saved_tx, sync_each))
+        .spawn({
+            let failed = failed.clone();
+            move || writer_loop(rx, free_tx, saved_tx, sync_each, &failed)
+        })
         .expect("spawn the recorder thread");
     (
         Recorder {
@@ -110,6 +121,8 @@ fn start_with(sync_each: bool) -> (Recorder, ScanSink) {
             active: false,
             rows: 0,
             grown: 0,
+            scan_id: 0,
+            failed,
         },
     )
 }
@@ -133,14 +146,22 @@ impl ScanSink {
         self.rows
     }
 
+    /// The running scan's recording could not be written (a full disk): the
+    /// writer has closed it; the scan should stop. One atomic load.
+    pub fn write_failed(&self) -> bool {
+        self.active && self.failed.load(Ordering::Relaxed) == self.scan_id
+    }
+
     /// Open a recording at `path` with `meta` (rare: allocation is fine here).
     pub fn begin(&mut self, path: &Path, meta: Vec<(String, toml::Value)>) {
         if self.active {
             self.end(Some("a new scan started before this one ended".into()));
         }
+        self.scan_id += 1;
         self.send(ToWriter::Begin {
             path: path.to_path_buf(),
             meta,
+            id: self.scan_id,
         });
         self.active = true;
         self.rows = 0;
@@ -206,11 +227,15 @@ struct Open {
     writer: Option<RecordingWriter>,
     path: PathBuf,
     error: Option<String>,
+    /// Rows kept on disk when a write failed.
+    kept: usize,
+    id: u64,
 }
 
 impl Open {
-    /// Append a block and flush; the first failure closes the writer and is kept.
-    fn write(&mut self, block: &[Sample], row: &mut [f64; 7]) {
+    /// Append a block and flush. The first failure closes the recording, cut
+    /// back to its last whole rows and marked aborted, and is kept.
+    fn write(&mut self, block: &[Sample], row: &mut [f64; 7], failed: &AtomicU64) {
         let Some(w) = self.writer.as_mut() else {
             return;
         };
@@ -224,9 +249,34 @@ impl Open {
             })
             .and_then(|()| w.flush());
         if let Err(e) = result {
-            self.error = Some(e.to_string());
-            self.writer = None;
+            failed.store(self.id, Ordering::Relaxed);
+            let w = self.writer.take().expect("checked above");
+            let (kept, cut) =
+                w.abort_after_error(&format!("the recording could not be written: {e}"));
+            self.kept = kept;
+            self.error = Some(match cut {
+                None => format!("{e}{}", storage_hint(&e)),
+                Some(c) => format!(
+                    "{e}{}; cutting the file back to whole rows failed too: {c}",
+                    storage_hint(&e)
+                ),
+            });
         }
+    }
+}
+
+/// Advice for an error that says the disk (or the file size limit) is full.
+fn storage_hint(e: &crate::recording::RecordingError) -> &'static str {
+    match e {
+        crate::recording::RecordingError::Io { source, .. }
+            if matches!(
+                source.kind(),
+                std::io::ErrorKind::StorageFull | std::io::ErrorKind::FileTooLarge
+            ) =>
+        {
+            " (the disk is full or the file size limit is reached: free some space, or record to another disk with --out)"
+        }
+        _ => "",
     }
 }
 
@@ -235,12 +285,13 @@ fn writer_loop(
     free: Sender<Vec<Sample>>,
     saved: Sender<SavedScan>,
     sync_each: bool,
+    failed: &AtomicU64,
 ) {
     let mut open: Option<Open> = None;
     let mut row = [0.0f64; 7];
     for msg in rx.iter() {
         match msg {
-            ToWriter::Begin { path, meta } => {
+            ToWriter::Begin { path, meta, id } => {
                 if let Some(o) = open.take() {
                     close(
                         o,
@@ -259,17 +310,24 @@ fn writer_loop(
                         }),
                         path,
                         error: None,
+                        kept: 0,
+                        id,
                     },
-                    Err(e) => Open {
-                        writer: None,
-                        path,
-                        error: Some(e.to_string()),
-                    },
+                    Err(e) => {
+                        failed.store(id, Ordering::Relaxed);
+                        Open {
+                            writer: None,
+                            path,
+                            error: Some(format!("{e}{}", storage_hint(&e))),
+                            kept: 0,
+                            id,
+                        }
+                    }
                 });
             }
             ToWriter::Block(mut block) => {
                 if let Some(o) = open.as_mut() {
-                    o.write(&block, &mut row);
+                    o.write(&block, &mut row, failed);
                 }
                 block.clear();
                 let _ = free.try_send(block);
@@ -292,7 +350,7 @@ fn writer_loop(
 
 fn close(o: Open, aborted: Option<String>, saved: &Sender<SavedScan>) {
     let mut error = o.error;
-    let mut rows = 0;
+    let mut rows = o.kept;
     let mut complete = false;
     if let Some(w) = o.writer {
         rows = w.rows();
@@ -353,6 +411,37 @@ mod tests {
         assert!((x[n - 1] - (n - 1) as f64 * 1e-6).abs() < 1e-9);
         // The pool held 16 blocks; this many samples needed more (counted, not lost).
         assert!(grown > 0, "the test did not make the writer lag");
+    }
+
+    #[test]
+    fn a_recording_that_cannot_be_written_tells_the_scan_to_stop() {
+        let dir = tempfile::tempdir().unwrap();
+        // A regular file where the scan's folder should be.
+        std::fs::write(dir.path().join("blocked"), b"").unwrap();
+        let (recorder, mut sink) = start();
+        sink.begin(&dir.path().join("blocked/scan.csv"), vec![]);
+        let give_up = std::time::Instant::now() + std::time::Duration::from_secs(10);
+        while !sink.write_failed() {
+            assert!(std::time::Instant::now() < give_up, "never told");
+            std::thread::sleep(std::time::Duration::from_millis(5));
+        }
+        sink.end(Some("the recording could not be written".into()));
+        // The next scan starts with a clean slate.
+        let ok = dir.path().join("ok.csv");
+        sink.begin(&ok, vec![]);
+        for i in 0..600 {
+            sink.push(sample(i));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        assert!(!sink.write_failed());
+        sink.end(None);
+        drop(sink);
+        let saved = recorder.join();
+        assert!(
+            saved[0].error.as_deref().unwrap().contains("blocked"),
+            "{saved:?}"
+        );
+        assert!(saved[1].complete && saved[1].error.is_none(), "{saved:?}");
     }
 
     #[test]

@@ -400,6 +400,17 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
         }
 
         let reading = match self.device.read(now) {
+            // A position that is not a number never reaches the controller,
+            // the device or the recording: the device is not to be trusted.
+            Ok(r) if r.pos_m.iter().any(|v| !v.is_finite()) => {
+                let e = crate::device::DeviceError::BadReading(format!(
+                    "position ({}, {}, {}) m at {now:.3} s is not a number",
+                    r.pos_m[0], r.pos_m[1], r.pos_m[2]
+                ));
+                let reason = format!("device read failed: {e}");
+                self.halt(Halt::DeviceError(reason.clone()), &reason);
+                return Err(Halt::DeviceError(reason));
+            }
             Ok(r) => r,
             Err(e) => {
                 let reason = format!("device read failed: {e}");
@@ -407,6 +418,11 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
                 return Err(Halt::DeviceError(reason));
             }
         };
+        // A read that blocked: its time passes before the force goes out, and
+        // the deadlines it overran count as missed on the next tick.
+        if let Some(d) = self.device.take_stall() {
+            self.clock.stall(d.as_secs_f64());
+        }
         self.reading = reading;
         let dt = self.last_t.map_or(self.period, |t| now - t);
         self.last_t = Some(now);
@@ -477,6 +493,10 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
         } else if self.scan_path.is_some() && self.trajectory.is_none() {
             // The path ended without a scan leg having run.
             self.end_scan(Some("the path ended before the scan leg".into()));
+        }
+        if self.sink.write_failed() {
+            // A full disk: no point stroking on; the recorder has the details.
+            self.stop_motion("the recording could not be written");
         }
 
         self.stats.tick(now, missed);

@@ -218,6 +218,9 @@ impl Clock for Stalling {
     fn is_virtual(&self) -> bool {
         true
     }
+    fn stall(&mut self, secs: f64) {
+        self.inner.stall(secs);
+    }
 }
 
 #[test]

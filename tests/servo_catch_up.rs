@@ -34,6 +34,9 @@ impl Clock for OneStall {
     fn is_virtual(&self) -> bool {
         true
     }
+    fn stall(&mut self, secs: f64) {
+        self.now += secs;
+    }
 }
 
 /// The simulator, noting the time of every read.

@@ -31,6 +31,8 @@ pub struct Lab {
     extractor: FeatureExtractor,
     /// What opening the device said (firmware, homing), for the message line.
     notes: Vec<String>,
+    /// Why the motion last stopped, for when the loop itself ends.
+    last_stop: Option<String>,
 }
 
 impl Lab {
@@ -46,6 +48,7 @@ impl Lab {
             mounts: 0,
             extractor: FeatureExtractor::new(&lp.profile.analysis),
             notes: Vec::new(),
+            last_stop: None,
         };
         lab.spawn()?;
         Ok(lab)
@@ -68,6 +71,7 @@ impl Lab {
         })
         .map_err(|e| e.to_string())?;
         self.mounts += 1;
+        self.last_stop = None;
         let handle = servo::spawn(p, move || device)
             .map_err(|e| format!("cannot start the servo thread: {e}"))?;
         self.handle = Some(handle);
@@ -127,21 +131,39 @@ impl Lab {
         let Some(h) = &self.handle else {
             return vec![];
         };
+        // Whether the loop had ended before its last events are drained, so
+        // none sent before the end is missed.
+        let finished = h.is_finished();
         for t in h.telemetry.try_iter() {
             app.on_telemetry(&t);
         }
         for e in h.events.try_iter() {
+            if let servo::ServoEvent::MotionStopped { reason } = &e {
+                self.last_stop = Some(reason.clone());
+            }
             app.on_servo_event(e);
         }
         let saved = h.saved();
-        let finished = h.is_finished();
         let mut actions = Vec::new();
         for s in saved {
             actions.extend(self.deliver(s, app));
         }
         if finished {
-            app.error("the servo loop stopped; the device is safe (forces off). Quit with q");
-            self.handle = None;
+            // Wait for the recorder to finish the last scan, and show it.
+            if let Some(h) = self.handle.take() {
+                for s in h.shutdown().1 {
+                    actions.extend(self.deliver(s, app));
+                }
+            }
+            // The reason stays on screen: a device fault ends the loop.
+            let why = self
+                .last_stop
+                .as_deref()
+                .map(|r| format!(" ({r})"))
+                .unwrap_or_default();
+            app.error(format!(
+                "the servo loop stopped{why}; the device is safe (forces off), any scan kept as incomplete. Quit with q"
+            ));
         }
         actions
     }
@@ -229,6 +251,55 @@ pub fn store(from: &Path, dataset: &Path, label: &str) -> Result<PathBuf, String
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::console::app::{Level, Source};
+    use crate::console::keymap::KeyMap;
+    use std::time::{Duration, Instant};
+
+    /// The console hears a device fault through the servo's events: the
+    /// reason stays in the status line once the loop has ended, and the scan
+    /// is on disk, incomplete, with the reason.
+    #[test]
+    fn a_device_that_vanishes_mid_scan_is_reported_with_its_reason() {
+        let d = tempfile::tempdir().unwrap();
+        let mut lp = LoadedProfile::load(Path::new("tests/data/profiles/quick-scan.toml")).unwrap();
+        // The quick path's stroke runs from about 0.1 s to 0.95 s of loop time.
+        lp.profile.simulator.faults.vanish_after_s = Some(0.5);
+        let mut app = App::new(
+            lp.clone(),
+            KeyMap::default(),
+            Source::Live {
+                backend: "sim".into(),
+            },
+            d.path().to_path_buf(),
+        );
+        let mut lab = Lab::start(&lp, d.path(), Some("S2")).unwrap();
+        let path = lab.start_scan("S2");
+        let give_up = Instant::now() + Duration::from_secs(30);
+        while lab.handle.is_some() {
+            lab.drain(&mut app);
+            assert!(Instant::now() < give_up, "the loop did not stop");
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        assert_eq!(app.status.level, Level::Error, "{:?}", app.status.text);
+        assert!(
+            app.status.text.contains("vanished at 0.5")
+                && app.status.text.contains("forces off")
+                && app.status.text.contains("check its cable and power"),
+            "{}",
+            app.status.text
+        );
+        // The scan was read back and shown (the recorder was waited for).
+        let shown = app.last_scan.as_ref().expect("the aborted scan is shown");
+        assert!(!shown.complete);
+        let rec = recording::read(&path).unwrap();
+        assert!(!rec.is_complete());
+        assert!(
+            rec.aborted().unwrap().contains("vanished"),
+            "{:?}",
+            rec.meta
+        );
+        assert!(rec.len() > 100, "{} samples kept", rec.len());
+    }
 
     #[test]
     fn storing_renames_or_rewrites_with_the_label() {

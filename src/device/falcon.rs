@@ -81,6 +81,11 @@ pub trait FalconTransport: Send {
     /// The servo loop's time (seconds): the emulator runs its physics up to
     /// it; a real device ignores it.
     fn advance_to(&mut self, _t_s: f64) {}
+    /// An injected stall of the last exchange (the emulator only; see
+    /// [`HapticDevice::take_stall`]).
+    fn take_stall(&mut self) -> Option<Duration> {
+        None
+    }
 }
 
 /// How to drive a Falcon (from the profile's `[falcon]` section).
@@ -387,6 +392,10 @@ impl<T: FalconTransport> HapticDevice for FalconDevice<T> {
         }
     }
 
+    fn take_stall(&mut self) -> Option<Duration> {
+        self.transport.take_stall()
+    }
+
     fn link_stats(&self) -> Option<LinkStats> {
         Some(LinkStats {
             packets: self.stats.packets_sent,
@@ -458,7 +467,8 @@ pub fn open_emulated(
     let section = lp.profile.falcon.clone().unwrap_or_default();
     let e = &section.emulator;
     let sim = super::sim::SimDevice::new(&lp.profile, &lp.base_dir, texture, seed)
-        .map_err(|e| OpenError::BadInput(e.to_string()))?;
+        .map_err(|e| OpenError::BadInput(e.to_string()))?
+        .without_faults();
     let emu = emulator::EmulatedFalcon::new(
         sim,
         emulator::EmulatorConfig {
@@ -468,6 +478,10 @@ pub fn open_emulated(
             garble_rate: e.garble_rate,
             split_rate: e.split_rate,
             unplug_after_s: e.unplug_after_s,
+            read_error_after_s: e.read_error_after_s,
+            stall_after_s: e.stall_after_s,
+            stall_ms: e.stall_ms,
+            stalls: e.stalls,
             auto_home: e.auto_home,
             leading_zero: seed % 2 == 1,
             seed,

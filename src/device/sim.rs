@@ -11,7 +11,12 @@
 //! with sub-steps, advanced to whatever time the caller reads at, so the same
 //! model runs in virtual time (datasets) and real time (live use).
 //!
-//! Deterministic from its seed. Never sleeps, never allocates after `new`.
+//! Faults on demand (`[simulator.faults]`): a failed read, reads that stall
+//! (handed to the servo loop's clock through `take_stall`), a NaN position,
+//! and vanishing for good, each at a given loop time.
+//!
+//! Deterministic from its seed. Never sleeps, never allocates after `new`
+//! (but for the message of an injected fault).
 
 use std::path::Path;
 
@@ -21,6 +26,7 @@ use rand_distr::{Distribution, Normal};
 
 use super::surface::{ProbeTrace, SurfaceError};
 use super::{DeviceError, HapticDevice, Reading};
+use crate::profile::hardware::SimFaults;
 use crate::profile::{DEVICE_MAX_FORCE_N, Profile, Simulator, WORKSPACE_MAX_M, WORKSPACE_MIN_M};
 
 /// Sliding speed below which Coulomb friction is scaled down (regularisation), m/s.
@@ -44,6 +50,18 @@ pub struct SimDevice {
     noise: Normal<f64>,
     /// Contact force last applied by the texture (for tests and display).
     contact: [f64; 3],
+    faults: FaultState,
+}
+
+/// Where the injected faults (`[simulator.faults]`) stand.
+#[derive(Debug, Clone, Default)]
+struct FaultState {
+    read_error_done: bool,
+    nan_done: bool,
+    stalls_done: u32,
+    stall: Option<std::time::Duration>,
+    /// Set once the device has vanished: what every call says from then on.
+    vanished: Option<String>,
 }
 
 impl SimDevice {
@@ -98,8 +116,21 @@ impl SimDevice {
             rng,
             noise: Normal::new(0.0, sigma).expect("a finite, non-negative sigma"),
             contact: [0.0; 3],
+            faults: FaultState::default(),
             p,
         })
+    }
+
+    /// The same simulator without injected faults (the emulated Falcon's
+    /// physics: its faults are the emulator's own, `[falcon.emulator]`).
+    pub fn without_faults(mut self) -> SimDevice {
+        self.p.faults = SimFaults::default();
+        self
+    }
+
+    /// The force last commanded and still applied (zero after `make_safe`), newtons.
+    pub fn applied_force(&self) -> [f64; 3] {
+        self.force
     }
 
     /// Push the probe by hand (manual mode): an external force, newtons.
@@ -190,6 +221,18 @@ impl HapticDevice for SimDevice {
         if !t_s.is_finite() {
             return Err(DeviceError::BadReading(format!("time {t_s} is not finite")));
         }
+        let due = |at: Option<f64>| at.is_some_and(|a| t_s >= a);
+        if let Some(m) = &self.faults.vanished {
+            return Err(DeviceError::Disconnected(m.clone()));
+        }
+        if due(self.p.faults.vanish_after_s) {
+            let m = format!(
+                "the simulated Falcon vanished at {t_s:.3} s, as `[simulator.faults] vanish_after_s` asks (a real one was unplugged or lost power: check its cable and power)"
+            );
+            self.faults.vanished = Some(m.clone());
+            self.force = [0.0; 3];
+            return Err(DeviceError::Disconnected(m));
+        }
         let span = t_s - self.t;
         if span > 0.0 {
             let n = (span / self.max_step).ceil().max(1.0);
@@ -214,6 +257,23 @@ impl HapticDevice for SimDevice {
                 "the simulated position diverged".into(),
             ));
         }
+        if !self.faults.read_error_done && due(self.p.faults.read_error_after_s) {
+            self.faults.read_error_done = true;
+            return Err(DeviceError::Io(format!(
+                "the simulated Falcon's read failed at {t_s:.3} s, as `[simulator.faults] read_error_after_s` asks (on a real one: check the USB cable and hub)"
+            )));
+        }
+        if !self.faults.nan_done && due(self.p.faults.nan_after_s) {
+            // The position is garbage, as from a device whose firmware misbehaves.
+            self.faults.nan_done = true;
+            pos[0] = f64::NAN;
+        }
+        if self.faults.stalls_done < self.p.faults.stalls && due(self.p.faults.stall_after_s) {
+            self.faults.stalls_done += 1;
+            self.faults.stall = Some(std::time::Duration::from_secs_f64(
+                self.p.faults.stall_ms / 1000.0,
+            ));
+        }
         Ok(Reading {
             pos_m: pos,
             buttons: 0,
@@ -222,6 +282,9 @@ impl HapticDevice for SimDevice {
     }
 
     fn command(&mut self, force_n: [f64; 3]) -> Result<(), DeviceError> {
+        if let Some(m) = &self.faults.vanished {
+            return Err(DeviceError::Disconnected(m.clone()));
+        }
         for (a, f) in force_n.iter().enumerate() {
             self.force[a] = if f.is_finite() {
                 f.clamp(-DEVICE_MAX_FORCE_N, DEVICE_MAX_FORCE_N)
@@ -234,6 +297,10 @@ impl HapticDevice for SimDevice {
 
     fn make_safe(&mut self) {
         self.force = [0.0; 3];
+    }
+
+    fn take_stall(&mut self) -> Option<std::time::Duration> {
+        self.faults.stall.take()
     }
 }
 
@@ -353,6 +420,53 @@ mod tests {
         assert_eq!(dev.force, [DEVICE_MAX_FORCE_N, 0.0, -DEVICE_MAX_FORCE_N]);
         dev.make_safe();
         assert_eq!(dev.force, [0.0; 3]);
+    }
+
+    #[test]
+    fn injected_faults_come_at_their_time() {
+        let mut p = thesis();
+        let f = &mut p.simulator.faults;
+        f.read_error_after_s = Some(0.010);
+        f.stall_after_s = Some(0.020);
+        f.stall_ms = 5.0;
+        f.stalls = 2;
+        f.nan_after_s = Some(0.030);
+        f.vanish_after_s = Some(0.040);
+        let mut dev = SimDevice::new(&p, Path::new("."), None, 1).unwrap();
+        let mut errors = Vec::new();
+        let mut stalls = Vec::new();
+        let mut nans = Vec::new();
+        for i in 1..=50 {
+            let t = i as f64 * 0.001;
+            match dev.read(t) {
+                Ok(r) if r.pos_m[0].is_nan() => nans.push(i),
+                Ok(_) => {}
+                Err(e) => errors.push((i, e)),
+            }
+            if let Some(d) = dev.take_stall() {
+                assert_eq!(d, std::time::Duration::from_millis(5));
+                stalls.push(i);
+            }
+            let _ = dev.command([1.0, 0.0, 0.0]);
+        }
+        assert_eq!(stalls, [20, 21]);
+        assert_eq!(nans, [30]);
+        assert!(matches!(errors[0], (10, DeviceError::Io(_))), "{errors:?}");
+        // Gone for good from 40 ms: reads and commands fail, forces are zero.
+        assert_eq!(errors.len(), 1 + 11, "{errors:?}");
+        assert!(
+            errors[1..]
+                .iter()
+                .all(|(i, e)| *i >= 40 && matches!(e, DeviceError::Disconnected(_)))
+        );
+        assert!(dev.command([1.0, 0.0, 0.0]).is_err());
+        assert_eq!(dev.applied_force(), [0.0; 3]);
+        // The emulated Falcon's physics carries none of them.
+        let mut clean = SimDevice::new(&p, Path::new("."), None, 1)
+            .unwrap()
+            .without_faults();
+        assert!((1..=50).all(|i| clean.read(i as f64 * 0.001).is_ok()));
+        assert_eq!(clean.take_stall(), None);
     }
 
     #[test]

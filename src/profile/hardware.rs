@@ -96,6 +96,13 @@ pub struct EmulatorSection {
     pub split_rate: f64,
     /// Pull the cable this many seconds after the loop starts.
     pub unplug_after_s: Option<f64>,
+    /// The USB read fails (an I/O error) this many seconds after the loop starts.
+    pub read_error_after_s: Option<f64>,
+    /// The device stops answering for `stall_ms`, `stalls` times in a row,
+    /// from this many seconds after the loop starts.
+    pub stall_after_s: Option<f64>,
+    pub stall_ms: f64,
+    pub stalls: u32,
     /// A simulated hand homes the grip (pulls it out and pushes it in).
     pub auto_home: bool,
 }
@@ -109,9 +116,122 @@ impl Default for EmulatorSection {
             garble_rate: 0.0,
             split_rate: 0.0,
             unplug_after_s: None,
+            read_error_after_s: None,
+            stall_after_s: None,
+            stall_ms: 0.0,
+            stalls: 1,
             auto_home: true,
         }
     }
+}
+
+/// Faults the simulator injects (`[simulator.faults]`, `device.kind = "sim"`).
+/// Times are seconds of servo-loop time: from the start of the session (the
+/// loop starts just before the first scan's path; the thesis path reaches its
+/// scan leg about 3.4 s in). Each fault happens once, at the first servo
+/// tick at or after its time.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimFaults {
+    /// A read fails with an I/O error.
+    pub read_error_after_s: Option<f64>,
+    /// Reads stall for `stall_ms`, `stalls` in a row.
+    pub stall_after_s: Option<f64>,
+    pub stall_ms: f64,
+    pub stalls: u32,
+    /// A read returns a position of NaN.
+    pub nan_after_s: Option<f64>,
+    /// The device vanishes: every call fails from then on (as if unplugged).
+    pub vanish_after_s: Option<f64>,
+}
+
+impl Default for SimFaults {
+    fn default() -> Self {
+        SimFaults {
+            read_error_after_s: None,
+            stall_after_s: None,
+            stall_ms: 0.0,
+            stalls: 1,
+            nan_after_s: None,
+            vanish_after_s: None,
+        }
+    }
+}
+
+impl SimFaults {
+    /// Whether any fault is asked for.
+    pub fn any(&self) -> bool {
+        self.read_error_after_s.is_some()
+            || self.stall_after_s.is_some()
+            || self.nan_after_s.is_some()
+            || self.vanish_after_s.is_some()
+    }
+}
+
+/// A fault's time: positive seconds (`prefix.key`).
+fn fault_time(prefix: &str, key: &str, v: Option<f64>) -> Result<(), Invalid> {
+    if let Some(t) = v
+        && !(t.is_finite() && t > 0.0)
+    {
+        return bad(
+            format!("{prefix}.{key}"),
+            format!("must be a positive number of seconds, got {t}"),
+        );
+    }
+    Ok(())
+}
+
+/// A stall: its length and count, checked the same way for every device.
+fn stall(prefix: &str, after: Option<f64>, ms: f64, count: u32) -> Result<(), Invalid> {
+    fault_time(prefix, "stall_after_s", after)?;
+    if !(ms.is_finite() && (0.0..=10_000.0).contains(&ms)) {
+        return bad(
+            format!("{prefix}.stall_ms"),
+            format!("must be from 0 to 10000 ms, got {ms}"),
+        );
+    }
+    if after.is_some() && ms == 0.0 {
+        return bad(
+            format!("{prefix}.stall_after_s"),
+            "needs `stall_ms`, how long each stall lasts (e.g. 5.0 for five servo periods at 1 kHz)",
+        );
+    }
+    if !(1..=100_000).contains(&count) {
+        return bad(
+            format!("{prefix}.stalls"),
+            format!("must be from 1 to 100000, got {count}"),
+        );
+    }
+    Ok(())
+}
+
+/// Check `[simulator.faults]` (called by `Profile::validate`).
+pub fn validate_sim_faults(p: &Profile) -> Result<(), Invalid> {
+    let f = &p.simulator.faults;
+    let prefix = "simulator.faults";
+    fault_time(prefix, "read_error_after_s", f.read_error_after_s)?;
+    stall(prefix, f.stall_after_s, f.stall_ms, f.stalls)?;
+    fault_time(prefix, "nan_after_s", f.nan_after_s)?;
+    fault_time(prefix, "vanish_after_s", f.vanish_after_s)?;
+    if f.any() && p.device.kind != DeviceKind::Sim {
+        let first = [
+            ("read_error_after_s", f.read_error_after_s),
+            ("stall_after_s", f.stall_after_s),
+            ("nan_after_s", f.nan_after_s),
+            ("vanish_after_s", f.vanish_after_s),
+        ]
+        .into_iter()
+        .find(|(_, v)| v.is_some())
+        .map_or("read_error_after_s", |(k, _)| k);
+        return bad(
+            format!("{prefix}.{first}"),
+            format!(
+                "`[simulator.faults]` applies to device.kind = \"sim\" only, not {:?}; the emulated Falcon's faults go in `[falcon.emulator]` (read_error_after_s, stall_after_s, unplug_after_s, …)",
+                p.device.kind.name()
+            ),
+        );
+    }
+    Ok(())
 }
 
 /// What a trigger button does.
@@ -263,6 +383,12 @@ pub fn validate(p: &Profile) -> Result<(), Invalid> {
                 "must be a positive number of seconds",
             );
         }
+        fault_time(
+            "falcon.emulator",
+            "read_error_after_s",
+            e.read_error_after_s,
+        )?;
+        stall("falcon.emulator", e.stall_after_s, e.stall_ms, e.stalls)?;
         if !e.firmware_loaded && f.firmware.is_none() {
             return bad(
                 "falcon.emulator.firmware_loaded",

@@ -4,7 +4,7 @@
 //! the writer never writes anything the reader would refuse.
 
 use std::fs::{self, File};
-use std::io::{self, BufWriter, Write};
+use std::io::{self, BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use super::{
@@ -31,6 +31,12 @@ pub struct RecordingWriter {
     /// The row being formatted, reused so rows cost no allocation.
     line: Vec<u8>,
     rows: usize,
+    /// Bytes handed to the buffer so far.
+    written: u64,
+    /// The file's length and row count at the last successful flush: whole
+    /// rows only, where [`RecordingWriter::abort_after_error`] cuts back to.
+    good_len: u64,
+    good_rows: usize,
     /// fsync when finished or aborted (off for batches synced as a whole).
     sync: bool,
 }
@@ -119,14 +125,23 @@ impl RecordingWriter {
         }
         .map_err(io_error)?;
         let mut out = BufWriter::with_capacity(64 * 1024, file);
-        out.write_all(head.as_bytes()).map_err(io_error)?;
-        out.flush().map_err(io_error)?;
+        if let Err(e) = out.write_all(head.as_bytes()).and_then(|()| out.flush()) {
+            // A head cut short (a full disk) is no recording: leave no file
+            // the reader would refuse.
+            drop(out.into_parts());
+            let _ = fs::remove_file(path);
+            return Err(io_error(e));
+        }
+        let head_len = head.len() as u64;
         Ok(Self {
             path: path.to_path_buf(),
             out: Some(out),
             decimals: columns.iter().map(|c| decimals_for(c)).collect(),
             line: Vec::with_capacity(MAX_VALUE_BYTES * columns.len()),
             rows: 0,
+            written: head_len,
+            good_len: head_len,
+            good_rows: 0,
             sync: true,
         })
     }
@@ -177,6 +192,7 @@ impl RecordingWriter {
         };
         result.map_err(|e| self.io_error(e))?;
         self.rows += 1;
+        self.written += self.line.len() as u64;
         Ok(())
     }
 
@@ -186,7 +202,38 @@ impl RecordingWriter {
             Some(out) => out.flush(),
             None => return Err(self.closed()),
         };
-        result.map_err(|e| self.io_error(e))
+        result.map_err(|e| self.io_error(e))?;
+        self.good_len = self.written;
+        self.good_rows = self.rows;
+        Ok(())
+    }
+
+    /// After a failed write or flush (a full disk, a file size limit): cut
+    /// the file back to the rows that last reached it whole, so no row is
+    /// left cut short, and mark it `# aborted = "reason"` if that still fits.
+    /// The recording then reads as incomplete. Returns the rows kept, and
+    /// the error if even cutting back failed.
+    pub fn abort_after_error(mut self, reason: &str) -> (usize, Option<RecordingError>) {
+        let Some(out) = self.out.take() else {
+            return (self.good_rows, Some(self.closed()));
+        };
+        // What is still buffered is dropped, not written.
+        let (mut file, _) = out.into_parts();
+        let mut line = format!("# {ABORTED_KEY} = ");
+        write_inline_toml(&mut line, &toml::Value::String(reason.to_string()));
+        line.push('\n');
+        let cut = file
+            .set_len(self.good_len)
+            .and_then(|()| file.seek(SeekFrom::Start(self.good_len)).map(|_| ()));
+        if let Err(e) = cut {
+            return (self.good_rows, Some(self.io_error(e)));
+        }
+        if file.write_all(line.as_bytes()).is_err() {
+            // The reason does not fit either: the rows alone read as incomplete.
+            let _ = file.set_len(self.good_len);
+        }
+        let _ = file.sync_all();
+        (self.good_rows, None)
     }
 
     /// Writes the trailer `# end samples = N`, flushes and syncs; the row count.

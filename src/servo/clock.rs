@@ -21,6 +21,10 @@ pub trait Clock: Send {
     /// Whether ticks should be as punctual as the clock can make them (a
     /// real clock spins before deadlines then, if configured to).
     fn set_precise(&mut self, _on: bool) {}
+
+    /// Sit out a stall of `secs` inside a tick (a device read that blocked):
+    /// the real clock sleeps, the virtual clock moves on.
+    fn stall(&mut self, secs: f64);
 }
 
 pub struct RealClock {
@@ -92,6 +96,12 @@ impl Clock for RealClock {
 
     fn set_precise(&mut self, on: bool) {
         self.precise = on;
+    }
+
+    fn stall(&mut self, secs: f64) {
+        if secs.is_finite() && secs > 0.0 {
+            std::thread::sleep(std::time::Duration::from_secs_f64(secs));
+        }
     }
 }
 
@@ -254,6 +264,12 @@ impl Clock for VirtualClock {
 
     fn is_virtual(&self) -> bool {
         true
+    }
+
+    fn stall(&mut self, secs: f64) {
+        if secs.is_finite() && secs > 0.0 {
+            self.now += secs;
+        }
     }
 }
 

@@ -13,10 +13,12 @@
 //! pushed fully in — by a simulated hand when `auto_home` is on.
 //!
 //! Faults on demand: replies dropped, garbled or split in two, uploads that
-//! fail (a corrupted echo) a set number of times, and unplugging at a given
+//! fail (a corrupted echo) a set number of times, unplugging at a given
 //! time (every call then fails as a vanished USB device does, and the motors
-//! stop). It never sleeps: a read that finds nothing returns at once, so the
-//! same emulator runs in virtual and in real time.
+//! stop), a USB read that fails at a given time, and exchanges that stall
+//! (handed to the servo loop's clock through `take_stall`). It never sleeps:
+//! a read that finds nothing returns at once, so the same emulator runs in
+//! virtual and in real time.
 
 use std::collections::VecDeque;
 use std::time::Duration;
@@ -68,6 +70,12 @@ pub struct EmulatorConfig {
     pub split_rate: f64,
     /// Emulator time (s) at which the cable is pulled.
     pub unplug_after_s: Option<f64>,
+    /// Emulator time (s) at which one USB read fails with an I/O error.
+    pub read_error_after_s: Option<f64>,
+    /// From this emulator time (s), `stalls` reads in a row block for `stall_ms`.
+    pub stall_after_s: Option<f64>,
+    pub stall_ms: f64,
+    pub stalls: u32,
     /// A simulated hand pulls the grip out and pushes it in to home it.
     pub auto_home: bool,
     /// The boot loader answers the handshake with a leading 0x00.
@@ -88,6 +96,10 @@ impl Default for EmulatorConfig {
             garble_rate: 0.0,
             split_rate: 0.0,
             unplug_after_s: None,
+            read_error_after_s: None,
+            stall_after_s: None,
+            stall_ms: 0.0,
+            stalls: 1,
             auto_home: true,
             leading_zero: false,
             seed: 1,
@@ -160,6 +172,9 @@ pub struct EmulatedFalcon {
     last_counts: [i16; 3],
     t: f64,
     unplugged: bool,
+    read_error_done: bool,
+    stalls_done: u32,
+    stall: Option<Duration>,
     pub counters: EmulatorCounters,
 }
 
@@ -195,6 +210,9 @@ impl EmulatedFalcon {
             last_counts: [0; 3],
             t: 0.0,
             unplugged: false,
+            read_error_done: false,
+            stalls_done: 0,
+            stall: None,
             counters: EmulatorCounters::default(),
             cfg,
         }
@@ -210,6 +228,11 @@ impl EmulatedFalcon {
 
     pub fn is_homed(&self) -> bool {
         self.homed
+    }
+
+    /// The motor commands the firmware is applying (zero once made safe or unplugged).
+    pub fn motor(&self) -> [i16; 3] {
+        self.motor
     }
 
     /// Pull the cable now.
@@ -483,6 +506,13 @@ impl FalconTransport for EmulatedFalcon {
 
     fn read(&mut self, buf: &mut [u8], _timeout: Duration) -> Result<usize, TransportError> {
         self.check()?;
+        if !self.read_error_done && self.cfg.read_error_after_s.is_some_and(|a| self.t >= a) {
+            self.read_error_done = true;
+            return Err(TransportError::Io(format!(
+                "the emulated Falcon's USB read failed at {:.3} s, as `[falcon.emulator] read_error_after_s` asks (on a real one: check the USB cable and hub)",
+                self.t
+            )));
+        }
         while self.replies_due > 0 {
             self.replies_due -= 1;
             let r = self.reply();
@@ -518,6 +548,10 @@ impl FalconTransport for EmulatedFalcon {
         if !self.unplugged && self.cfg.unplug_after_s.is_some_and(|u| t_s >= u) {
             self.unplug();
         }
+        if self.stalls_done < self.cfg.stalls && self.cfg.stall_after_s.is_some_and(|a| t_s >= a) {
+            self.stalls_done += 1;
+            self.stall = Some(Duration::from_secs_f64(self.cfg.stall_ms / 1000.0));
+        }
         if !self.unplugged {
             self.outside_forces();
         } else {
@@ -525,6 +559,10 @@ impl FalconTransport for EmulatedFalcon {
         }
         // The physics runs whether or not anyone listens.
         let _ = self.sim.read(t_s);
+    }
+
+    fn take_stall(&mut self) -> Option<Duration> {
+        self.stall.take()
     }
 }
 
