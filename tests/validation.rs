@@ -169,12 +169,12 @@ fn sweep_values_and_keys() {
     assert!(v[0].is_array());
     let (_, v) = parse_sweep("metric=euclidean,cosine").unwrap();
     assert_eq!(v[1].as_str(), Some("cosine"));
-    let err = parse_sweep("speed=0.01,0.02").err().unwrap();
-    assert!(
-        err.message().contains("simulate one dataset per value"),
-        "{}",
-        err.message()
-    );
+    // Decimal ranges keep the decimals written (no 0.015000000000000001).
+    let (_, v) = parse_sweep("path.speed_m_per_s=0.005..0.02:0.005").unwrap();
+    let v: Vec<f64> = v.iter().map(|x| x.as_float().unwrap()).collect();
+    assert_eq!(v, [0.005, 0.01, 0.015, 0.02]);
+    assert!(parse_sweep("k=3..1").is_err());
+    assert!(parse_sweep("k=1..x").is_err());
     assert!(parse_sweep("k").is_err());
 
     let p = LoadedProfile::thesis().profile;
