@@ -185,7 +185,7 @@ pub enum Command {
         profile: ProfileArg,
         #[arg(required = true, value_name = "PATH")]
         paths: Vec<PathBuf>,
-        /// Outlier threshold t: distance to the class centroid beyond median + t x 1.4826 x MAD.
+        /// Outlier threshold t: distance d to the class centroid beyond median + t x 1.4826 x MAD, on the scale d^(2/3).
         #[arg(long, default_value_t = 3.0, value_name = "T")]
         threshold: f64,
         /// Print JSON for scripts.
