@@ -545,11 +545,17 @@ pub fn with_resolved(
             }
         }
     }
-    let p: Profile = toml::Value::Table(doc)
+    let mut p: Profile = toml::Value::Table(doc)
         .try_into()
         .map_err(|e: toml::de::Error| {
             bad(format!("--sweep {name} = {value}: {}", e.message().trim()))
         })?;
+    // A window over the whole scan leg follows the swept path (unless the
+    // window itself is swept).
+    if !(k.table == "analysis" && k.field == "window") {
+        p.analysis.window_is_scan_leg = profile.analysis.window_is_scan_leg;
+    }
+    p.resolve_window();
     p.validate()
         .map_err(|v| bad(format!("--sweep {name} = {value}: {}: {}", v.key, v.reason)))?;
     Ok(p)
