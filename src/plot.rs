@@ -596,7 +596,18 @@ impl Data {
                     .label_style(font)
                     .draw()
                     .map_err(fail)?;
-                // A value that could not be evaluated (NaN) has no mark.
+                // A value that could not be evaluated (NaN) is a cross on the axis.
+                let missing: Vec<usize> = (0..n).filter(|&i| !points[i].1.is_finite()).collect();
+                if !missing.is_empty() {
+                    c.draw_series(
+                        missing
+                            .iter()
+                            .map(|&i| Cross::new((i as f64, 0.0), 6, BLACK.stroke_width(2))),
+                    )
+                    .map_err(fail)?
+                    .label("not evaluated")
+                    .legend(|(x, y)| Cross::new((x + 10, y), 6, BLACK.stroke_width(2)));
+                }
                 let points: Vec<(usize, &(String, f64, f64))> = points
                     .iter()
                     .enumerate()

@@ -174,6 +174,26 @@ fn a_value_whose_recordings_cannot_be_analysed_is_reported_not_fatal() {
     assert!(s.points[1].error.as_deref().unwrap().contains("spacing"));
     assert!(s.table().contains("not evaluated"));
     assert!(s.table().contains("best: path.speed_m_per_s = 0.01"));
+    // The JSON has null numbers and the reason; the figure draws the rest.
+    let json = serde_json::to_value(&s).unwrap();
+    assert!(json["points"][1]["accuracy"].is_null());
+    assert!(json["points"][1]["error"].is_string());
+    let dir = tempfile::tempdir().unwrap();
+    let (j, png) = (dir.path().join("s.json"), dir.path().join("s.png"));
+    std::fs::write(&j, json.to_string()).unwrap();
+    let out = hapticlab(&[
+        "plot",
+        "sweep",
+        j.to_str().unwrap(),
+        "--out",
+        png.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(std::fs::metadata(&png).unwrap().len() > 1000);
 }
 
 #[test]
