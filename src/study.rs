@@ -741,7 +741,8 @@ pub fn sweep(
         progress(i + 1);
     }
     Ok(Sweep {
-        key: k.name(),
+        // As typed (`k`), like the sweeps before simulated ones.
+        key: key.to_string(),
         method: plan.describe(),
         points,
         simulated: None,
