@@ -134,12 +134,17 @@ pub enum Command {
     },
     /// Train and test on a split of the recordings; print the confusion matrix (Table 4.1).
     #[command(
-        after_help = "Examples:\n  hapticlab evaluate recordings/thesis-sim --json > report.json\n  hapticlab evaluate recordings/thesis-sim --folds 10 --seed 1\n  hapticlab evaluate recordings/lab --folds 5 --group-by session\n  hapticlab evaluate recordings/thesis-sim --folds 10 --sweep k=1..15"
+        after_help = "Examples:\n  hapticlab evaluate recordings/thesis-sim --json > report.json\n  hapticlab evaluate recordings/thesis-sim --folds 10 --seed 1\n  hapticlab evaluate recordings/lab --folds 5 --group-by session\n  hapticlab evaluate recordings/thesis-sim --folds 10 --sweep k=1..15\n  hapticlab evaluate --profile thesis --simulate --folds 5 --sweep controller.stiffness_n_per_m[1]=90..540:90"
     )]
     Evaluate {
         #[command(flatten)]
         profile: ProfileArg,
-        #[arg(required = true, value_name = "PATH")]
+        /// Recordings or folders of recordings (none with --simulate).
+        #[arg(
+            required_unless_present = "simulate",
+            conflicts_with = "simulate",
+            value_name = "PATH"
+        )]
         paths: Vec<PathBuf>,
         /// Shuffle each class with this seed before the split (default: file-name order).
         #[arg(long, value_name = "S")]
@@ -194,7 +199,7 @@ pub enum Command {
         profile: ProfileArg,
         #[arg(required = true, value_name = "PATH")]
         paths: Vec<PathBuf>,
-        /// Outlier threshold t: distance to the class centroid beyond median + t x 1.4826 x MAD.
+        /// Outlier threshold t: distance d to the class centroid beyond median + t x 1.4826 x MAD, on the scale d^(2/3).
         #[arg(long, default_value_t = 3.0, value_name = "T")]
         threshold: f64,
         /// Print JSON for scripts.

@@ -57,7 +57,7 @@ pub fn load_profile(arg: &ProfileArg) -> Result<LoadedProfile, Failure> {
 }
 
 /// A progress bar on a terminal; nothing when standard error is piped.
-fn progress_bar(total: u64, what: &str) -> ProgressBar {
+pub(crate) fn progress_bar(total: u64, what: &str) -> ProgressBar {
     if !std::io::stderr().is_terminal() {
         return ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden());
     }

@@ -591,13 +591,31 @@ impl Data {
                             String::new()
                         }
                     })
-                    .x_desc(key.clone())
+                    .x_desc(with_unit(key))
                     .y_desc("accuracy (%)")
                     .label_style(font)
                     .draw()
                     .map_err(fail)?;
-                c.draw_series(points.iter().enumerate().map(|(i, p)| {
-                    let (lo, hi) = (100.0 * (p.1 - p.2), 100.0 * (p.1 + p.2));
+                // A value that could not be evaluated (NaN) is a cross on the axis.
+                let missing: Vec<usize> = (0..n).filter(|&i| !points[i].1.is_finite()).collect();
+                if !missing.is_empty() {
+                    c.draw_series(
+                        missing
+                            .iter()
+                            .map(|&i| Cross::new((i as f64, 0.0), 6, BLACK.stroke_width(2))),
+                    )
+                    .map_err(fail)?
+                    .label("not evaluated")
+                    .legend(|(x, y)| Cross::new((x + 10, y), 6, BLACK.stroke_width(2)));
+                }
+                let points: Vec<(usize, &(String, f64, f64))> = points
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, p)| p.1.is_finite())
+                    .collect();
+                c.draw_series(points.iter().map(|&(i, p)| {
+                    let sd = if p.2.is_finite() { p.2 } else { 0.0 };
+                    let (lo, hi) = (100.0 * (p.1 - sd), 100.0 * (p.1 + sd));
                     PathElement::new(
                         [(i as f64, lo.max(0.0)), (i as f64, hi.min(100.0))],
                         GREYS[1].stroke_width(2),
@@ -609,10 +627,7 @@ impl Data {
                     PathElement::new([(x + 10, y - 8), (x + 10, y + 8)], GREYS[1].stroke_width(2))
                 });
                 c.draw_series(LineSeries::new(
-                    points
-                        .iter()
-                        .enumerate()
-                        .map(|(i, p)| (i as f64, 100.0 * p.1)),
+                    points.iter().map(|&(i, p)| (i as f64, 100.0 * p.1)),
                     BLACK.stroke_width(2),
                 ))
                 .map_err(fail)?
@@ -621,8 +636,7 @@ impl Data {
                 c.draw_series(
                     points
                         .iter()
-                        .enumerate()
-                        .map(|(i, p)| Circle::new((i as f64, 100.0 * p.1), 4, BLACK.filled())),
+                        .map(|&(i, p)| Circle::new((i as f64, 100.0 * p.1), 4, BLACK.filled())),
                 )
                 .map_err(fail)?;
                 c.configure_series_labels()
@@ -635,5 +649,29 @@ impl Data {
             }
         }
         Ok(())
+    }
+}
+
+/// A swept key as an axis label: the unit its name ends with spelled out,
+/// `controller.stiffness_n_per_m[1]` as `controller.stiffness_n_per_m[1] (N/m)`.
+pub fn with_unit(key: &str) -> String {
+    let field = key.split('[').next().unwrap_or(key);
+    let unit = [
+        ("_n_s_per_m", "N·s/m"),
+        ("_n_per_m", "N/m"),
+        ("_m_per_s", "m/s"),
+        ("_hz", "Hz"),
+        ("_kg", "kg"),
+        ("_n", "N"),
+        ("_m", "m"),
+        ("_s", "s"),
+        ("_us", "µs"),
+    ]
+    .iter()
+    .find(|(suffix, _)| field.ends_with(suffix))
+    .map(|(_, u)| *u);
+    match unit {
+        Some(u) => format!("{key} ({u})"),
+        None => key.to_string(),
     }
 }

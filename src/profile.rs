@@ -375,8 +375,16 @@ pub struct Analysis {
     /// The resampling axis: a position column (distance from the scan's
     /// first sample) or `t_s` (time since the scan's first sample).
     pub axis: String,
-    /// [start, end] of the window along the axis, from the scan's start, in the axis's unit.
+    /// [start, end] of the window along the axis, from the scan's start, in
+    /// the axis's unit; `"scan-leg"` in a profile: the whole scan leg,
+    /// `[0, the leg's extent along the axis]` (for `t_s`, its duration with
+    /// the dwell), worked out from `[path]` when the profile is loaded.
+    #[serde(deserialize_with = "window_or_scan_leg")]
     pub window: [f64; 2],
+    /// Set when the profile said `window = "scan-leg"`: the window follows
+    /// the path (a sweep of the path's speed moves its end).
+    #[serde(skip)]
+    pub window_is_scan_leg: bool,
     /// Resampling spacing, in the axis's unit (thesis: 0.3 mm).
     pub spacing: f64,
     #[serde(default)]
@@ -405,6 +413,29 @@ pub struct Analysis {
     pub welch_overlap: Option<f64>,
 }
 
+/// What `window = "scan-leg"` reads as until [`Profile::resolve_window`]
+/// works out the leg's extent: [0, +inf], which no validation accepts.
+const SCAN_LEG: [f64; 2] = [0.0, f64::INFINITY];
+
+fn window_or_scan_leg<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum W {
+        Range([f64; 2]),
+        Word(String),
+    }
+    match W::deserialize(d) {
+        Ok(W::Range(r)) => Ok(r),
+        Ok(W::Word(w)) if w == "scan-leg" => Ok(SCAN_LEG),
+        Ok(W::Word(w)) => Err(serde::de::Error::custom(format!(
+            "window must be [start, end] or \"scan-leg\", got {w:?}"
+        ))),
+        Err(_) => Err(serde::de::Error::custom(
+            "window must be [start, end] (two numbers) or \"scan-leg\"",
+        )),
+    }
+}
+
 fn is_default<T: Default + PartialEq>(v: &T) -> bool {
     *v == T::default()
 }
@@ -416,6 +447,7 @@ impl Default for Analysis {
             channel: "y_m".into(),
             axis: "x_m".into(),
             window: [0.060, 0.0897],
+            window_is_scan_leg: false,
             spacing: 0.0003,
             detrend: Detrend::Mean,
             spectrum: SpectrumKind::Magnitude,
@@ -845,6 +877,8 @@ impl LoadedProfile {
                 reason: e.message().trim().to_string(),
             }
         })?;
+        let mut profile = profile;
+        profile.resolve_window();
         if let Err(v) = profile.validate() {
             let (line, column) = locate_key(text, &v.key);
             return Err(ProfileError {
@@ -1056,6 +1090,12 @@ impl Profile {
             );
         }
         finite_pos("analysis.spacing", an.spacing)?;
+        if an.window == SCAN_LEG {
+            return bad(
+                "analysis.window",
+                "\"scan-leg\" needs a scan leg that moves along the axis",
+            );
+        }
         if !(an.window[0].is_finite()
             && an.window[1].is_finite()
             && an.window[0] >= 0.0
@@ -1083,7 +1123,7 @@ impl Profile {
             return bad(
                 "analysis.window",
                 format!(
-                    "ends at {} but the scan leg spans only {:.6} along {}",
+                    "ends at {} but the scan leg spans only {:.6} along {} (window = \"scan-leg\" takes all of it)",
                     an.window[1], leg_extent, an.axis
                 ),
             );
@@ -1273,6 +1313,40 @@ impl Profile {
 
     pub fn texture(&self, label: &str) -> Option<&Texture> {
         self.textures.iter().find(|t| t.label == label)
+    }
+
+    /// The scan leg's extent along `axis`: its travel along a position
+    /// axis (`x_m`, `y_m`, `z_m`), metres, or its duration with the dwell
+    /// (`t_s`), seconds. `None` for another axis or an invalid path.
+    pub fn scan_leg_extent(&self, axis: &str) -> Option<f64> {
+        let p = &self.path;
+        if p.scan_leg == 0 || p.scan_leg >= p.waypoints_m.len() {
+            return None;
+        }
+        let (a0, a1) = (p.waypoints_m[p.scan_leg - 1], p.waypoints_m[p.scan_leg]);
+        match axis {
+            "x_m" => Some((a1[0] - a0[0]).abs()),
+            "y_m" => Some((a1[1] - a0[1]).abs()),
+            "z_m" => Some((a1[2] - a0[2]).abs()),
+            "t_s" => Some(dist(a0, a1) / p.speed_m_per_s + p.dwell_s),
+            _ => None,
+        }
+    }
+
+    /// Work out `window = "scan-leg"`: [0, the leg's extent along the
+    /// axis]. Call after deserialising, before [`Self::validate`] (which
+    /// refuses the unresolved [0, +inf]); again after changing the path.
+    pub fn resolve_window(&mut self) {
+        if self.analysis.window == SCAN_LEG {
+            self.analysis.window_is_scan_leg = true;
+        }
+        if self.analysis.window_is_scan_leg
+            && let Some(e) = self.scan_leg_extent(&self.analysis.axis)
+            && e.is_finite()
+            && e > 0.0
+        {
+            self.analysis.window = [0.0, e];
+        }
     }
 
     /// Length of the scan leg, metres.

@@ -8,7 +8,11 @@
 //! profile's `[analysis]`, `[classifier]` or `[evaluation]` table through
 //! TOML, so every key those tables accept can be swept and is validated as
 //! in a profile file. Keys that change the recordings themselves (the
-//! simulator's speed, stiffness, …) need a new dataset and are refused.
+//! path's speed, the controller's stiffness, any `[controller]`, `[path]`,
+//! `[simulator]` or `[device]` key) need a new dataset per value: with
+//! `--simulate`, each value simulates one in virtual time (in a temporary
+//! folder, same seed for every value) and evaluates it; over recordings on
+//! disk they are refused.
 
 use std::path::PathBuf;
 
@@ -39,18 +43,29 @@ pub struct ValidationArgs {
     /// Seed of the folds' shuffle (default: the profile's evaluation.shuffle_seed, else 0).
     #[arg(long, value_name = "S")]
     pub seed: Option<u64>,
-    /// Evaluate once per value of a profile key: `k=1..15`, `k=1..15:2`, `metric=euclidean,cosine`, `spacing=0.0002,0.0003`, `spectrum=magnitude,welch`.
+    /// Evaluate once per value of a profile key: `k=1..15`, `k=1..15:2`, `metric=euclidean,cosine`, `spacing=0.0002,0.0003`, `spectrum=magnitude,welch`; with --simulate also `controller.stiffness_n_per_m[1]=90..540:90`, `path.speed_m_per_s=0.005..0.03:0.005`.
     #[arg(long, value_name = "KEY=VALUES")]
     pub sweep: Option<String>,
     /// Worker threads for the folds and the reading (default: the number of cores).
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
+    /// Evaluate a dataset simulated from the profile in virtual time (no PATH; a temporary folder, removed after); with --sweep of a [controller], [path], [simulator] or [device] key, one dataset per value.
+    #[arg(long)]
+    pub simulate: bool,
+    /// With --simulate: scans per texture (default: the profile's train_per_class + test_per_class).
+    #[arg(long, value_name = "N")]
+    pub per_class: Option<usize>,
 }
 
 impl ValidationArgs {
     /// Whether anything beyond the thesis's holdout was asked for.
     pub fn is_active(&self) -> bool {
-        self.folds.is_some() || self.loo || self.group_by.is_some() || self.sweep.is_some()
+        self.folds.is_some()
+            || self.loo
+            || self.group_by.is_some()
+            || self.sweep.is_some()
+            || self.simulate
+            || self.per_class.is_some()
     }
 }
 
@@ -287,18 +302,9 @@ pub fn validate(
     .map_err(bad)
 }
 
-/// Keys that change the recordings, not their analysis: sweeping them
-/// needs a new dataset per value.
-const NEEDS_RESIMULATING: [&str; 6] = [
-    "speed",
-    "speed_m_per_s",
-    "stiffness",
-    "stiffness_y",
-    "stiffness_n_per_m",
-    "damping_n_s_per_m",
-];
-
-/// `KEY=VALUES` into the key and its values as TOML literals.
+/// `KEY=VALUES` into the key and its values as TOML literals: `1..15`,
+/// `1..15:2`, `0.005..0.02:0.005` (a range, ends included), or a comma
+/// list (`euclidean,cosine`, `[0,1],[1,2]`).
 pub fn parse_sweep(spec: &str) -> Result<(String, Vec<toml::Value>), Failure> {
     let (key, values) = spec.split_once('=').ok_or_else(|| {
         bad(format!(
@@ -306,44 +312,13 @@ pub fn parse_sweep(spec: &str) -> Result<(String, Vec<toml::Value>), Failure> {
         ))
     })?;
     let key = key.trim().to_string();
-    let short = key.rsplit('.').next().unwrap_or(&key);
-    if NEEDS_RESIMULATING.contains(&short)
-        || key.starts_with("simulator")
-        || key.starts_with("path")
-        || key.starts_with("controller")
-    {
-        return Err(bad(format!(
-            "--sweep {key}: this key changes the recordings themselves, which evaluate cannot redo; \
-             simulate one dataset per value (hapticlab simulate --profile P --out DIR) and evaluate each. \
-             Sweepable: any key of [analysis], [classifier] or [evaluation], e.g. k, metric, weights, \
-             spacing, spectrum, taper, window, band, welch_segment"
-        )));
+    if key.is_empty() {
+        return Err(bad(format!("--sweep {spec:?}: no key before `=`")));
     }
     let values = values.trim();
     let mut out = Vec::new();
     if let Some((a, b)) = values.split_once("..") {
-        let (b, step) = match b.split_once(':') {
-            Some((b, s)) => (b, s),
-            None => (b, "1"),
-        };
-        let parse = |s: &str| {
-            s.trim().parse::<i64>().map_err(|_| {
-                bad(format!(
-                    "--sweep {key}: {values:?} is not a range like 1..15 or 1..15:2"
-                ))
-            })
-        };
-        let (a, b, step) = (parse(a)?, parse(b)?, parse(step)?);
-        if step <= 0 || b < a || (b - a) / step > 10_000 {
-            return Err(bad(format!(
-                "--sweep {key}: {values:?} is an empty or too long range"
-            )));
-        }
-        let mut v = a;
-        while v <= b {
-            out.push(toml::Value::Integer(v));
-            v += step;
-        }
+        out = parse_range(&key, values, a, b)?;
     } else {
         for item in split_top_level(values)
             .iter()
@@ -361,6 +336,55 @@ pub fn parse_sweep(spec: &str) -> Result<(String, Vec<toml::Value>), Failure> {
         return Err(bad(format!("--sweep {key}: no values")));
     }
     Ok((key, out))
+}
+
+/// `a..b` or `a..b:step`: whole numbers when all three are, else decimals
+/// rounded to the most decimals written (so 0.1 steps stay 0.1, 0.2, …).
+fn parse_range(key: &str, values: &str, a: &str, b: &str) -> Result<Vec<toml::Value>, Failure> {
+    let (b, step) = match b.split_once(':') {
+        Some((b, s)) => (b, s),
+        None => (b, "1"),
+    };
+    let (a, b, step) = (a.trim(), b.trim(), step.trim());
+    let not_range = || {
+        bad(format!(
+            "--sweep {key}: {values:?} is not a range like 1..15, 1..15:2 or 0.005..0.02:0.005"
+        ))
+    };
+    let too_long = || {
+        bad(format!(
+            "--sweep {key}: {values:?} is an empty or too long range (at most 10,000 values)"
+        ))
+    };
+    if let (Ok(a), Ok(b), Ok(step)) = (a.parse::<i64>(), b.parse::<i64>(), step.parse::<i64>()) {
+        if step <= 0 || b < a || (b - a) / step > 10_000 {
+            return Err(too_long());
+        }
+        return Ok((0..=(b - a) / step)
+            .map(|i| toml::Value::Integer(a + i * step))
+            .collect());
+    }
+    let decimals = [a, b, step]
+        .iter()
+        .map(|s| s.split_once('.').map_or(0, |(_, d)| d.len()))
+        .max()
+        .unwrap_or(0)
+        .min(15) as i32;
+    let num = |s: &str| {
+        s.parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(not_range)
+    };
+    let (a, b, step) = (num(a)?, num(b)?, num(step)?);
+    if step <= 0.0 || b < a || (b - a) / step > 10_000.0 {
+        return Err(too_long());
+    }
+    let scale = 10f64.powi(decimals);
+    let n = ((b - a) / step + 1e-9).floor() as usize;
+    Ok((0..=n)
+        .map(|i| toml::Value::Float(((a + i as f64 * step) * scale).round() / scale))
+        .collect())
 }
 
 /// Split at the commas outside brackets: `[0,1],[1,2]` is two values.
@@ -381,37 +405,159 @@ fn split_top_level(s: &str) -> Vec<&str> {
     out
 }
 
-/// The profile with `key` set to `value`: the key is looked up in
-/// `[analysis]`, `[classifier]`, then `[evaluation]` (or named with its
-/// table, `analysis.spacing`), then the profile is validated.
-pub fn with_key(profile: &Profile, key: &str, value: &toml::Value) -> Result<Profile, Failure> {
-    let mut doc = toml::Table::try_from(profile).map_err(bad)?;
-    let (tables, field): (Vec<&str>, &str) = match key.split_once('.') {
-        Some((t, f)) => (vec![t], f),
-        None => (vec!["analysis", "classifier", "evaluation"], key),
-    };
-    let table = tables
-        .iter()
-        .find(|t| {
-            doc.get(**t)
-                .and_then(|v| v.as_table())
-                .is_some_and(|tab| tab.contains_key(field) || known_field(t, field))
-        })
-        .ok_or_else(|| {
-            bad(format!(
-                "--sweep {key}: not a key of [analysis], [classifier] or [evaluation]"
-            ))
-        })?;
-    if let Some(tab) = doc.get_mut(*table).and_then(|v| v.as_table_mut()) {
-        tab.insert(field.to_string(), value.clone());
+/// The tables a sweep sets without new recordings: their keys change how
+/// the recordings are analysed, classified or split.
+pub const ANALYSIS_TABLES: [&str; 3] = ["analysis", "classifier", "evaluation"];
+/// The tables whose keys change the recordings themselves: sweeping them
+/// needs a new simulated dataset per value (`evaluate --simulate`).
+pub const SIMULATION_TABLES: [&str; 4] = ["controller", "path", "simulator", "device"];
+
+/// A swept key, resolved against the profile: its table, its field, and
+/// for a 3-vector (`stiffness_n_per_m`, …) optionally one component.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SweepKey {
+    pub table: String,
+    pub field: String,
+    /// 0, 1, 2 for x, y, z: written `stiffness_n_per_m[1]` or `stiffness_n_per_m.y`.
+    pub component: Option<usize>,
+}
+
+impl SweepKey {
+    /// Whether each value needs its own recordings (a simulated dataset).
+    pub fn needs_simulation(&self) -> bool {
+        SIMULATION_TABLES.contains(&self.table.as_str())
     }
-    let p: Profile = toml::Value::Table(doc)
+    /// `table.field` or `table.field[i]`, as reports name it.
+    pub fn name(&self) -> String {
+        match self.component {
+            Some(i) => format!("{}.{}[{i}]", self.table, self.field),
+            None => format!("{}.{}", self.table, self.field),
+        }
+    }
+}
+
+/// Find `key` in the profile: `table.field` (`analysis.spacing`,
+/// `path.speed_m_per_s`), or a bare field looked up in `[analysis]`,
+/// `[classifier]`, `[evaluation]`, then `[controller]`, `[path]`,
+/// `[simulator]`, `[device]`; a 3-vector's component as `field[1]` or
+/// `field.y`.
+pub fn resolve_key(profile: &Profile, key: &str) -> Result<SweepKey, Failure> {
+    let doc = toml::Table::try_from(profile).map_err(bad)?;
+    let unknown = || {
+        bad(format!(
+            "--sweep {key}: not a key of [analysis], [classifier] or [evaluation] (evaluated on the \
+             recordings) nor of [controller], [path], [simulator] or [device] (with --simulate); \
+             e.g. k, spacing, taper, controller.stiffness_n_per_m[1], path.speed_m_per_s"
+        ))
+    };
+    let mut rest = key.trim();
+    let mut component = None;
+    if let Some(open) = rest.strip_suffix(']').and_then(|r| r.rfind('[')) {
+        let idx = &rest[open + 1..rest.len() - 1];
+        component = Some(idx.trim().parse::<usize>().map_err(|_| {
+            bad(format!(
+                "--sweep {key}: `[{idx}]` is not a component index (0, 1 or 2)"
+            ))
+        })?);
+        rest = &rest[..open];
+    }
+    let (table, field) = match rest.split_once('.') {
+        Some((t, f)) if ANALYSIS_TABLES.contains(&t) || SIMULATION_TABLES.contains(&t) => {
+            (Some(t), f)
+        }
+        _ => (None, rest),
+    };
+    let field = match field.rsplit_once('.') {
+        Some((f, axis @ ("x" | "y" | "z"))) if component.is_none() => {
+            component = Some(["x", "y", "z"].iter().position(|a| *a == axis).unwrap_or(0));
+            f
+        }
+        Some(_) => return Err(unknown()),
+        None => field,
+    };
+    let has = |t: &str| {
+        doc.get(t)
+            .and_then(|v| v.as_table())
+            .is_some_and(|tab| tab.contains_key(field) || known_field(t, field))
+    };
+    let table = match table {
+        Some(t) if has(t) => t,
+        Some(_) => return Err(unknown()),
+        None => ANALYSIS_TABLES
+            .iter()
+            .chain(SIMULATION_TABLES.iter())
+            .find(|t| has(t))
+            .copied()
+            .ok_or_else(unknown)?,
+    };
+    if let Some(i) = component {
+        let len = doc
+            .get(table)
+            .and_then(|t| t.get(field))
+            .and_then(|v| v.as_array())
+            .map(Vec::len);
+        if len != Some(3) || i > 2 {
+            return Err(bad(format!(
+                "--sweep {key}: only a 3-vector such as controller.stiffness_n_per_m has components, [0] to [2] (x, y, z)"
+            )));
+        }
+    }
+    Ok(SweepKey {
+        table: table.to_string(),
+        field: field.to_string(),
+        component,
+    })
+}
+
+/// The profile with `key` set to `value` (see [`resolve_key`]), validated
+/// as a profile file would be. A whole number where the profile holds a
+/// decimal is taken as that decimal.
+pub fn with_key(profile: &Profile, key: &str, value: &toml::Value) -> Result<Profile, Failure> {
+    let k = resolve_key(profile, key)?;
+    with_resolved(profile, &k, value)
+}
+
+/// [`with_key`] for a key already resolved.
+pub fn with_resolved(
+    profile: &Profile,
+    k: &SweepKey,
+    value: &toml::Value,
+) -> Result<Profile, Failure> {
+    let name = k.name();
+    let mut doc = toml::Table::try_from(profile).map_err(bad)?;
+    let as_like = |old: Option<&toml::Value>, v: &toml::Value| match (old, v) {
+        (Some(toml::Value::Float(_)), toml::Value::Integer(i)) => toml::Value::Float(*i as f64),
+        _ => v.clone(),
+    };
+    if let Some(tab) = doc.get_mut(&k.table).and_then(|v| v.as_table_mut()) {
+        match k.component {
+            Some(i) => {
+                if let Some(arr) = tab.get_mut(&k.field).and_then(|v| v.as_array_mut()) {
+                    let v = as_like(arr.get(i), value);
+                    if let Some(slot) = arr.get_mut(i) {
+                        *slot = v;
+                    }
+                }
+            }
+            None => {
+                let v = as_like(tab.get(&k.field), value);
+                tab.insert(k.field.clone(), v);
+            }
+        }
+    }
+    let mut p: Profile = toml::Value::Table(doc)
         .try_into()
         .map_err(|e: toml::de::Error| {
-            bad(format!("--sweep {key} = {value}: {}", e.message().trim()))
+            bad(format!("--sweep {name} = {value}: {}", e.message().trim()))
         })?;
+    // A window over the whole scan leg follows the swept path (unless the
+    // window itself is swept).
+    if !(k.table == "analysis" && k.field == "window") {
+        p.analysis.window_is_scan_leg = profile.analysis.window_is_scan_leg;
+    }
+    p.resolve_window();
     p.validate()
-        .map_err(|v| bad(format!("--sweep {key} = {value}: {}: {}", v.key, v.reason)))?;
+        .map_err(|v| bad(format!("--sweep {name} = {value}: {}: {}", v.key, v.reason)))?;
     Ok(p)
 }
 
@@ -431,6 +577,7 @@ fn known_field(table: &str, field: &str) -> bool {
         .contains(&field),
         "classifier" => ["metric", "weights", "standardize", "k_candidates"].contains(&field),
         "evaluation" => ["shuffle_seed", "method", "folds", "group_by"].contains(&field),
+        "path" => ["transit_speed_m_per_s"].contains(&field),
         _ => false,
     }
 }
@@ -444,6 +591,20 @@ pub struct SweepPoint {
     pub macro_f1: f64,
     /// The k used per fold (differs from the value only with k = "auto").
     pub k: Vec<usize>,
+    /// Recordings evaluated (simulated sweeps: scans that finished).
+    pub recordings: usize,
+    /// Simulated sweeps: scans that did not finish (left out).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub incomplete: usize,
+    /// Simulated sweeps: why this value's dataset could not be evaluated
+    /// (e.g. a path so fast the window has gaps); its numbers are NaN
+    /// (`null` in JSON).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -451,10 +612,88 @@ pub struct Sweep {
     pub key: String,
     pub method: String,
     pub points: Vec<SweepPoint>,
+    /// Set when every value was evaluated on its own simulated dataset.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub simulated: Option<SimulatedInfo>,
+}
+
+/// How a simulated sweep's datasets were made.
+#[derive(Debug, Clone, Serialize)]
+pub struct SimulatedInfo {
+    /// Scans per texture and value.
+    pub per_class: usize,
+    /// The dataset seed (the profile's `simulator.seed`): the same for every
+    /// value, so the values differ only in the swept key.
+    pub seed: u64,
+}
+
+/// How `evaluate --simulate` makes its datasets.
+#[derive(Debug, Clone, Copy)]
+pub struct SimPlan {
+    pub per_class: usize,
+    pub threads: usize,
+}
+
+/// A dataset simulated from `lp` in virtual time (`per_class` scans of
+/// every texture, seeded with the profile's `simulator.seed`), written to a
+/// temporary folder that is removed before this returns, and loaded for
+/// `analysis`. File names are relative (`S2/S2_001.csv`). `progress` hears
+/// (done, total) scans.
+pub fn simulated_dataset(
+    lp: &crate::profile::LoadedProfile,
+    sim: SimPlan,
+    analysis: &Analysis,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Dataset, Failure> {
+    let dir = tempfile::Builder::new()
+        .prefix("hapticlab-simulate-")
+        .tempdir()
+        .map_err(|e| {
+            Failure::Runtime(format!(
+                "cannot make a temporary folder for the simulated scans: {e}"
+            ))
+        })?;
+    let opts = crate::acquire::SimulateOptions {
+        out: dir.path().to_path_buf(),
+        per_class: sim.per_class,
+        seed: lp.profile.simulator.seed,
+        threads: sim.threads.max(1),
+        gzip: false,
+    };
+    crate::acquire::simulate_dataset(lp, &opts, progress)?;
+    let mut data = Dataset::load(&[dir.path().to_path_buf()], analysis, sim.threads)?;
+    let relative = |f: &str| {
+        std::path::Path::new(f)
+            .strip_prefix(dir.path())
+            .map_or_else(|_| f.to_string(), |r| r.display().to_string())
+    };
+    for s in &mut data.scans {
+        s.file = relative(&s.file);
+    }
+    for f in &mut data.incomplete {
+        *f = relative(f);
+    }
+    data.scans.sort_by(|a, b| a.file.cmp(&b.file));
+    data.incomplete.sort();
+    Ok(data)
+}
+
+fn point(value: &toml::Value, r: &CvReport, data: &Dataset) -> SweepPoint {
+    SweepPoint {
+        value: crate::study::meta_text(value),
+        accuracy: r.accuracy,
+        accuracy_mean: r.accuracy_mean,
+        accuracy_std: r.accuracy_std,
+        macro_f1: r.macro_f1,
+        k: r.folds.iter().map(|f| f.k).collect(),
+        recordings: data.scans.len(),
+        incomplete: data.incomplete.len(),
+        error: None,
+    }
 }
 
 /// Evaluate once per value; features are re-extracted only when the
-/// analysis changes.
+/// analysis changes. Every value is checked before the first is evaluated.
 pub fn sweep(
     profile: &Profile,
     data: &Dataset,
@@ -463,14 +702,23 @@ pub fn sweep(
     plan: &Plan,
     progress: &dyn Fn(usize),
 ) -> Result<Sweep, Failure> {
+    let k = resolve_key(profile, key)?;
+    if k.needs_simulation() {
+        return Err(bad(format!(
+            "--sweep {key}: this key changes the recordings themselves; sweep it on simulated datasets (--simulate)"
+        )));
+    }
+    let profiles = values
+        .iter()
+        .map(|v| with_resolved(profile, &k, v))
+        .collect::<Result<Vec<_>, _>>()?;
     let groups = match &plan.group_by {
         Some(g) => Some(data.groups(g)?),
         None => None,
     };
     let mut points = Vec::new();
     let mut cached: Option<(Analysis, Vec<TrainingExample>)> = None;
-    for (i, v) in values.iter().enumerate() {
-        let p = with_key(profile, key, v)?;
+    for (i, (v, p)) in values.iter().zip(&profiles).enumerate() {
         if p.analysis
             .all_channels()
             .ne(profile.analysis.all_channels())
@@ -488,21 +736,88 @@ pub fn sweep(
                 e
             }
         };
-        let r = validate(&p, examples, groups.as_deref(), plan)?;
-        points.push(SweepPoint {
-            value: crate::study::meta_text(v),
-            accuracy: r.accuracy,
-            accuracy_mean: r.accuracy_mean,
-            accuracy_std: r.accuracy_std,
-            macro_f1: r.macro_f1,
-            k: r.folds.iter().map(|f| f.k).collect(),
-        });
+        let r = validate(p, examples, groups.as_deref(), plan)?;
+        points.push(point(v, &r, data));
         progress(i + 1);
     }
     Ok(Sweep {
+        // As typed (`k`), like the sweeps before simulated ones.
         key: key.to_string(),
         method: plan.describe(),
         points,
+        simulated: None,
+    })
+}
+
+/// Evaluate once per value of a key that changes the recordings (the path's
+/// speed, the controller's stiffness, a simulator setting): each value
+/// simulates its own dataset ([`simulated_dataset`], same seed for every
+/// value), then validates as `plan` says. Every value is checked before
+/// the first is simulated. `progress` hears (value index, scans done in
+/// this value, scans per value).
+pub fn sweep_simulated(
+    lp: &crate::profile::LoadedProfile,
+    key: &str,
+    values: &[toml::Value],
+    plan: &Plan,
+    sim: SimPlan,
+    progress: &(dyn Fn(usize, usize, usize) + Sync),
+) -> Result<Sweep, Failure> {
+    let k = resolve_key(&lp.profile, key)?;
+    let profiles = values
+        .iter()
+        .map(|v| with_resolved(&lp.profile, &k, v))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut points = Vec::new();
+    for (i, (v, p)) in values.iter().zip(profiles).enumerate() {
+        let lp_v = crate::profile::LoadedProfile {
+            profile: p,
+            ..lp.clone()
+        };
+        let data = simulated_dataset(&lp_v, sim, &lp_v.profile.analysis, &|done, total| {
+            progress(i, done, total)
+        })?;
+        // Recordings the analysis cannot use (a path so fast the window
+        // has gaps) are this value's result: say so and go on. Anything
+        // else (k larger than the training part, …) stops the sweep.
+        let examples = if data.scans.is_empty() {
+            Err(bad("no simulated scan finished"))
+        } else {
+            data.examples(&lp_v.profile.analysis)
+        };
+        let examples = match examples {
+            Ok(e) => e,
+            Err(f) => {
+                points.push(SweepPoint {
+                    value: meta_text(v),
+                    accuracy: f64::NAN,
+                    accuracy_mean: f64::NAN,
+                    accuracy_std: f64::NAN,
+                    macro_f1: f64::NAN,
+                    k: Vec::new(),
+                    recordings: data.scans.len(),
+                    incomplete: data.incomplete.len(),
+                    error: Some(f.message().to_string()),
+                });
+                continue;
+            }
+        };
+        let groups = match &plan.group_by {
+            Some(g) => Some(data.groups(g)?),
+            None => None,
+        };
+        let r = validate(&lp_v.profile, examples, groups.as_deref(), plan)
+            .map_err(|f| bad(format!("--sweep {} = {v}: {}", k.name(), f.message())))?;
+        points.push(point(v, &r, &data));
+    }
+    Ok(Sweep {
+        key: k.name(),
+        method: plan.describe(),
+        points,
+        simulated: Some(SimulatedInfo {
+            per_class: sim.per_class,
+            seed: lp.profile.simulator.seed,
+        }),
     })
 }
 
@@ -517,20 +832,37 @@ impl Sweep {
             .unwrap_or(1);
         let mut out = format!("{:<w$}  accuracy  per-fold mean ± sd  macro-F1\n", self.key);
         for p in &self.points {
+            if let Some(e) = &p.error {
+                out.push_str(&format!("{:<w$}  not evaluated: {e}\n", p.value));
+                continue;
+            }
             out.push_str(&format!(
-                "{:<w$}  {:>7.1}%  {:>8.1} ± {:<5.1} %  {:>8.3}\n",
+                "{:<w$}  {:>7.1}%  {:>8.1} ± {:<5.1} %  {:>8.3}",
                 p.value,
                 100.0 * p.accuracy,
                 100.0 * p.accuracy_mean,
                 100.0 * p.accuracy_std,
                 p.macro_f1
             ));
+            if p.incomplete > 0 {
+                out.push_str(&format!(
+                    "  ({} of {} scans did not finish)",
+                    p.incomplete,
+                    p.incomplete + p.recordings
+                ));
+            }
+            out.push('\n');
         }
-        if let Some(best) = self.points.iter().max_by(|a, b| {
-            a.accuracy
-                .total_cmp(&b.accuracy)
-                .then(std::cmp::Ordering::Greater)
-        }) {
+        if let Some(best) = self
+            .points
+            .iter()
+            .filter(|p| p.error.is_none())
+            .max_by(|a, b| {
+                a.accuracy
+                    .total_cmp(&b.accuracy)
+                    .then(std::cmp::Ordering::Greater)
+            })
+        {
             out.push_str(&format!(
                 "best: {} = {} ({:.1} %), {}\n",
                 self.key,
@@ -543,7 +875,7 @@ impl Sweep {
     }
 }
 
-/// `hapticlab evaluate` with cross-validation or a sweep.
+/// `hapticlab evaluate` with cross-validation, a sweep, or simulated data.
 pub fn run_evaluate(
     profile: &ProfileArg,
     paths: &[PathBuf],
@@ -557,22 +889,135 @@ pub fn run_evaluate(
         args.seed = shuffle_seed;
     }
     let plan = Plan::new(&lp.profile, &args);
-    let data = Dataset::load(paths, &lp.profile.analysis, plan.threads)?;
-    for f in &data.incomplete {
-        eprintln!("warning: {f}: incomplete scan (no `# end samples` trailer), skipped");
+    let sweep_spec = match &args.sweep {
+        Some(spec) => {
+            let (key, values) = parse_sweep(spec)?;
+            let k = resolve_key(&lp.profile, &key)?;
+            Some((spec, key, k, values))
+        }
+        None => None,
+    };
+    match (args.simulate, paths.is_empty()) {
+        (true, false) => {
+            return Err(bad(
+                "--simulate evaluates datasets simulated from the profile: give no PATH",
+            ));
+        }
+        (false, true) => {
+            return Err(bad(
+                "no recordings: give a PATH, or --simulate to evaluate a simulated dataset",
+            ));
+        }
+        _ => {}
     }
-    if let Some(spec) = &args.sweep {
-        let (key, values) = parse_sweep(spec)?;
-        let s = sweep(&lp.profile, &data, &key, &values, &plan, &|_| {})?;
+    if let Some((spec, _, k, _)) = &sweep_spec
+        && k.needs_simulation()
+        && !args.simulate
+    {
+        return Err(bad(format!(
+            "--sweep {}: this key changes the recordings themselves, so it cannot be swept over \
+             recordings on disk; simulate a dataset per value instead: \
+             hapticlab evaluate --profile {} --simulate --folds 5 --sweep {spec}",
+            k.name(),
+            profile.profile.display()
+        )));
+    }
+    let sim = SimPlan {
+        per_class: args.per_class.unwrap_or(
+            lp.profile.evaluation.train_per_class + lp.profile.evaluation.test_per_class,
+        ),
+        threads: plan.threads,
+    };
+    if args.per_class.is_some() && !args.simulate {
+        return Err(bad(
+            "--per-class sets how many scans --simulate makes per texture; add --simulate (and no PATH)",
+        ));
+    }
+    if args.simulate && sim.per_class == 0 {
+        return Err(bad("--per-class must be at least 1"));
+    }
+    let e = &lp.profile.evaluation;
+    if args.simulate
+        && plan.method == SplitMethod::Holdout
+        && sim.per_class < e.train_per_class + e.test_per_class
+    {
+        return Err(bad(format!(
+            "--per-class {}: the profile's holdout split needs {} scans per texture ({} to train, {} to test); \
+             simulate at least that many, or cross-validate (--folds N)",
+            sim.per_class,
+            e.train_per_class + e.test_per_class,
+            e.train_per_class,
+            e.test_per_class
+        )));
+    }
+    let n_textures = lp.profile.textures.len();
+    if let Some((_, key, k, values)) = &sweep_spec
+        && k.needs_simulation()
+    {
+        let per_value = sim.per_class * n_textures;
+        let pb = crate::commands::progress_bar((per_value * values.len()) as u64, "simulating");
+        let s = sweep_simulated(&lp, key, values, &plan, sim, &|i, done, _| {
+            if done == 1 {
+                pb.set_message(format!(
+                    "{} = {} ({}/{})",
+                    k.name(),
+                    meta_text(&values[i]),
+                    i + 1,
+                    values.len()
+                ));
+            }
+            pb.set_position((i * per_value + done) as u64);
+        })?;
+        pb.finish_and_clear();
         if json {
             println!("{}", serde_json::to_string(&s).map_err(bad)?);
         } else {
             println!(
-                "profile {}: sweeping {key} over {} values, {}, {} recordings",
+                "profile {}: sweeping {} over {} values, each on {} simulated scans per texture (seed {}), {}",
                 lp.profile.name,
+                s.key,
+                values.len(),
+                sim.per_class,
+                lp.profile.simulator.seed,
+                plan.describe(),
+            );
+            print!("{}", s.table());
+        }
+        return Ok(());
+    }
+    let data = if args.simulate {
+        let pb = crate::commands::progress_bar((sim.per_class * n_textures) as u64, "simulating");
+        let d = simulated_dataset(&lp, sim, &lp.profile.analysis, &|done, _| {
+            pb.set_position(done as u64)
+        })?;
+        pb.finish_and_clear();
+        d
+    } else {
+        Dataset::load(paths, &lp.profile.analysis, plan.threads)?
+    };
+    for f in &data.incomplete {
+        eprintln!("warning: {f}: incomplete scan (no `# end samples` trailer), skipped");
+    }
+    let source = if args.simulate {
+        format!(
+            "{} simulated recordings (seed {})",
+            data.scans.len(),
+            lp.profile.simulator.seed
+        )
+    } else {
+        format!("{} recordings", data.scans.len())
+    };
+    if let Some((_, key, _, values)) = &sweep_spec {
+        let s = sweep(&lp.profile, &data, key, values, &plan, &|_| {})?;
+        if json {
+            println!("{}", serde_json::to_string(&s).map_err(bad)?);
+        } else {
+            println!(
+                "profile {}: sweeping {} over {} values, {}, {source}",
+                lp.profile.name,
+                s.key,
                 values.len(),
                 plan.describe(),
-                data.scans.len()
             );
             print!("{}", s.table());
         }
@@ -588,7 +1033,7 @@ pub fn run_evaluate(
         println!("{}", serde_json::to_string(&report).map_err(bad)?);
     } else {
         println!(
-            "profile {}: k-NN k = {} ({:?}, {:?} votes{}), {}, {} recordings",
+            "profile {}: k-NN k = {} ({:?}, {:?} votes{}), {}, {source}",
             lp.profile.name,
             lp.profile.classifier.k_text(),
             lp.profile.classifier.metric,
@@ -599,7 +1044,6 @@ pub fn run_evaluate(
                 ""
             },
             plan.describe(),
-            data.scans.len()
         );
         print!("{}", report.table());
     }

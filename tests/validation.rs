@@ -169,12 +169,12 @@ fn sweep_values_and_keys() {
     assert!(v[0].is_array());
     let (_, v) = parse_sweep("metric=euclidean,cosine").unwrap();
     assert_eq!(v[1].as_str(), Some("cosine"));
-    let err = parse_sweep("speed=0.01,0.02").err().unwrap();
-    assert!(
-        err.message().contains("simulate one dataset per value"),
-        "{}",
-        err.message()
-    );
+    // Decimal ranges keep the decimals written (no 0.015000000000000001).
+    let (_, v) = parse_sweep("path.speed_m_per_s=0.005..0.02:0.005").unwrap();
+    let v: Vec<f64> = v.iter().map(|x| x.as_float().unwrap()).collect();
+    assert_eq!(v, [0.005, 0.01, 0.015, 0.02]);
+    assert!(parse_sweep("k=3..1").is_err());
+    assert!(parse_sweep("k=1..x").is_err());
     assert!(parse_sweep("k").is_err());
 
     let p = LoadedProfile::thesis().profile;
@@ -257,4 +257,135 @@ fn evaluate_cli_cross_validates_reproducibly() {
         .output()
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
+}
+
+/// How unevenly the folds share each class: the mean over classes of the
+/// (population) standard deviation across folds of fold count / class count.
+fn class_imbalance(labels: &[&str], folds: &[Vec<usize>]) -> f64 {
+    let classes: BTreeSet<&str> = labels.iter().copied().collect();
+    let mut total = 0.0;
+    for c in &classes {
+        let n = labels.iter().filter(|l| *l == c).count() as f64;
+        let shares: Vec<f64> = folds
+            .iter()
+            .map(|f| f.iter().filter(|&&i| labels[i] == *c).count() as f64 / n)
+            .collect();
+        let m = shares.iter().sum::<f64>() / shares.len() as f64;
+        total +=
+            (shares.iter().map(|s| (s - m) * (s - m)).sum::<f64>() / shares.len() as f64).sqrt();
+    }
+    total / classes.len() as f64
+}
+
+/// Grouped folds as they were dealt before stratification: shuffled, then
+/// largest first into the fold with the fewest examples.
+fn size_balanced_folds(groups: &[String], folds: usize, seed: u64) -> Vec<Vec<usize>> {
+    use rand::SeedableRng;
+    use rand::seq::SliceRandom;
+    let mut by: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
+    for (i, g) in groups.iter().enumerate() {
+        by.entry(g).or_default().push(i);
+    }
+    let mut gs: Vec<Vec<usize>> = by.into_values().collect();
+    gs.shuffle(&mut rand_chacha::ChaCha8Rng::seed_from_u64(seed));
+    gs.sort_by_key(|g| std::cmp::Reverse(g.len()));
+    let mut out = vec![Vec::new(); folds];
+    for g in gs {
+        let f = (0..folds).min_by_key(|&f| (out[f].len(), f)).unwrap();
+        out[f].extend(g);
+    }
+    out
+}
+
+/// Trials of one texture each, of uneven lengths: (labels, groups).
+fn trials() -> (Vec<&'static str>, Vec<String>) {
+    let sizes: [(&str, &[usize]); 3] = [
+        ("A", &[6, 4, 4, 2, 2, 3]),
+        ("B", &[5, 5, 3, 3, 1, 1]),
+        ("C", &[8, 2, 2, 2, 2, 4]),
+    ];
+    let (mut labels, mut groups) = (Vec::new(), Vec::new());
+    for (label, trials) in sizes {
+        for (t, &n) in trials.iter().enumerate() {
+            for _ in 0..n {
+                labels.push(label);
+                groups.push(format!("{label}-trial-{t}"));
+            }
+        }
+    }
+    (labels, groups)
+}
+
+#[test]
+fn grouped_folds_are_stratified_as_far_as_the_groups_allow() {
+    let (labels, groups) = trials();
+    let (mut strat, mut naive) = (0.0, 0.0);
+    for seed in 0..30 {
+        let f = make_folds(&labels, Some(&groups), SplitMethod::KFold, 3, seed).unwrap();
+        assert!(f.iter().all(|fold| !fold.is_empty()));
+        let (s, n) = (
+            class_imbalance(&labels, &f),
+            class_imbalance(&labels, &size_balanced_folds(&groups, 3, seed)),
+        );
+        assert!(
+            s <= n + 1e-12,
+            "seed {seed}: stratified {s:.3} vs size-balanced {n:.3}"
+        );
+        // Every fold tests every class here (each class has 6 trials for 3 folds).
+        for fold in &f {
+            let present: BTreeSet<&str> = fold.iter().map(|&i| labels[i]).collect();
+            assert_eq!(present.len(), 3, "seed {seed}: {present:?}");
+        }
+        (strat, naive) = (strat + s, naive + n);
+    }
+    assert!(
+        strat < 0.5 * naive,
+        "stratified {strat:.3} vs size-balanced {naive:.3}"
+    );
+
+    // Two classes of four equal trials into four folds: one of each per fold.
+    let labels: Vec<&str> = (0..40).map(|i| if i < 20 { "A" } else { "B" }).collect();
+    let groups: Vec<String> = (0..40).map(|i| format!("t{}", i / 5)).collect();
+    for seed in 0..20 {
+        let f = make_folds(&labels, Some(&groups), SplitMethod::KFold, 4, seed).unwrap();
+        for fold in &f {
+            let a = fold.iter().filter(|&&i| labels[i] == "A").count();
+            assert_eq!((a, fold.len()), (5, 10), "seed {seed}");
+        }
+    }
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(200))]
+    #[test]
+    fn stratified_grouped_folds_never_leak_and_test_everything_once(
+        rows in proptest::collection::vec((0usize..4, 0usize..12), 2..120),
+        folds in 2usize..8,
+        seed in 0u64..1000,
+    ) {
+        let labels: Vec<&str> = rows.iter().map(|(c, _)| ["A", "B", "C", "D"][*c]).collect();
+        let groups: Vec<String> = rows.iter().map(|(_, g)| format!("g{g}")).collect();
+        let n_groups = groups.iter().collect::<BTreeSet<_>>().len();
+        let made = make_folds(&labels, Some(&groups), SplitMethod::KFold, folds, seed);
+        if folds > n_groups {
+            proptest::prop_assert!(made.is_err());
+            return Ok(());
+        }
+        let f = made.unwrap();
+        proptest::prop_assert_eq!(&f, &make_folds(&labels, Some(&groups), SplitMethod::KFold, folds, seed).unwrap());
+        let mut tested = vec![0; labels.len()];
+        for fold in &f {
+            proptest::prop_assert!(!fold.is_empty());
+            let inside: BTreeSet<&str> = fold.iter().map(|&i| groups[i].as_str()).collect();
+            for (i, g) in groups.iter().enumerate() {
+                if !fold.contains(&i) {
+                    proptest::prop_assert!(!inside.contains(g.as_str()), "{} leaks", g);
+                }
+            }
+            for &i in fold {
+                tested[i] += 1;
+            }
+        }
+        proptest::prop_assert!(tested.iter().all(|&t| t == 1));
+    }
 }

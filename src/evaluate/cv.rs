@@ -6,10 +6,11 @@
 //! (ChaCha8, seeded with the seed and the label) and dealt round-robin into
 //! the folds, continuing from where the previous class stopped, so every
 //! fold holds each class in proportion. With groups (a metadata value per
-//! example: `session`, `trial`, …), whole groups are dealt instead: shuffled
-//! with the seed, then largest first into the fold with the fewest examples;
-//! leave-one-out with groups leaves one group out. No group ever sits on both
-//! sides of a split. Like the rest of `evaluate`, this never reads files and
+//! example: `session`, `trial`, …), whole groups are dealt instead, shuffled
+//! with the seed and stratified as far as the groups allow: each goes to the
+//! fold whose class mix it keeps closest to the dataset's (see
+//! [`stratified_groups`]); leave-one-out with groups leaves one group out.
+//! No group ever sits on both sides of a split. Like the rest of `evaluate`, this never reads files and
 //! never prints.
 
 use std::collections::BTreeMap;
@@ -91,21 +92,110 @@ pub fn make_folds(
                     by.len()
                 )));
             }
-            let mut groups: Vec<Vec<usize>> = by.into_values().collect();
-            groups.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
-            // Stable: equal sizes keep the shuffled order.
-            groups.sort_by_key(|g| std::cmp::Reverse(g.len()));
-            let mut out: Folds = vec![Vec::new(); folds];
-            for g in groups {
-                let smallest = (0..folds).min_by_key(|&f| (out[f].len(), f)).unwrap_or(0);
-                out[smallest].extend(g);
-            }
-            for f in &mut out {
-                f.sort_unstable();
-            }
-            Ok(out)
+            let groups: Vec<Vec<usize>> = by.into_values().collect();
+            Ok(stratified_groups(labels, groups, folds, seed))
         }
     }
+}
+
+/// Deal whole groups into `folds` folds so that each fold's class mix
+/// follows the dataset's as closely as the groups allow (after
+/// scikit-learn's `StratifiedGroupKFold`): the groups are shuffled with the
+/// seed, then taken purest first (largest spread of their class counts),
+/// each into the fold where it leaves the per-class shares of the folds
+/// least spread (mean over classes of the standard deviation across folds
+/// of fold count / class count); ties go to the fold with fewest examples,
+/// then the first. A fold that would otherwise stay empty takes a group.
+fn stratified_groups(
+    labels: &[&str],
+    mut groups: Vec<Vec<usize>>,
+    folds: usize,
+    seed: u64,
+) -> Folds {
+    let classes: Vec<&str> = {
+        let mut c: Vec<&str> = labels.to_vec();
+        c.sort_unstable();
+        c.dedup();
+        c
+    };
+    let class_of = |i: usize| classes.binary_search(&labels[i]).unwrap_or(0);
+    let mut class_total = vec![0usize; classes.len()];
+    for &l in labels {
+        class_total[classes.binary_search(&l).unwrap_or(0)] += 1;
+    }
+    groups.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
+    let counts: Vec<Vec<usize>> = groups
+        .iter()
+        .map(|g| {
+            let mut c = vec![0usize; classes.len()];
+            for &i in g {
+                c[class_of(i)] += 1;
+            }
+            c
+        })
+        .collect();
+    let spread = |c: &[usize]| {
+        let x: Vec<f64> = c.iter().map(|&v| v as f64).collect();
+        mean_std(&x).1
+    };
+    let mut order: Vec<usize> = (0..groups.len()).collect();
+    // Stable: equal spreads keep the shuffled order.
+    order.sort_by(|&a, &b| spread(&counts[b]).total_cmp(&spread(&counts[a])));
+
+    let mut per_fold = vec![vec![0usize; classes.len()]; folds];
+    let mut out: Folds = vec![Vec::new(); folds];
+    // The cost of the folds' class counts: how unevenly each class is shared.
+    let cost = |per_fold: &[Vec<usize>]| -> f64 {
+        (0..classes.len())
+            .map(|c| {
+                let shares: Vec<f64> = per_fold
+                    .iter()
+                    .map(|f| f[c] as f64 / class_total[c] as f64)
+                    .collect();
+                let (m, _) = mean_std(&shares);
+                // Population spread (the folds are all there is).
+                (shares.iter().map(|s| (s - m) * (s - m)).sum::<f64>() / folds as f64).sqrt()
+            })
+            .sum::<f64>()
+            / classes.len() as f64
+    };
+    for (left, &g) in order.iter().enumerate().map(|(i, g)| (order.len() - i, g)) {
+        let empty = out.iter().filter(|f| f.is_empty()).count();
+        let candidates: Vec<usize> = if left <= empty {
+            (0..folds).filter(|&f| out[f].is_empty()).collect()
+        } else {
+            (0..folds).collect()
+        };
+        let mut best: Option<(f64, usize, usize)> = None;
+        for f in candidates {
+            for (c, n) in counts[g].iter().enumerate() {
+                per_fold[f][c] += n;
+            }
+            let score = cost(&per_fold);
+            for (c, n) in counts[g].iter().enumerate() {
+                per_fold[f][c] -= n;
+            }
+            let key = (score, out[f].len(), f);
+            let better = match best {
+                None => true,
+                Some((s, len, idx)) => {
+                    score < s - 1e-12 || ((score - s).abs() <= 1e-12 && (key.1, key.2) < (len, idx))
+                }
+            };
+            if better {
+                best = Some(key);
+            }
+        }
+        let f = best.map_or(0, |b| b.2);
+        for (c, n) in counts[g].iter().enumerate() {
+            per_fold[f][c] += n;
+        }
+        out[f].extend(groups[g].iter().copied());
+    }
+    for f in &mut out {
+        f.sort_unstable();
+    }
+    out
 }
 
 /// One fold's outcome.
