@@ -386,8 +386,13 @@ pub fn load_examples(
         if !rec.is_complete() {
             pb.suspend(|| {
                 eprintln!(
-                    "warning: {}: incomplete scan (no `# end samples` trailer), skipped",
-                    f.display()
+                    "warning: {}: incomplete scan (no `# end samples` trailer{}), skipped",
+                    f.display(),
+                    if rec.torn_last_row {
+                        "; its last row was cut short and left out"
+                    } else {
+                        ""
+                    }
                 )
             });
             continue;

@@ -78,6 +78,10 @@ pub struct Recording {
     pub data: Vec<Vec<f64>>,
     /// `Some(N)` when the trailer `# end samples = N` was present.
     pub trailer_samples: Option<usize>,
+    /// The file ended in a row cut short (a write interrupted by `kill -9`,
+    /// a power cut or a full disk): that row was dropped, and the recording
+    /// is incomplete.
+    pub torn_last_row: bool,
 }
 
 impl Recording {
@@ -421,7 +425,18 @@ impl<'a> Parser<'a> {
     fn run(mut self) -> Result<Recording, RecordingError> {
         self.format_line()?;
         self.metadata_and_header()?;
+        let torn = self.cut_torn_row();
         self.rows()?;
+        if torn && let Some((_, at)) = self.trailer {
+            return Err(self.error_at(
+                self.line + 1,
+                format!(
+                    "a row after the trailer on line {at}; the trailer must come last \
+                     (the file ends in the middle of this row)"
+                ),
+            ));
+        }
+        self.recording.torn_last_row = torn;
         if let Some((count, at)) = self.trailer {
             let read = self.recording.len();
             if count != read {
@@ -433,6 +448,22 @@ impl<'a> Parser<'a> {
             self.recording.trailer_samples = Some(count);
         }
         Ok(self.recording)
+    }
+
+    /// A last line with no line end that is not a comment is a row whose
+    /// write was cut short (the writer hands the OS whole rows, so only an
+    /// interrupted write leaves one): leave it out. True when one was.
+    fn cut_torn_row(&mut self) -> bool {
+        if self.text.ends_with('\n') {
+            return false;
+        }
+        let start = self.text.rfind('\n').map_or(0, |i| i + 1);
+        let last = self.text[start..].trim();
+        if start < self.pos || last.is_empty() || last.starts_with('#') {
+            return false;
+        }
+        self.text = &self.text[..start];
+        true
     }
 
     fn format_line(&mut self) -> Result<(), RecordingError> {

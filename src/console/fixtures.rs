@@ -36,6 +36,7 @@ pub fn scan_view(with_prediction: bool) -> ScanView {
         columns: vec!["t_s".into(), "x_m".into(), "y_m".into()],
         data: vec![t, x, y],
         trailer_samples: Some(n),
+        torn_last_row: false,
     };
     let mut v = analyse(&rec, Path::new("ds/.unsaved/scan-001.csv"), &mut ex);
     if with_prediction {

@@ -197,6 +197,7 @@ mod tests {
             columns: vec!["t_s".into(), "x_m".into(), "fy_n".into()],
             data: vec![t, x, vec![-0.3; n]],
             trailer_samples: Some(n),
+            torn_last_row: false,
         }
     }
 

@@ -257,6 +257,7 @@ fn replay_keys_drive_the_player() {
             vec![0.0; 1000],
         ],
         trailer_samples: Some(1000),
+        torn_last_row: false,
     };
     let mut r = Replay::new("ds".into(), vec!["ds/a.csv".into(), "ds/b.csv".into()]);
     r.player = Some(Player::new(&rec));
