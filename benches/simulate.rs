@@ -22,6 +22,7 @@ fn bench(c: &mut Criterion) {
                     seed: 1,
                     threads,
                     gzip: false,
+                    overwrite: false,
                 };
                 let saved = simulate_dataset(&lp, &opts, &|_, _| {}).expect("simulate");
                 assert_eq!(saved.len(), 120);

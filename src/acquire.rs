@@ -154,6 +154,8 @@ pub struct SimulateOptions {
     pub threads: usize,
     /// Compress each finished recording to `.csv.gz`.
     pub gzip: bool,
+    /// Replace recordings already at the scans' names (else it is an error).
+    pub overwrite: bool,
 }
 
 /// One simulated scan in virtual time: the whole path from rest at the first
@@ -293,6 +295,19 @@ pub fn simulate_dataset(
         .collect();
     for t in &lp.profile.textures {
         check_label(&t.label).map_err(AcquireError::BadInput)?;
+    }
+    if !opts.overwrite {
+        let taken = jobs.iter().find_map(|(label, i)| {
+            let plain = scan_file(&opts.out, label, *i);
+            let gz = plain.with_extension("csv.gz");
+            [plain, gz].into_iter().find(|p| p.exists())
+        });
+        if let Some(p) = taken {
+            return Err(AcquireError::BadInput(format!(
+                "{} already exists: simulate does not overwrite recordings; give an empty --out folder, or --overwrite to replace them",
+                p.display()
+            )));
+        }
     }
     let next = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);

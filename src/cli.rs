@@ -63,6 +63,9 @@ pub enum Command {
         /// Compress each recording (Zopfli gzip, about a second per recording) to OUT/<label>/<label>_NNN.csv.gz.
         #[arg(long)]
         gzip: bool,
+        /// Replace recordings already in OUT under the same names (by default that is an error).
+        #[arg(long)]
+        overwrite: bool,
         /// Print the result as JSON.
         #[arg(long)]
         json: bool,

@@ -88,6 +88,7 @@ pub fn run(cmd: Command) -> Result<(), Failure> {
             seed,
             threads,
             gzip,
+            overwrite,
             json,
         } => simulate(
             &profile,
@@ -97,6 +98,7 @@ pub fn run(cmd: Command) -> Result<(), Failure> {
                 seed: seed.unwrap_or(0),
                 threads: threads.unwrap_or(0),
                 gzip,
+                overwrite,
             },
             seed.is_some(),
             json,

@@ -659,6 +659,7 @@ pub fn simulated_dataset(
         seed: lp.profile.simulator.seed,
         threads: sim.threads.max(1),
         gzip: false,
+        overwrite: false,
     };
     crate::acquire::simulate_dataset(lp, &opts, progress)?;
     let mut data = Dataset::load(&[dir.path().to_path_buf()], analysis, sim.threads)?;

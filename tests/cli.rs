@@ -855,3 +855,33 @@ fn an_interrupted_scan_exits_1_and_keeps_its_samples() {
     let x = rec.column("x_m").unwrap();
     assert!(x[x.len() - 1] < -0.031, "{}", x[x.len() - 1]);
 }
+
+#[test]
+fn simulate_never_overwrites_recordings_unless_asked() {
+    let dir = TempDir::new().unwrap();
+    let data = dir.path().join("D");
+    simulate(&data, 1, 3);
+    let first = data.join("S2").join("S2_001.csv");
+    let before = fs::read(&first).unwrap();
+    let args = [
+        "simulate",
+        "--out",
+        p(&data),
+        "--per-class",
+        "1",
+        "--seed",
+        "4",
+    ];
+    let msg = assert_error(&run(&args), 2);
+    assert!(msg.contains("already exists"), "{msg}");
+    assert!(msg.contains("--overwrite"), "{msg}");
+    assert_eq!(fs::read(&first).unwrap(), before, "a recording was touched");
+    let mut with = args.to_vec();
+    with.push("--overwrite");
+    assert_ok(&run(&with));
+    assert_ne!(
+        fs::read(&first).unwrap(),
+        before,
+        "seed 4 differs from seed 3"
+    );
+}

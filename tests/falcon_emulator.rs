@@ -66,6 +66,7 @@ fn the_thesis_result_holds_through_the_emulated_falcon() {
         seed: 1,
         threads: 2,
         gzip: false,
+        overwrite: false,
     };
     let saved = simulate_dataset(&lp, &opts, &|_, _| {}).unwrap();
     assert!(saved.iter().all(|s| s.complete), "{saved:?}");

@@ -33,6 +33,7 @@ fn dominant_bins_and_accuracy_match_the_thesis() {
         seed: p.simulator.seed,
         threads: 2,
         gzip: false,
+        overwrite: false,
     };
     let saved = simulate_dataset(&lp, &opts, &|_, _| {}).unwrap();
     assert_eq!(saved.len(), 4 * PER_CLASS);
