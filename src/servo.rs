@@ -505,7 +505,7 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
         }
         if self.stats.streak >= self.missed_limit {
             let reason = format!(
-                "{} consecutive missed deadlines: the loop cannot keep {} Hz",
+                "{} consecutive missed deadlines: the loop (or the device it waits on) cannot keep {} Hz",
                 self.stats.streak,
                 (1.0 / self.period).round()
             );
