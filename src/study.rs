@@ -215,6 +215,9 @@ pub struct Plan {
     pub folds: usize,
     pub group_by: Option<String>,
     pub seed: u64,
+    /// For a holdout: shuffle each class with this seed, else take the
+    /// recordings in file-name order (as plain `evaluate` does).
+    pub holdout_shuffle: Option<u64>,
     pub threads: usize,
 }
 
@@ -235,6 +238,7 @@ impl Plan {
             folds: args.folds.or(e.folds).unwrap_or(10),
             group_by: args.group_by.clone().or_else(|| e.group_by.clone()),
             seed: args.seed.or(e.shuffle_seed).unwrap_or(0),
+            holdout_shuffle: args.seed.or(e.shuffle_seed),
             threads: args
                 .threads
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
@@ -247,7 +251,10 @@ impl Plan {
             .as_ref()
             .map_or(String::new(), |g| format!(", grouped by {g}"));
         match self.method {
-            SplitMethod::Holdout => format!("holdout split (seed {})", self.seed),
+            SplitMethod::Holdout => match self.holdout_shuffle {
+                Some(s) => format!("holdout split (shuffled, seed {s})"),
+                None => "holdout split (file-name order)".into(),
+            },
             SplitMethod::KFold => format!(
                 "{}-fold cross-validation{g}, seed {}",
                 self.folds, self.seed
@@ -269,7 +276,7 @@ pub fn validate(
 ) -> Result<CvReport, Failure> {
     if plan.method == SplitMethod::Holdout {
         let mut eval = profile.evaluation.clone();
-        eval.shuffle_seed = Some(plan.seed);
+        eval.shuffle_seed = plan.holdout_shuffle;
         let split = ev::split(examples, &eval).map_err(bad)?;
         let mut all = split.train.clone();
         all.extend(split.test.iter().cloned());

@@ -389,3 +389,50 @@ proptest::proptest! {
         proptest::prop_assert!(tested.iter().all(|&t| t == 1));
     }
 }
+
+#[test]
+fn a_holdout_through_the_study_code_takes_the_same_split_as_plain_evaluate() {
+    // 12 scans of each of two classes, named so file-name order and any
+    // shuffle differ.
+    let examples: Vec<TrainingExample> = (0..24)
+        .map(|i| {
+            let label = if i % 2 == 0 { "A" } else { "B" };
+            ex(
+                format!("{label}/{label}_{i:03}.csv"),
+                label,
+                vec![i as f64, 1.0],
+            )
+        })
+        .collect();
+    let mut lp = LoadedProfile::thesis();
+    lp.profile.analysis = analysis(2);
+    lp.profile.classifier.k = 1;
+    lp.profile.evaluation.train_per_class = 8;
+    lp.profile.evaluation.test_per_class = 4;
+    let p = &lp.profile;
+    let plain = hapticlab::evaluate::split(examples.clone(), &p.evaluation).unwrap();
+    let want: BTreeSet<String> = plain.test.iter().map(|e| e.file.clone()).collect();
+
+    let plan = hapticlab::study::Plan::new(p, &hapticlab::study::ValidationArgs::default());
+    assert!(
+        plan.describe().contains("file-name order"),
+        "{}",
+        plan.describe()
+    );
+    let report = hapticlab::study::validate(p, examples.clone(), None, &plan).unwrap();
+    let got: BTreeSet<String> = report.test.iter().cloned().collect();
+    assert_eq!(got, want);
+
+    // Asked for a seed, it shuffles, as `evaluate --shuffle-seed` does.
+    let args = hapticlab::study::ValidationArgs {
+        seed: Some(7),
+        ..Default::default()
+    };
+    let plan = hapticlab::study::Plan::new(p, &args);
+    let report = hapticlab::study::validate(p, examples.clone(), None, &plan).unwrap();
+    let mut eval = p.evaluation.clone();
+    eval.shuffle_seed = Some(7);
+    let shuffled = hapticlab::evaluate::split(examples, &eval).unwrap();
+    let want: BTreeSet<String> = shuffled.test.iter().map(|e| e.file.clone()).collect();
+    assert_eq!(report.test.iter().cloned().collect::<BTreeSet<_>>(), want);
+}
