@@ -34,7 +34,8 @@ use crate::device::HapticDevice;
 use crate::device::sim::SimDevice;
 use crate::profile::{WORKSPACE_MAX_M, WORKSPACE_MIN_M};
 
-/// Falcon z (m) the grip must pass, pulled out, then pushed in, to home.
+/// Falcon z (m) the grip must pass, pulled out, then pushed in, to home:
+/// each arm homes when its angle passes the angle it has there on the axis.
 pub const HOME_OUT_Z_M: f64 = 0.155;
 pub const HOME_IN_Z_M: f64 = 0.095;
 /// The simulated hand that homes the device: a spring towards each end.
@@ -51,6 +52,11 @@ const WORKSPACE_CENTRE_M: [f64; 3] = [
     (WORKSPACE_MIN_M[1] + WORKSPACE_MAX_M[1]) / 2.0,
     (WORKSPACE_MIN_M[2] + WORKSPACE_MAX_M[2]) / 2.0,
 ];
+/// An arm's motor angle (rad) with the grip on the Falcon's axis at `z_m`.
+fn arm_angle_on_axis(z_m: f64) -> f64 {
+    kinematics::inverse([0.0, 0.0, z_m]).map_or(0.0, |a| a.theta1[0])
+}
+
 /// Beyond the arms' reach the mechanism holds the grip back, stiffly.
 const REACH_STIFFNESS_N_PER_M: f64 = 20_000.0;
 const REACH_DAMPING_N_S_PER_M: f64 = 20.0;
@@ -162,8 +168,14 @@ pub struct EmulatedFalcon {
     replies_due: u32,
     motor: [i16; 3],
     flags: u8,
-    homed: bool,
-    seen_out: bool,
+    /// Per-axis homed flags (bit i: arm i), as the firmware reports them.
+    homed_axes: u8,
+    /// Which arms have swung past their homing mark pulled out.
+    seen_out: [bool; 3],
+    /// Each arm's motor angle (rad) with the grip on the axis at the
+    /// pulled-out and the pushed-in homing marks.
+    home_out_rad: f64,
+    home_in_rad: f64,
     /// The simulated hand has let go of the grip after homing it.
     released: bool,
     /// The last grip position (profile frame) the arms could reach.
@@ -202,8 +214,10 @@ impl EmulatedFalcon {
             replies_due: 0,
             motor: [0; 3],
             flags: 0,
-            homed: false,
-            seen_out: false,
+            homed_axes: 0,
+            seen_out: [false; 3],
+            home_out_rad: arm_angle_on_axis(HOME_OUT_Z_M),
+            home_in_rad: arm_angle_on_axis(HOME_IN_Z_M),
             released: false,
             reachable: WORKSPACE_CENTRE_M,
             offsets,
@@ -227,7 +241,7 @@ impl EmulatedFalcon {
     }
 
     pub fn is_homed(&self) -> bool {
-        self.homed
+        self.homed_axes == packet::ALL_HOMED
     }
 
     /// The motor commands the firmware is applying (zero once made safe or unplugged).
@@ -260,8 +274,8 @@ impl EmulatedFalcon {
 
     fn reset_to_boot_loader(&mut self) {
         self.fw = Firmware::Boot(Boot::Idle);
-        self.homed = false;
-        self.seen_out = false;
+        self.homed_axes = 0;
+        self.seen_out = [false; 3];
         self.released = false;
         self.motor = [0; 3];
         self.sim.make_safe();
@@ -349,15 +363,17 @@ impl EmulatedFalcon {
                 .map(|t| kinematics::count_of_angle(t, self.cfg.encoder_offset_deg));
         }
         let mut encoder = self.last_counts;
-        if !self.homed {
-            for (e, o) in encoder.iter_mut().zip(self.offsets) {
+        // Each arm's count is relative to where it powered up until that arm
+        // is homed; then it jumps to the absolute angle.
+        for (i, (e, o)) in encoder.iter_mut().zip(self.offsets).enumerate() {
+            if self.homed_axes & (1 << i) == 0 {
                 *e = e.wrapping_add(o);
             }
         }
         ReplyPacket {
             encoder,
             buttons: 0,
-            homed: if self.homed { packet::ALL_HOMED } else { 0 },
+            homed: self.homed_axes,
         }
     }
 
@@ -367,23 +383,31 @@ impl EmulatedFalcon {
     /// like an end stop where the simulator's box would let it wander off.
     fn outside_forces(&mut self) {
         let homing = self.fw == Firmware::Running && self.flags & packet::FLAG_HOMING != 0;
-        let z = self.falcon_position()[2];
-        if homing && !self.homed {
-            if z >= HOME_OUT_Z_M {
-                self.seen_out = true;
-            }
-            if self.seen_out && z <= HOME_IN_Z_M {
-                self.homed = true;
+        if homing
+            && !self.is_homed()
+            && let Ok(a) = kinematics::inverse(self.falcon_position())
+        {
+            // Each arm homes on its own: swung past its outer mark, then
+            // back past its inner one.
+            let out = (self.home_out_rad - self.home_in_rad).signum();
+            for (i, &t) in a.theta1.iter().enumerate() {
+                if (t - self.home_out_rad) * out >= 0.0 {
+                    self.seen_out[i] = true;
+                }
+                if self.seen_out[i] && (t - self.home_in_rad) * out <= 0.0 {
+                    self.homed_axes |= 1 << i;
+                }
             }
         }
+        let homed = self.is_homed();
         let p = self.sim.true_position();
         let v = self.sim.true_velocity();
         let target = if !self.cfg.auto_home || self.released {
             None
-        } else if !self.homed {
-            // Out past the homing mark, then in past the other.
+        } else if !homed {
+            // Out past the homing marks, then in past the others.
             homing.then(|| {
-                let z = if self.seen_out {
+                let z = if self.seen_out.iter().all(|&s| s) {
                     HOME_IN_Z_M - 0.004
                 } else {
                     HOME_OUT_Z_M + 0.004
@@ -679,6 +703,7 @@ mod tests {
         let mut dev = FalconDevice::open(e, FalconConfig::default(), &mut |_| {}).unwrap();
         let mut t = 0.0;
         let mut homed_at = None;
+        let mut last_axes = 0;
         for k in 1..5000 {
             t = k as f64 * 0.001;
             let r = dev.read(t).unwrap();
@@ -691,6 +716,10 @@ mod tests {
                 [0.0, 3.0, 0.0]
             };
             dev.command(f).unwrap();
+            // The per-arm flags only ever rise.
+            let axes = dev.transport().homed_axes;
+            assert_eq!(axes & last_axes, last_axes, "a homed flag dropped");
+            last_axes = axes;
             if !r.homed {
                 assert_eq!(dev.transport().motor, [0; 3]);
                 assert_eq!(dev.transport().flags & packet::LED_RED, packet::LED_RED);
