@@ -267,6 +267,19 @@ pub fn parse_csv(text: &str, origin: &str, args: &ImportArgs) -> Result<Imported
         }
         (None, None) => unreachable!("checked above"),
     };
+    // A rate too small, or times too far apart, overflow to inf (or NaN).
+    if let Some(i) = time.iter().position(|t| !t.is_finite()) {
+        let from = match args.rate {
+            // Only a rate below about 1e-300 overflows: print it as such.
+            Some(r) => format!("--rate {r:e}"),
+            None => "the time column's intervals".to_string(),
+        };
+        return Err(bad(format!(
+            "{origin}: the time of sample {} overflows (it is {}, from {from})",
+            i + 1,
+            time[i]
+        )));
+    }
     let mut meta = Vec::new();
     if let Some(r) = args.rate {
         meta.push(("rate_hz".to_string(), toml::Value::Float(r)));
@@ -418,8 +431,9 @@ pub fn write_recording(path: &Path, imp: &Imported, label: &str) -> Result<(), F
     })
 }
 
-/// `hapticlab import`: returns the recordings written.
-pub fn run(args: &ImportArgs) -> Result<Vec<PathBuf>, Failure> {
+/// Checks the options that apply to every file (`--meta`, `--rate`,
+/// `--label`); the extra metadata they give.
+pub fn check_options(args: &ImportArgs) -> Result<Vec<(String, toml::Value)>, Failure> {
     let extra: Vec<(String, toml::Value)> = args
         .meta
         .iter()
@@ -435,6 +449,47 @@ pub fn run(args: &ImportArgs) -> Result<Vec<PathBuf>, Failure> {
     if let Some(l) = &args.label {
         crate::profile::check_label(l).map_err(|e| bad(format!("--label: {e}")))?;
     }
+    Ok(extra)
+}
+
+/// Parses one input file's bytes, in the format its extension `ext` names
+/// (`csv`, `txt`, `tsv`, `wav`, `wave`; any case), with the mapping in `args`.
+/// `origin` names it in messages.
+pub fn parse_file(
+    bytes: Vec<u8>,
+    origin: &str,
+    ext: &str,
+    args: &ImportArgs,
+) -> Result<Imported, Failure> {
+    match ext.to_ascii_lowercase().as_str() {
+        "wav" | "wave" => {
+            let mut w = parse_wav(&bytes, origin)?;
+            if !args.names.is_empty() {
+                if args.names.len() != w.names.len() {
+                    return Err(bad(format!(
+                        "--names gives {} name(s) but {origin} has {} channel(s)",
+                        args.names.len(),
+                        w.names.len()
+                    )));
+                }
+                w.names = args.names.clone();
+            }
+            Ok(w)
+        }
+        "csv" | "txt" | "tsv" => {
+            let text =
+                String::from_utf8(bytes).map_err(|_| bad(format!("{origin}: not UTF-8 text")))?;
+            parse_csv(&text, origin, args)
+        }
+        _ => Err(bad(format!(
+            "{origin}: unknown format (expected .csv or .wav)"
+        ))),
+    }
+}
+
+/// `hapticlab import`: returns the recordings written.
+pub fn run(args: &ImportArgs) -> Result<Vec<PathBuf>, Failure> {
+    let extra = check_options(args)?;
     // Parse everything first: one bad file and nothing is written.
     let mut planned = Vec::new();
     for f in &args.files {
@@ -442,34 +497,9 @@ pub fn run(args: &ImportArgs) -> Result<Vec<PathBuf>, Failure> {
         let bytes = std::fs::read(f).map_err(|e| Failure::Runtime(format!("{origin}: {e}")))?;
         let ext = f
             .extension()
-            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+            .map(|e| e.to_string_lossy().into_owned())
             .unwrap_or_default();
-        let mut imp = match ext.as_str() {
-            "wav" | "wave" => {
-                let mut w = parse_wav(&bytes, &origin)?;
-                if !args.names.is_empty() {
-                    if args.names.len() != w.names.len() {
-                        return Err(bad(format!(
-                            "--names gives {} name(s) but {origin} has {} channel(s)",
-                            args.names.len(),
-                            w.names.len()
-                        )));
-                    }
-                    w.names = args.names.clone();
-                }
-                w
-            }
-            "csv" | "txt" | "tsv" => {
-                let text = String::from_utf8(bytes)
-                    .map_err(|_| bad(format!("{origin}: not UTF-8 text")))?;
-                parse_csv(&text, &origin, args)?
-            }
-            _ => {
-                return Err(bad(format!(
-                    "{origin}: unknown format (expected .csv or .wav)"
-                )));
-            }
-        };
+        let mut imp = parse_file(bytes, &origin, &ext, args)?;
         let label = match (&args.label, imp.label.take()) {
             (Some(l), _) => l.clone(),
             (None, Some(l)) => l,

@@ -6,6 +6,17 @@ use std::path::Path;
 
 use hapticlab::import::{ImportArgs, run};
 use hapticlab::recording;
+use proptest::prelude::*;
+
+#[path = "common/mutation.rs"]
+mod mutation;
+use mutation::{mutate, mutation};
+
+/// The fuzz targets' entry points (`fuzz/src/lib.rs`): `import_csv` (the
+/// mapping as options on the first line, then the file) and `import_wav`.
+#[path = "../fuzz/src/lib.rs"]
+#[allow(dead_code)]
+mod entries;
 
 fn args(files: &[&Path], out: &Path) -> ImportArgs {
     ImportArgs {
@@ -94,6 +105,40 @@ fn a_bad_csv_gives_a_clear_message_and_writes_nothing() {
     );
 }
 
+#[test]
+fn times_that_overflow_are_refused_not_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("far.csv");
+    // Row intervals of 2e308 s: the median interval shared within a burst is inf.
+    std::fs::write(&f, "t,a,b\n-1e308,1,2\n1e308,3,4\n").unwrap();
+    let out = dir.path().join("out");
+    let mut a = args(&[&f], &out);
+    a.time_column = Some("t".into());
+    a.burst = 2;
+    a.label = Some("S1".into());
+    let e = run(&a).unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+    assert!(
+        e.message().contains(
+            "far.csv: the time of sample 1 overflows (it is NaN, from the time column's intervals)"
+        ),
+        "{}",
+        e.message()
+    );
+    // A positive rate so small that 1/rate is inf.
+    a.time_column = None;
+    a.burst = 1;
+    a.rate = Some(1e-310);
+    let e = run(&a).unwrap_err();
+    assert!(
+        e.message()
+            .contains("the time of sample 2 overflows (it is inf, from --rate 1e-310)"),
+        "{}",
+        e.message()
+    );
+    assert!(!out.exists(), "nothing written");
+}
+
 /// A WAV file: `format` 1 (PCM) or 3 (float), interleaved frames.
 fn wav(format: u16, channels: u16, rate: u32, bits: u16, data: &[u8]) -> Vec<u8> {
     let mut b = Vec::new();
@@ -166,4 +211,47 @@ fn wav_16_and_24_bit_integer_and_float_round_trip() {
         "{}",
         e.message()
     );
+}
+
+const CSV_MAPPINGS: [&str; 4] = [
+    "--time-column t --label-column texture",
+    "--rate 1000 --label S1",
+    "--time-column t --burst 2 --channels a1,a2 --label S1",
+    "--rate 3000 --burst 2 --label S1 --delimiter ;",
+];
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(500))]
+
+    /// Any bytes as a CSV or a WAV file: an import, or a message; never a panic.
+    #[test]
+    fn arbitrary_bytes_never_panic(
+        mapping in 0..CSV_MAPPINGS.len(),
+        bytes in prop::collection::vec(any::<u8>(), 0..400),
+    ) {
+        let _ = entries::import_wav(&bytes);
+        let mut csv = format!("{}\n", CSV_MAPPINGS[mapping]).into_bytes();
+        csv.extend(&bytes);
+        let _ = entries::import_csv(&csv);
+    }
+
+    #[test]
+    fn mutated_csv_files_never_panic(
+        mapping in 0..CSV_MAPPINGS.len(),
+        mutations in prop::collection::vec(mutation(b",;\t\n\r\"-.e0123456789"), 1..6),
+    ) {
+        let file = "t,a1,a2,texture\n0,1,2,S1\n0.5,3,4,S1\n1,5,6,S1\n";
+        let _ = entries::import_csv(&mutate(format!("{}\n{file}", CSV_MAPPINGS[mapping]).into_bytes(), &mutations));
+    }
+
+    #[test]
+    fn mutated_wav_files_never_panic(
+        format in prop::sample::select(vec![(1u16, 8u16), (1, 16), (1, 24), (1, 32), (3, 32), (3, 64)]),
+        channels in 1u16..4,
+        mutations in prop::collection::vec(mutation(&[0, 1, 0xff, 0x7f, 0x80, 0xfe]), 1..6),
+    ) {
+        let data: Vec<u8> = (0..48).collect();
+        let bytes = wav(format.0, channels, 8000, format.1, &data);
+        let _ = entries::import_wav(&mutate(bytes, &mutations));
+    }
 }

@@ -5,6 +5,17 @@
 use std::path::Path;
 
 use hapticlab::profile::LoadedProfile;
+use proptest::prelude::*;
+
+#[path = "common/mutation.rs"]
+mod mutation;
+use mutation::{mutate, mutation};
+
+/// The fuzz targets' entry points (`fuzz/src/lib.rs`): `profile` loads the
+/// text and checks the promises a loaded profile keeps.
+#[path = "../fuzz/src/lib.rs"]
+#[allow(dead_code)]
+mod entries;
 
 #[test]
 fn every_invalid_profile_is_refused_with_file_line_key_and_reason() {
@@ -59,4 +70,37 @@ fn the_shipped_profiles_are_valid() {
     let disk = LoadedProfile::load(Path::new("profiles/thesis.toml")).unwrap();
     assert_eq!(builtin.profile, disk.profile);
     assert_eq!(builtin.sha256, disk.sha256);
+}
+
+const SHIPPED: [&str; 3] = [
+    include_str!("../profiles/thesis.toml"),
+    include_str!("../profiles/thesis-emulator.toml"),
+    include_str!("../profiles/thesis-falcon.toml"),
+];
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(500))]
+
+    /// Any bytes: a profile, or a message naming the file; never a panic.
+    #[test]
+    fn arbitrary_bytes_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..600)) {
+        let _ = entries::profile(&bytes);
+    }
+
+    #[test]
+    fn mutated_profiles_never_panic(
+        which in 0..SHIPPED.len(),
+        mutations in prop::collection::vec(mutation(b"=[]{}\"'.,#\n-+0123456789e_"), 1..6),
+    ) {
+        let bytes = mutate(SHIPPED[which].as_bytes().to_vec(), &mutations);
+        // Lossy, so that most mutants reach the TOML parser.
+        let _ = entries::profile(String::from_utf8_lossy(&bytes).as_bytes());
+    }
+}
+
+#[test]
+fn the_shipped_profiles_pass_the_fuzz_entry_point() {
+    for text in SHIPPED {
+        assert_eq!(entries::profile(text.as_bytes()), Ok(()));
+    }
 }

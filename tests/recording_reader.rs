@@ -7,6 +7,10 @@ use std::path::{Path, PathBuf};
 use hapticlab::recording::{self, FORMAT_LINE, Recording, RecordingError, RecordingWriter};
 use proptest::prelude::*;
 
+#[path = "common/mutation.rs"]
+mod mutation;
+use mutation::{mutate, mutation};
+
 const COLUMNS: [&str; 7] = ["t_s", "x_m", "y_m", "z_m", "fx_n", "fy_n", "fz_n"];
 
 fn broken(name: &str) -> PathBuf {
@@ -363,52 +367,6 @@ fn gzip(bytes: &[u8]) -> Vec<u8> {
     encoder.finish().unwrap()
 }
 
-#[derive(Debug, Clone)]
-enum Mutation {
-    Set(usize, u8),
-    Insert(usize, Vec<u8>),
-    Remove(usize, usize),
-    Truncate(usize),
-}
-
-fn mutation() -> impl Strategy<Value = Mutation> {
-    let interesting = prop::sample::select(b",#\n\r.-+e= 0x\"".to_vec());
-    prop_oneof![
-        (any::<usize>(), prop_oneof![interesting, any::<u8>()])
-            .prop_map(|(i, b)| Mutation::Set(i, b)),
-        (any::<usize>(), prop::collection::vec(any::<u8>(), 1..8))
-            .prop_map(|(i, b)| Mutation::Insert(i, b)),
-        (any::<usize>(), 1usize..40).prop_map(|(i, n)| Mutation::Remove(i, n)),
-        any::<usize>().prop_map(Mutation::Truncate),
-    ]
-}
-
-fn mutate(mut bytes: Vec<u8>, mutations: &[Mutation]) -> Vec<u8> {
-    for m in mutations {
-        let len = bytes.len().max(1);
-        match m {
-            Mutation::Set(i, b) => {
-                if let Some(slot) = bytes.get_mut(i % len) {
-                    *slot = *b;
-                }
-            }
-            Mutation::Insert(i, b) => {
-                let at = i % (bytes.len() + 1);
-                bytes.splice(at..at, b.iter().copied());
-            }
-            Mutation::Remove(i, n) => {
-                let at = i % len;
-                let end = (at + n).min(bytes.len());
-                if at < end {
-                    bytes.drain(at..end);
-                }
-            }
-            Mutation::Truncate(i) => bytes.truncate(i % len),
-        }
-    }
-    bytes
-}
-
 /// Whatever happens, the reader answers: a recording that holds together, or an error.
 fn check_never_panics(bytes: &[u8]) {
     match recording::parse(bytes, "fuzz.csv") {
@@ -443,7 +401,7 @@ proptest! {
     fn mutated_recordings_never_panic(
         rows in 0usize..30,
         trailer in any::<bool>(),
-        mutations in prop::collection::vec(mutation(), 1..6),
+        mutations in prop::collection::vec(mutation(b",#\n\r.-+e= 0x\""), 1..6),
     ) {
         let valid = valid_text(rows, trailer);
         check_never_panics(&mutate(valid.clone(), &mutations));

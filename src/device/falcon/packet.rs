@@ -341,4 +341,44 @@ mod tests {
         assert_eq!(r.next_packet(), None);
         assert_eq!(r.buffered(), 0);
     }
+
+    proptest::proptest! {
+        /// Any 16 bytes decode to a packet or to `None`; any stream, in any
+        /// pieces, yields only well-formed packets, and every byte pushed is
+        /// a packet's, counted as discarded, or still buffered.
+        #[test]
+        fn any_bytes_decode_or_are_refused_and_every_byte_is_accounted_for(
+            stream in proptest::collection::vec(
+                proptest::prop_oneof![
+                    proptest::sample::select(b"<>AP@Q".to_vec()),
+                    proptest::arbitrary::any::<u8>(),
+                ],
+                0..1500,
+            ),
+            piece in 1usize..700,
+        ) {
+            for p in stream.chunks_exact(PACKET_LEN) {
+                let p: &[u8; PACKET_LEN] = p.try_into().unwrap();
+                if let Some(r) = decode_reply(p) {
+                    proptest::prop_assert_eq!(&encode_reply(&r)[..14], &p[..14]);
+                }
+                if let Some(c) = decode_command(p) {
+                    proptest::prop_assert_eq!(&encode_command(&c)[..14], &p[..14]);
+                }
+            }
+            let mut r = PacketReader::new();
+            let mut packets = 0;
+            for bytes in stream.chunks(piece) {
+                r.push(bytes);
+                while let Some(p) = r.next_packet() {
+                    proptest::prop_assert!(decode_reply(&p).is_some());
+                    packets += 1;
+                }
+            }
+            proptest::prop_assert_eq!(
+                stream.len() as u64,
+                packets * PACKET_LEN as u64 + r.stats.discarded_bytes + r.buffered() as u64
+            );
+        }
+    }
 }
