@@ -44,6 +44,10 @@ use live::Lab;
 
 /// Frames per second at most.
 pub const FRAME_RATE: u32 = 30;
+/// Frames a second while the console sits idle (Manual mode, no scan, no
+/// replay, no key for a while): still the 20 a second the panels promise.
+pub const IDLE_FRAME_RATE: u32 = 20;
+const IDLE_AFTER: Duration = Duration::from_secs(2);
 
 /// The default dataset folder: `recordings/session-<date>`.
 pub fn default_dataset() -> PathBuf {
@@ -229,8 +233,8 @@ pub fn run_loop<B: Backend>(
 where
     B::Error: std::fmt::Display,
 {
-    let frame = Duration::from_secs(1) / FRAME_RATE;
     let input = event::Input::start().map_err(|e| format!("terminal input: {e}"))?;
+    let mut last_key = Instant::now();
     if let Ok(size) = terminal.size() {
         app.resize(size.width, size.height);
     }
@@ -255,7 +259,13 @@ where
         terminal
             .draw(|f| f.render_widget(&*app, f.area()))
             .map_err(|e| format!("cannot draw: {e}"))?;
-        // Keys until the next frame is due.
+        // Keys until the next frame is due: 30 fps while anything moves or
+        // the user types, 20 (the panels' minimum) when the console sits idle.
+        let idle = app.mode() == crate::servo::Mode::Manual
+            && !app.scan_running
+            && app.replay.is_none()
+            && last_key.elapsed() > IDLE_AFTER;
+        let frame = Duration::from_secs(1) / if idle { IDLE_FRAME_RATE } else { FRAME_RATE };
         loop {
             let left = frame.saturating_sub(started.elapsed());
             if left.is_zero() || app.quit {
@@ -266,6 +276,7 @@ where
                 .map_err(|e| format!("terminal input: {e}"))?
             {
                 Some(Event::Key(k)) => {
+                    last_key = Instant::now();
                     let actions = app.handle_key(k);
                     run_actions(actions, app, lab.as_deref_mut(), jobs);
                 }

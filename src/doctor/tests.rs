@@ -164,7 +164,9 @@ fn a_well_set_up_pc_for_the_sim_profile_has_nothing_to_fix() {
         [
             "usb",
             "firmware",
-            "realtime",
+            "rt-priority",
+            "memory-lock",
+            "cpu-pinning",
             "terminal",
             "term",
             "colour",
@@ -327,7 +329,11 @@ fn firmware_is_not_needed_by_the_simulator_and_needed_by_the_emulator() {
 
 #[test]
 fn without_a_realtime_request_the_limits_are_a_note() {
-    let c = realtime_checks(&thesis(), &stock_system());
+    let no_rt = Needs {
+        realtime: None,
+        ..thesis()
+    };
+    let c = realtime_checks(&no_rt, &stock_system());
     assert_eq!(c.len(), 1);
     assert_eq!(c[0].status, Status::Note);
     assert!(
