@@ -2,9 +2,10 @@
 //! percentiles, missed deadlines, while the probe runs the thesis path, its
 //! scans are recorded, and a console-like consumer drains the telemetry and
 //! renders a full 200×60 console frame thirty times a second. Not a statistical micro-benchmark: one long run,
-//! reported. `HAPTICLAB_SOAK_S` sets the duration (default 60 s);
-//! `HAPTICLAB_RT=1` asks for the profile's real-time setup (SCHED_FIFO 80,
-//! memory locked), as `device.realtime` does. To find where late ticks come
+//! reported. `HAPTICLAB_SOAK_S` sets the duration (default 60 s). It runs
+//! the thesis profile's real-time setup (SCHED_FIFO 80, memory locked, spin
+//! 200 µs while driving); `HAPTICLAB_RT=0` runs at normal priority and
+//! `HAPTICLAB_SPIN_US=N` changes the spin. To find where late ticks come
 //! from, `HAPTICLAB_NO_SCAN=1` holds the probe instead of scanning and
 //! `HAPTICLAB_NO_DRAW=1` drains telemetry without drawing.
 //!
@@ -35,21 +36,21 @@ fn main() {
         .unwrap_or(60.0);
     let mut lp = LoadedProfile::thesis();
     let flag = |name: &str| std::env::var(name).is_ok_and(|v| v == "1");
-    let rt = flag("HAPTICLAB_RT");
-    let (no_scan, no_draw) = (flag("HAPTICLAB_NO_SCAN"), flag("HAPTICLAB_NO_DRAW"));
-    // `HAPTICLAB_SPIN_US=N`: wake N µs early and spin to each deadline (device.spin_us).
-    let spin_us: u32 = std::env::var("HAPTICLAB_SPIN_US")
+    // The thesis profile's own real-time setup unless overridden:
+    // `HAPTICLAB_RT=0` runs at normal priority, `HAPTICLAB_SPIN_US=N` sets
+    // device.spin_us.
+    if std::env::var("HAPTICLAB_RT").is_ok_and(|v| v == "0") {
+        lp.profile.device.realtime = None;
+    }
+    if let Some(spin) = std::env::var("HAPTICLAB_SPIN_US")
         .ok()
         .and_then(|v| v.parse().ok())
-        .unwrap_or(0);
-    if rt {
-        lp.profile.device.realtime = Some(hapticlab::profile::Realtime {
-            priority: 80,
-            lock_memory: true,
-            cpu: None,
-        });
+    {
+        lp.profile.device.spin_us = spin;
     }
-    lp.profile.device.spin_us = spin_us;
+    let rt = lp.profile.device.realtime.is_some();
+    let spin_us = lp.profile.device.spin_us;
+    let (no_scan, no_draw) = (flag("HAPTICLAB_NO_SCAN"), flag("HAPTICLAB_NO_DRAW"));
     let profile = lp.profile.clone();
     let base = lp.base_dir.clone();
     let handle = spawn(&lp.profile, move || {
