@@ -425,6 +425,31 @@ fn scan_with_fault(profile: &Path, data: &Path, reason: &str) -> Recording {
     rec
 }
 
+/// Beside four complete scans simulated into `dir/E`, `features` over `data`
+/// skips the incomplete `file` with a warning and reads the rest.
+fn assert_features_skip(dir: &Path, data: &Path, file: &Path) {
+    let complete = dir.join("E");
+    let r = output(hapticlab().args([
+        "simulate",
+        "-p",
+        QUICK_SIM,
+        "--per-class",
+        "1",
+        "--out",
+        p(&complete),
+    ]));
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let r = output(hapticlab().args(["features", "-p", QUICK_SIM, p(data), p(&complete)]));
+    assert_eq!(r.code, Some(0), "{r:?}");
+    // A header and the four complete scans.
+    assert_eq!(r.stdout.lines().count(), 5, "{r:?}");
+    assert!(
+        r.stderr
+            .contains(&format!("warning: {}: incomplete scan", p(file))),
+        "{r:?}"
+    );
+}
+
 fn with_sim_faults(faults: &'static str) -> impl FnOnce(String) -> String {
     move |t| format!("{t}\n[simulator.faults]\n{faults}\n")
 }
@@ -440,28 +465,7 @@ fn scan_reports_a_read_error_and_batch_commands_skip_the_scan() {
     );
     scan_with_fault(&prof, &data, "read_error_after_s");
     // Next to complete scans, `features` skips it with a warning.
-    let complete = dir.path().join("E");
-    let r = output(hapticlab().args([
-        "simulate",
-        "-p",
-        QUICK_SIM,
-        "--per-class",
-        "1",
-        "--out",
-        p(&complete),
-    ]));
-    assert_eq!(r.code, Some(0), "{r:?}");
-    let r = output(hapticlab().args(["features", "-p", QUICK_SIM, p(&data), p(&complete)]));
-    assert_eq!(r.code, Some(0), "{r:?}");
-    // A header and the four complete scans.
-    assert_eq!(r.stdout.lines().count(), 5, "{r:?}");
-    assert!(
-        r.stderr.contains(&format!(
-            "warning: {}: incomplete scan",
-            p(&data.join("S2/S2_001.csv"))
-        )),
-        "{r:?}"
-    );
+    assert_features_skip(dir.path(), &data, &data.join("S2/S2_001.csv"));
 }
 
 #[test]
@@ -589,25 +593,7 @@ fn kill_9_during_a_scan_leaves_a_readable_incomplete_recording() {
     assert!(rec.len() >= 250, "{} samples", rec.len());
     assert_eq!(rec.label(), Some("S2"));
     // Batch commands skip it with a warning.
-    let complete = dir.path().join("E");
-    let r = output(hapticlab().args([
-        "simulate",
-        "-p",
-        QUICK_SIM,
-        "--per-class",
-        "1",
-        "--out",
-        p(&complete),
-    ]));
-    assert_eq!(r.code, Some(0), "{r:?}");
-    let r = output(hapticlab().args(["features", "-p", QUICK_SIM, p(&data), p(&complete)]));
-    assert_eq!(r.code, Some(0), "{r:?}");
-    assert_eq!(r.stdout.lines().count(), 5, "{r:?}");
-    assert!(
-        r.stderr
-            .contains(&format!("warning: {}: incomplete scan", p(&file))),
-        "{r:?}"
-    );
+    assert_features_skip(dir.path(), &data, &file);
 }
 
 /// A full disk, portably: the child may write files of at most `limit`
