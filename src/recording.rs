@@ -163,9 +163,23 @@ pub fn parse(bytes: &[u8], origin: &str) -> Result<Recording, RecordingError> {
     parse_text(bytes, origin)
 }
 
+/// A gzipped recording may hold at most this much text, or this many times
+/// its compressed size if that is more: a real recording (CSV of decimals)
+/// compresses three to five times, a gzip bomb a thousand.
+const GZIP_MIN_LIMIT: u64 = 1 << 30;
+const GZIP_MAX_RATIO: u64 = 100;
+
 fn gunzip(bytes: &[u8], origin: &str) -> Result<Vec<u8>, RecordingError> {
+    let limit = (bytes.len() as u64)
+        .saturating_mul(GZIP_MAX_RATIO)
+        .max(GZIP_MIN_LIMIT);
+    gunzip_at_most(bytes, origin, limit)
+}
+
+fn gunzip_at_most(bytes: &[u8], origin: &str, limit: u64) -> Result<Vec<u8>, RecordingError> {
     let mut text = Vec::with_capacity(bytes.len().saturating_mul(4));
     flate2::read::MultiGzDecoder::new(bytes)
+        .take(limit.saturating_add(1))
         .read_to_end(&mut text)
         .map_err(|e| RecordingError::Compressed {
             origin: origin.to_string(),
@@ -178,6 +192,15 @@ fn gunzip(bytes: &[u8], origin: &str) -> Result<Vec<u8>, RecordingError> {
                 format!("corrupt gzip stream ({e})")
             },
         })?;
+    if text.len() as u64 > limit {
+        return Err(RecordingError::Compressed {
+            origin: origin.to_string(),
+            reason: format!(
+                "it unpacks to more than {limit} bytes ({} compressed): too large for a recording (a gzip bomb?)",
+                bytes.len()
+            ),
+        });
+    }
     Ok(text)
 }
 
@@ -687,6 +710,21 @@ fn walk(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_gzip_stream_that_unpacks_too_far_is_refused() {
+        use std::io::Write;
+        let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::best());
+        gz.write_all(&vec![b'0'; 1 << 20]).unwrap();
+        let bytes = gz.finish().unwrap();
+        assert!(bytes.len() < 4096, "{} bytes", bytes.len());
+        let err = gunzip_at_most(&bytes, "bomb.csv.gz", 100_000).unwrap_err();
+        assert!(err.to_string().contains("too large"), "{err}");
+        assert_eq!(
+            gunzip_at_most(&bytes, "ok.csv.gz", 1 << 20).unwrap().len(),
+            1 << 20
+        );
+    }
     use proptest::prelude::*;
 
     const EXAMPLE: &str = "# hapticlab recording v1\n# label = \"S2\"\n# profile = \"thesis\"\n\
