@@ -91,7 +91,15 @@ pub fn run(lp: LoadedProfile, dataset: Option<PathBuf>) -> Result<(), Failure> {
         dataset.clone(),
     );
     let texture = lp.profile.texture(&app.label).map(|t| t.label.clone());
-    let mut lab = Lab::start(&lp, &dataset, texture.as_deref()).map_err(runtime)?;
+    // A profile's texture or firmware file that cannot be used is bad input
+    // (exit 2); a device that cannot be opened is a runtime failure (1).
+    let mut lab = Lab::start(&lp, &dataset, texture.as_deref()).map_err(|e| {
+        if e.is_bad_input() {
+            Failure::BadInput(e.to_string())
+        } else {
+            runtime(e)
+        }
+    })?;
     app.mounted = lab.texture.clone();
     refresh_dataset(&mut app);
     if let Some((m, file)) = dataset::load_saved_model(&lp, &dataset) {

@@ -885,3 +885,24 @@ fn simulate_never_overwrites_recordings_unless_asked() {
         "seed 4 differs from seed 3"
     );
 }
+
+#[test]
+fn the_console_refuses_a_missing_firmware_file_as_bad_input() {
+    let dir = TempDir::new().unwrap();
+    let text = fs::read_to_string(Path::new(REPO).join("profiles/thesis-emulator.toml")).unwrap();
+    assert!(text.contains("firmware_loaded = true") && text.contains("\n[falcon]\n"));
+    let text = text
+        .replace("firmware_loaded = true", "firmware_loaded = false")
+        .replace("\n[falcon]\n", "\n[falcon]\nfirmware = \"nowhere.bin\"\n");
+    let profile = dir.path().join("no-firmware.toml");
+    fs::write(&profile, text).unwrap();
+    let ds = dir.path().join("ds");
+    let msg = assert_error(
+        &run(&["console", "--profile", p(&profile), "--dataset", p(&ds)]),
+        2,
+    );
+    assert!(
+        msg.contains("nowhere.bin") && msg.contains("firmware"),
+        "{msg}"
+    );
+}

@@ -9,7 +9,9 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::acquire::{next_free_index, open_device, scan_file, scan_metadata, scan_seed};
+use crate::acquire::{
+    AcquireError, next_free_index, open_device, scan_file, scan_metadata, scan_seed,
+};
 use crate::analysis::FeatureExtractor;
 use crate::profile::{DeviceKind, LoadedProfile};
 use crate::recorder::{COLUMNS, SavedScan};
@@ -38,7 +40,11 @@ pub struct Lab {
 impl Lab {
     /// Start the servo on the profile's device, `texture` under the probe
     /// (simulated devices only).
-    pub fn start(lp: &LoadedProfile, dataset: &Path, texture: Option<&str>) -> Result<Lab, String> {
+    pub fn start(
+        lp: &LoadedProfile,
+        dataset: &Path,
+        texture: Option<&str>,
+    ) -> Result<Lab, AcquireError> {
         let simulated = lp.profile.device.kind != DeviceKind::Falcon;
         let mut lab = Lab {
             lp: lp.clone(),
@@ -58,7 +64,7 @@ impl Lab {
         self.lp.profile.device.kind.name()
     }
 
-    fn spawn(&mut self) -> Result<(), String> {
+    fn spawn(&mut self) -> Result<(), AcquireError> {
         let p = &self.lp.profile;
         let seed = scan_seed(
             p.simulator.seed,
@@ -68,12 +74,11 @@ impl Lab {
         let notes = &mut self.notes;
         let device = open_device(&self.lp, self.texture.as_deref(), seed, &mut |m| {
             notes.push(m.to_string())
-        })
-        .map_err(|e| e.to_string())?;
+        })?;
         self.mounts += 1;
         self.last_stop = None;
         let handle = servo::spawn(p, move || device)
-            .map_err(|e| format!("cannot start the servo thread: {e}"))?;
+            .map_err(|e| AcquireError::Runtime(format!("cannot start the servo thread: {e}")))?;
         self.handle = Some(handle);
         Ok(())
     }
@@ -92,7 +97,7 @@ impl Lab {
             }
         }
         self.texture = Some(texture.to_string());
-        self.spawn()
+        self.spawn().map_err(|e| e.to_string())
     }
 
     pub fn send(&self, c: Command) {
