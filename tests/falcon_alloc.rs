@@ -13,6 +13,7 @@ use hapticlab::device::falcon::emulator::{EmulatedFalcon, EmulatorConfig};
 use hapticlab::device::falcon::{FalconConfig, FalconDevice};
 use hapticlab::device::sim::SimDevice;
 use hapticlab::profile::LoadedProfile;
+use hapticlab::profile::hardware::EmulatorSection;
 
 #[test]
 fn no_allocation_per_falcon_tick() {
@@ -21,9 +22,12 @@ fn no_allocation_per_falcon_tick() {
     let emu = EmulatedFalcon::new(
         sim,
         EmulatorConfig {
-            drop_rate: 0.03,
-            garble_rate: 0.03,
-            split_rate: 0.2,
+            device: EmulatorSection {
+                drop_rate: 0.03,
+                garble_rate: 0.03,
+                split_rate: 0.2,
+                ..EmulatorSection::default()
+            },
             ..EmulatorConfig::default()
         },
     );

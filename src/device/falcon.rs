@@ -472,17 +472,7 @@ pub fn open_emulated(
     let emu = emulator::EmulatedFalcon::new(
         sim,
         emulator::EmulatorConfig {
-            firmware_loaded: e.firmware_loaded,
-            upload_failures: e.upload_failures,
-            drop_rate: e.drop_rate,
-            garble_rate: e.garble_rate,
-            split_rate: e.split_rate,
-            unplug_after_s: e.unplug_after_s,
-            read_error_after_s: e.read_error_after_s,
-            stall_after_s: e.stall_after_s,
-            stall_ms: e.stall_ms,
-            stalls: e.stalls,
-            auto_home: e.auto_home,
+            device: e.clone(),
             leading_zero: seed % 2 == 1,
             seed,
             frame: config.frame,

@@ -32,6 +32,7 @@ use super::packet::{self, PacketReader, ReplyPacket};
 use super::{FalconTransport, TransportError, ftdi};
 use crate::device::HapticDevice;
 use crate::device::sim::SimDevice;
+use crate::profile::hardware::EmulatorSection;
 use crate::profile::{WORKSPACE_MAX_M, WORKSPACE_MIN_M};
 
 /// Falcon z (m) the grip must pass, pulled out, then pushed in, to home:
@@ -66,24 +67,8 @@ const MIN_IMAGE: usize = 1024;
 /// What to emulate (from the profile's `[falcon.emulator]`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct EmulatorConfig {
-    /// The firmware is already running (as after an earlier session).
-    pub firmware_loaded: bool,
-    /// The first N uploads fail (one echoed byte corrupted).
-    pub upload_failures: u32,
-    /// Per reply: the chance it is lost, garbled, or delivered in two pieces.
-    pub drop_rate: f64,
-    pub garble_rate: f64,
-    pub split_rate: f64,
-    /// Emulator time (s) at which the cable is pulled.
-    pub unplug_after_s: Option<f64>,
-    /// Emulator time (s) at which one USB read fails with an I/O error.
-    pub read_error_after_s: Option<f64>,
-    /// From this emulator time (s), `stalls` reads in a row block for `stall_ms`.
-    pub stall_after_s: Option<f64>,
-    pub stall_ms: f64,
-    pub stalls: u32,
-    /// A simulated hand pulls the grip out and pushes it in to home it.
-    pub auto_home: bool,
+    /// The state and faults the profile's `[falcon.emulator]` asks for.
+    pub device: EmulatorSection,
     /// The boot loader answers the handshake with a leading 0x00.
     pub leading_zero: bool,
     pub seed: u64,
@@ -96,17 +81,7 @@ pub struct EmulatorConfig {
 impl Default for EmulatorConfig {
     fn default() -> Self {
         EmulatorConfig {
-            firmware_loaded: true,
-            upload_failures: 0,
-            drop_rate: 0.0,
-            garble_rate: 0.0,
-            split_rate: 0.0,
-            unplug_after_s: None,
-            read_error_after_s: None,
-            stall_after_s: None,
-            stall_ms: 0.0,
-            stalls: 1,
-            auto_home: true,
+            device: EmulatorSection::default(),
             leading_zero: false,
             seed: 1,
             frame: Frame::default(),
@@ -198,7 +173,7 @@ impl EmulatedFalcon {
         let offsets = [0; 3].map(|_: i16| rng.random_range(-200..=200));
         let noise = Normal::new(0.0, cfg.position_noise_m.max(0.0)).expect("a finite sigma");
         EmulatedFalcon {
-            fw: if cfg.firmware_loaded {
+            fw: if cfg.device.firmware_loaded {
                 Firmware::Running
             } else {
                 Firmware::Boot(Boot::Idle)
@@ -304,7 +279,7 @@ impl EmulatedFalcon {
                 if b == 0x41 && self.baud == ftdi::BAUD_LOADER && !self.dtr {
                     self.to_host.push_back(0x41);
                     self.counters.uploads_started += 1;
-                    let fail = self.counters.uploads_started <= self.cfg.upload_failures;
+                    let fail = self.counters.uploads_started <= self.cfg.device.upload_failures;
                     let corrupt_at = fail.then(|| 62 * 40 + self.rng.random_range(0..62));
                     self.fw = Firmware::Boot(Boot::Loading {
                         received: 0,
@@ -402,7 +377,7 @@ impl EmulatedFalcon {
         let homed = self.is_homed();
         let p = self.sim.true_position();
         let v = self.sim.true_velocity();
-        let target = if !self.cfg.auto_home || self.released {
+        let target = if !self.cfg.device.auto_home || self.released {
             None
         } else if !homed {
             // Out past the homing marks, then in past the others.
@@ -530,7 +505,13 @@ impl FalconTransport for EmulatedFalcon {
 
     fn read(&mut self, buf: &mut [u8], _timeout: Duration) -> Result<usize, TransportError> {
         self.check()?;
-        if !self.read_error_done && self.cfg.read_error_after_s.is_some_and(|a| self.t >= a) {
+        if !self.read_error_done
+            && self
+                .cfg
+                .device
+                .read_error_after_s
+                .is_some_and(|a| self.t >= a)
+        {
             self.read_error_done = true;
             return Err(TransportError::Io(format!(
                 "the emulated Falcon's USB read failed at {:.3} s, as `[falcon.emulator] read_error_after_s` asks (on a real one: check the USB cable and hub)",
@@ -540,12 +521,18 @@ impl FalconTransport for EmulatedFalcon {
         while self.replies_due > 0 {
             self.replies_due -= 1;
             let r = self.reply();
-            if self.rng.random_bool(self.cfg.drop_rate.clamp(0.0, 1.0)) {
+            if self
+                .rng
+                .random_bool(self.cfg.device.drop_rate.clamp(0.0, 1.0))
+            {
                 self.counters.dropped += 1;
                 continue;
             }
             let mut bytes = packet::encode_reply(&r);
-            if self.rng.random_bool(self.cfg.garble_rate.clamp(0.0, 1.0)) {
+            if self
+                .rng
+                .random_bool(self.cfg.device.garble_rate.clamp(0.0, 1.0))
+            {
                 let i = self.rng.random_range(1..15);
                 bytes[i] = b'z';
                 self.counters.garbled += 1;
@@ -554,7 +541,11 @@ impl FalconTransport for EmulatedFalcon {
             self.to_host.extend(bytes);
         }
         let mut n = buf.len().min(self.to_host.len());
-        if n > 1 && self.rng.random_bool(self.cfg.split_rate.clamp(0.0, 1.0)) {
+        if n > 1
+            && self
+                .rng
+                .random_bool(self.cfg.device.split_rate.clamp(0.0, 1.0))
+        {
             n = self.rng.random_range(1..n);
             self.counters.split += 1;
         }
@@ -569,12 +560,14 @@ impl FalconTransport for EmulatedFalcon {
             return;
         }
         self.t = t_s;
-        if !self.unplugged && self.cfg.unplug_after_s.is_some_and(|u| t_s >= u) {
+        if !self.unplugged && self.cfg.device.unplug_after_s.is_some_and(|u| t_s >= u) {
             self.unplug();
         }
-        if self.stalls_done < self.cfg.stalls && self.cfg.stall_after_s.is_some_and(|a| t_s >= a) {
+        if self.stalls_done < self.cfg.device.stalls
+            && self.cfg.device.stall_after_s.is_some_and(|a| t_s >= a)
+        {
             self.stalls_done += 1;
-            self.stall = Some(Duration::from_secs_f64(self.cfg.stall_ms / 1000.0));
+            self.stall = Some(Duration::from_secs_f64(self.cfg.device.stall_ms / 1000.0));
         }
         if !self.unplugged {
             self.outside_forces();
@@ -623,7 +616,10 @@ mod tests {
     #[test]
     fn the_upload_runs_the_handshake_and_echoes_every_chunk() {
         let mut e = emulator(EmulatorConfig {
-            firmware_loaded: false,
+            device: EmulatorSection {
+                firmware_loaded: false,
+                ..EmulatorSection::default()
+            },
             leading_zero: true,
             ..EmulatorConfig::default()
         });
@@ -644,8 +640,11 @@ mod tests {
     #[test]
     fn an_upload_that_fails_twice_succeeds_on_the_third_attempt() {
         let mut e = emulator(EmulatorConfig {
-            firmware_loaded: false,
-            upload_failures: 2,
+            device: EmulatorSection {
+                firmware_loaded: false,
+                upload_failures: 2,
+                ..EmulatorSection::default()
+            },
             ..EmulatorConfig::default()
         });
         let r = firmware::ensure_loaded(&mut e, Some(&image()), 20, &mut |_| {}).unwrap();
@@ -663,8 +662,11 @@ mod tests {
     #[test]
     fn too_many_failures_name_the_failing_step() {
         let mut e = emulator(EmulatorConfig {
-            firmware_loaded: false,
-            upload_failures: 5,
+            device: EmulatorSection {
+                firmware_loaded: false,
+                upload_failures: 5,
+                ..EmulatorSection::default()
+            },
             ..EmulatorConfig::default()
         });
         let err = firmware::ensure_loaded(&mut e, Some(&image()), 3, &mut |_| {})
@@ -674,7 +676,10 @@ mod tests {
         assert!(err.contains("chunk 41"), "{err}");
         // No image at all: says where to get one.
         let mut e = emulator(EmulatorConfig {
-            firmware_loaded: false,
+            device: EmulatorSection {
+                firmware_loaded: false,
+                ..EmulatorSection::default()
+            },
             ..EmulatorConfig::default()
         });
         let err = firmware::ensure_loaded(&mut e, None, 3, &mut |_| {})
@@ -687,7 +692,10 @@ mod tests {
     fn a_silent_boot_loader_fails_at_the_handshake() {
         // The cable is pulled before anything is said: the link error is named.
         let mut e = emulator(EmulatorConfig {
-            firmware_loaded: false,
+            device: EmulatorSection {
+                firmware_loaded: false,
+                ..EmulatorSection::default()
+            },
             ..EmulatorConfig::default()
         });
         e.unplug();
@@ -824,10 +832,13 @@ mod tests {
     #[test]
     fn faults_are_survived_and_counted_and_unplugging_stops_the_motors() {
         let e = emulator(EmulatorConfig {
-            drop_rate: 0.05,
-            garble_rate: 0.05,
-            split_rate: 0.3,
-            unplug_after_s: Some(4.0),
+            device: EmulatorSection {
+                drop_rate: 0.05,
+                garble_rate: 0.05,
+                split_rate: 0.3,
+                unplug_after_s: Some(4.0),
+                ..EmulatorSection::default()
+            },
             ..EmulatorConfig::default()
         });
         let mut dev = FalconDevice::open(e, FalconConfig::default(), &mut |_| {}).unwrap();
