@@ -612,10 +612,13 @@ where
                 .as_ref()
                 .map(clock::request_realtime)
                 .unwrap_or_default();
-            if let Some(tx) = &links.events {
-                for message in notices {
-                    let _ = tx.try_send(ServoEvent::Notice { message });
-                }
+            // One notice for the whole real-time setup, so a status line
+            // that shows the latest message shows all of it.
+            if let Some(tx) = &links.events
+                && !notices.is_empty()
+            {
+                let message = notices.join("; ");
+                let _ = tx.try_send(ServoEvent::Notice { message });
             }
             let device = make();
             let clock = clock::RealClock::start().with_spin(profile.device.spin_us);
