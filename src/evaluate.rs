@@ -166,13 +166,29 @@ pub fn evaluate(model: &Model, test: &[TrainingExample]) -> Result<Report, Evalu
         });
     }
     let correct: usize = (0..labels.len()).map(|i| confusion[i][i]).sum();
-    let per_class = labels
+    let per_class = class_rates(&labels, &confusion);
+    Ok(Report {
+        accuracy: correct as f64 / test.len() as f64,
+        confusion,
+        per_class,
+        train: model.examples.iter().map(|e| e.file.clone()).collect(),
+        test: test.iter().map(|e| e.file.clone()).collect(),
+        predictions,
+        labels,
+    })
+}
+
+/// SR and ER of each class (row) of a confusion matrix; NaN for a class
+/// with no test examples.
+pub fn class_rates(labels: &[String], confusion: &[Vec<usize>]) -> Vec<ClassRate> {
+    labels
         .iter()
+        .zip(confusion)
         .enumerate()
-        .map(|(i, label)| {
-            let n: usize = confusion[i].iter().sum();
+        .map(|(i, (label, row))| {
+            let n: usize = row.iter().sum();
             let success_rate = if n > 0 {
-                confusion[i][i] as f64 / n as f64
+                row[i] as f64 / n as f64
             } else {
                 f64::NAN
             };
@@ -183,16 +199,7 @@ pub fn evaluate(model: &Model, test: &[TrainingExample]) -> Result<Report, Evalu
                 error_rate: 1.0 - success_rate,
             }
         })
-        .collect();
-    Ok(Report {
-        accuracy: correct as f64 / test.len() as f64,
-        confusion,
-        per_class,
-        train: model.examples.iter().map(|e| e.file.clone()).collect(),
-        test: test.iter().map(|e| e.file.clone()).collect(),
-        predictions,
-        labels,
-    })
+        .collect()
 }
 
 impl Report {

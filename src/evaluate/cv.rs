@@ -20,7 +20,7 @@ use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
-use super::{ClassRate, EvaluateError, PredictionRow, class_seed, evaluate};
+use super::{ClassRate, EvaluateError, PredictionRow, class_rates, class_seed, evaluate};
 use crate::classify::{Model, TrainingExample};
 use crate::profile::{Analysis, Classifier, SplitMethod};
 
@@ -340,24 +340,7 @@ pub fn cross_validate(
     }
     let tested: usize = confusion.iter().flatten().sum();
     let correct: usize = (0..labels.len()).map(|i| confusion[i][i]).sum();
-    let per_class = labels
-        .iter()
-        .enumerate()
-        .map(|(i, label)| {
-            let n: usize = confusion[i].iter().sum();
-            let sr = if n > 0 {
-                confusion[i][i] as f64 / n as f64
-            } else {
-                f64::NAN
-            };
-            ClassRate {
-                label: label.clone(),
-                n,
-                success_rate: sr,
-                error_rate: 1.0 - sr,
-            }
-        })
-        .collect();
+    let per_class = class_rates(&labels, &confusion);
     let f1 = f1_scores(&confusion);
     let present: Vec<f64> = f1.iter().copied().filter(|v| v.is_finite()).collect();
     let macro_f1 = present.iter().sum::<f64>() / present.len().max(1) as f64;
