@@ -104,7 +104,7 @@ pub enum AnalysisError {
     },
     #[error(
         "no sample of the scan lies within half a spacing ({half}) of the window's {edge} at {at} along {axis}",
-        half = show(.axis, .spacing / 2.0),
+        half = show_fine(.axis, .spacing / 2.0),
         at = show(.axis, *.at)
     )]
     EdgeGap {
@@ -125,6 +125,17 @@ fn show(axis: &str, value: f64) -> String {
         format!("{value:.3} s")
     } else {
         format!("{value}")
+    }
+}
+
+/// A small axis value to the hundredth of a millimetre where that matters
+/// (half of a 0.3 mm spacing is 0.15 mm, not "0.1 mm").
+fn show_fine(axis: &str, value: f64) -> String {
+    if axis.ends_with("_m") {
+        let mm = format!("{:.2}", value * 1000.0);
+        format!("{} mm", mm.strip_suffix('0').unwrap_or(&mm))
+    } else {
+        show(axis, value)
     }
 }
 
@@ -513,7 +524,7 @@ mod tests {
         let err = fx.features(&x, &vec![0.0; x.len()]).unwrap_err();
         assert_eq!(
             err.to_string(),
-            "no sample of the scan lies within half a spacing (0.1 mm) of the window's start at 60.0 mm along x_m"
+            "no sample of the scan lies within half a spacing (0.15 mm) of the window's start at 60.0 mm along x_m"
         );
     }
 

@@ -194,8 +194,19 @@ impl Inspection {
         for f in &self.incomplete {
             s.push_str(&format!("incomplete: {f} (no `# end samples` trailer)\n"));
         }
-        for (f, e) in self.unreadable.iter().chain(&self.unusable) {
-            s.push_str(&format!("unusable: {f}: {e}\n"));
+        // Errors usually name their file already: name it once.
+        let named = |f: &str, e: &str| {
+            if e.starts_with(f) {
+                e.to_string()
+            } else {
+                format!("{f}: {e}")
+            }
+        };
+        for (f, e) in &self.unreadable {
+            s.push_str(&format!("unreadable: {}\n", named(f, e)));
+        }
+        for (f, e) in &self.unusable {
+            s.push_str(&format!("unusable: {}\n", named(f, e)));
         }
         if self.outliers.is_empty() {
             s.push_str(&format!(
@@ -303,6 +314,32 @@ mod tests {
             .map(|i| ex(&format!("s{i}"), "S", vec![1.0]))
             .collect();
         assert!(outliers(&same, 3.0).1.is_empty());
+    }
+
+    /// A reason that already names its file names it once.
+    #[test]
+    fn each_bad_file_is_named_once() {
+        let i = Inspection {
+            files: 2,
+            classes: vec![],
+            incomplete: vec![],
+            unreadable: vec![(
+                "d/x.csv".into(),
+                "d/x.csv:1: not a hapticlab recording".into(),
+            )],
+            unusable: vec![("d/y.csv".into(), "the scan covers too little".into())],
+            outliers: vec![],
+            threshold_factor: 3.0,
+        };
+        let t = i.text();
+        assert!(
+            t.contains("unreadable: d/x.csv:1: not a hapticlab recording\n"),
+            "{t}"
+        );
+        assert!(
+            t.contains("unusable: d/y.csv: the scan covers too little\n"),
+            "{t}"
+        );
     }
 
     /// Ordinary Gaussian classes varying along one direction (the most

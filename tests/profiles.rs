@@ -72,6 +72,20 @@ fn the_shipped_profiles_are_valid() {
     assert_eq!(builtin.sha256, disk.sha256);
 }
 
+/// The profile for a real Falcon asks for the simulated thesis profile's
+/// real-time setup: a USB round trip leaves no room for late wake-ups.
+#[test]
+fn the_falcon_profiles_ask_for_the_thesis_real_time_setup() {
+    let thesis = LoadedProfile::load(Path::new("profiles/thesis.toml")).unwrap();
+    let falcon = LoadedProfile::load(Path::new("profiles/thesis-falcon.toml")).unwrap();
+    assert!(thesis.profile.device.realtime.is_some());
+    assert_eq!(
+        falcon.profile.device.realtime,
+        thesis.profile.device.realtime
+    );
+    assert_eq!(falcon.profile.device.spin_us, thesis.profile.device.spin_us);
+}
+
 const SHIPPED: [&str; 3] = [
     include_str!("../profiles/thesis.toml"),
     include_str!("../profiles/thesis-emulator.toml"),
