@@ -44,6 +44,12 @@ impl From<acquire::AcquireError> for Failure {
     }
 }
 
+impl From<crate::dataset::DatasetError> for Failure {
+    fn from(e: crate::dataset::DatasetError) -> Failure {
+        if e.is_bad_input() { bad(e) } else { runtime(e) }
+    }
+}
+
 fn bad(m: impl std::fmt::Display) -> Failure {
     Failure::BadInput(m.to_string())
 }

@@ -17,11 +17,10 @@ use std::path::PathBuf;
 
 use serde::Serialize;
 
-use crate::analysis::FeatureExtractor;
 use crate::classify::{Scaling, TrainingExample};
 use crate::cli::ProfileArg;
-use crate::commands::{Failure, example_of, load_profile};
-use crate::recording;
+use crate::commands::{Failure, load_profile};
+use crate::dataset::{self, Skipped, Unusable};
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Outlier {
@@ -242,26 +241,29 @@ pub fn run(
             "--threshold must be a positive number, got {threshold}"
         )));
     }
-    let files = recording::collect_files(paths).map_err(|e| Failure::BadInput(e.to_string()))?;
-    if files.is_empty() {
-        return Err(Failure::BadInput(
-            "no recordings (*.csv, *.csv.gz) found".into(),
-        ));
-    }
-    let mut fx = FeatureExtractor::new(&lp.profile.analysis);
-    let mut examples = Vec::new();
+    let files = dataset::find(paths)?;
+    let loaded = dataset::load(
+        &files,
+        &lp.profile.analysis,
+        dataset::Options {
+            unusable: Unusable::Skip,
+            ..dataset::Options::default()
+        },
+        &|| {},
+    )?;
     let (mut incomplete, mut unreadable, mut unusable) = (Vec::new(), Vec::new(), Vec::new());
-    for f in &files {
-        let name = f.display().to_string();
-        match recording::read(f) {
-            Err(e) => unreadable.push((name, e.to_string())),
-            Ok(rec) if !rec.is_complete() => incomplete.push(name),
-            Ok(rec) => match example_of(&rec, f, &mut fx) {
-                Ok(e) => examples.push(e),
-                Err(e) => unusable.push((name, e.message().to_string())),
-            },
+    for s in &loaded.skipped {
+        match s {
+            Skipped::Incomplete { file, .. } => incomplete.push(file.clone()),
+            Skipped::Unusable {
+                file,
+                reason,
+                unreadable: true,
+            } => unreadable.push((file.clone(), reason.clone())),
+            Skipped::Unusable { file, reason, .. } => unusable.push((file.clone(), reason.clone())),
         }
     }
+    let examples = loaded.into_examples();
     let (classes, outliers) = outliers(&examples, threshold);
     let report = Inspection {
         files: files.len(),

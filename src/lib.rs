@@ -1,5 +1,7 @@
 //! hapticlab: haptic texture classification with a Novint Falcon (or its
-//! simulation), after the thesis in `shared/reference/thesis.txt`.
+//! simulation), after G. A. Hidalgo Vázquez, *Supervised Learning for Haptics
+//! Texture Classification Using Fourier Analysis*, master's thesis,
+//! Tecnológico de Monterrey, 2011.
 //!
 //! The engine (profile, device, servo, recorder/recording, analysis,
 //! classifier) knows nothing of any user interface; the command line and the
@@ -11,6 +13,7 @@ pub mod classify;
 pub mod cli;
 pub mod commands;
 pub mod console;
+pub mod dataset;
 pub mod device;
 pub mod devices;
 pub mod doctor;

@@ -15,6 +15,7 @@
 //! Everything is black, greys and line styles, so it prints in grey. This
 //! module reads its inputs and writes only the figure.
 
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use clap::{Args, Subcommand};
@@ -24,7 +25,8 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use crate::analysis::FeatureExtractor;
 use crate::cli::ProfileArg;
-use crate::commands::{Failure, features_of, label_of, load_profile};
+use crate::commands::{Failure, load_profile};
+use crate::dataset::{self, features_of, label_of};
 use crate::recording;
 
 static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
@@ -261,24 +263,27 @@ impl Data {
                 per_class,
             } => {
                 let lp = load_profile(profile)?;
-                let mut fx = FeatureExtractor::new(&lp.profile.analysis);
-                let files = recording::collect_files(paths).map_err(bad)?;
+                let files = dataset::find(paths)?;
+                let loaded = dataset::load(
+                    &files,
+                    &lp.profile.analysis,
+                    dataset::Options::default(),
+                    &|| {},
+                )?;
+                for skipped in &loaded.skipped {
+                    let _ = writeln!(std::io::stderr(), "warning: {skipped}");
+                }
                 let mut classes: Vec<(String, Vec<Vec<f64>>)> = Vec::new();
-                for f in &files {
-                    let rec = recording::read(f).map_err(bad)?;
-                    if !rec.is_complete() {
-                        continue;
-                    }
-                    let label = label_of(&rec, f)?;
-                    let i = match classes.iter().position(|(l, _)| *l == label) {
+                for e in loaded.entries {
+                    let i = match classes.iter().position(|(l, _)| *l == e.label) {
                         Some(i) => i,
                         None => {
-                            classes.push((label, Vec::new()));
+                            classes.push((e.label, Vec::new()));
                             classes.len() - 1
                         }
                     };
                     if classes[i].1.len() < *per_class {
-                        classes[i].1.push(features_of(&rec, f, &mut fx)?);
+                        classes[i].1.push(e.features);
                     }
                 }
                 if classes.is_empty() {
