@@ -5,7 +5,7 @@
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
@@ -247,7 +247,11 @@ fn scan(
     }
     // Before anything moves: the recordings must have somewhere to go.
     acquire::check_writable(&out.join(label)).map_err(Failure::from)?;
+    // `stop`: end the session (SIGINT, SIGTERM, or the terminal gone);
+    // `lost`: the terminal has gone (SIGHUP, a hang-up, a pipe nobody reads,
+    // a line that could not be written).
     let stop = Arc::new(AtomicBool::new(false));
+    let lost = Arc::new(AtomicBool::new(false));
     for sig in [
         signal_hook::consts::SIGINT,
         signal_hook::consts::SIGTERM,
@@ -255,11 +259,28 @@ fn scan(
     ] {
         signal_hook::flag::register(sig, stop.clone()).map_err(runtime)?;
     }
-    eprintln!(
+    signal_hook::flag::register(signal_hook::consts::SIGHUP, lost.clone()).map_err(runtime)?;
+    let terminal_gone = || {
+        lost.store(true, Ordering::Relaxed);
+        stop.store(true, Ordering::Relaxed);
+    };
+    // Nothing may print with println!/eprintln! here: they panic on a
+    // terminal that has gone. A line that cannot be written stops the scan.
+    let say = |args: std::fmt::Arguments<'_>| {
+        if !crate::terminal::out(args) {
+            terminal_gone();
+        }
+    };
+    let tell = |args: std::fmt::Arguments<'_>| {
+        if !crate::terminal::err(args) {
+            terminal_gone();
+        }
+    };
+    tell(format_args!(
         "scanning {label} on the {} device: {count} scan(s) of about {:.0} s each; Ctrl-C stops safely",
         lp.profile.device.kind.name(),
         acquire::path_duration_s(&lp)
-    );
+    ));
     let mut n = 0;
     let mut failed = None;
     let req = acquire::LiveScans {
@@ -272,7 +293,7 @@ fn scan(
     // Hands-free triggers: used when at least one is plugged in; never fatal.
     let watcher = start_triggers(&lp);
     let triggers = watcher.as_ref().map(|w| w.events.clone());
-    let mut on_note = |m: &str| eprintln!("{m}");
+    let mut on_note = |m: &str| tell(format_args!("{m}"));
     let mut on_scan = |r: &acquire::ScanReport| {
         n += 1;
         let s = &r.saved;
@@ -284,13 +305,13 @@ fn scan(
             (Some(reason), None) => format!("aborted ({reason}), samples kept, incomplete"),
             (None, None) => "complete".into(),
         };
-        println!(
+        say(format_args!(
             "scan {n}: {} — {} samples, {state}",
             s.path.display(),
             s.rows
-        );
+        ));
         if r.stats.ticks > 0 {
-            println!("  loop: {}", r.stats.summary());
+            say(format_args!("  loop: {}", r.stats.summary()));
         }
         if s.aborted.is_some() || s.error.is_some() {
             let kept = if s.rows > 0 {
@@ -310,8 +331,38 @@ fn scan(
         on_note: &mut on_note,
         triggers,
     };
-    let reports = acquire::scan_live_with(&lp, &req, stop, hooks).map_err(Failure::from)?;
+    let why = || {
+        if lost.load(Ordering::Relaxed) {
+            "terminal lost".to_string()
+        } else {
+            "interrupted by a signal".to_string()
+        }
+    };
+    // The terminal is watched while the scan runs: a hang-up or a pipe
+    // nobody reads any more stops it within a poll (50 ms).
+    let done = AtomicBool::new(false);
+    let reports = std::thread::scope(|scope| {
+        scope.spawn(|| {
+            while !done.load(Ordering::Relaxed) && !stop.load(Ordering::Relaxed) {
+                if crate::terminal::lost() {
+                    terminal_gone();
+                    break;
+                }
+                std::thread::sleep(std::time::Duration::from_millis(50));
+            }
+        });
+        let r = acquire::scan_live_stopping(&lp, &req, stop.clone(), &why, hooks);
+        done.store(true, Ordering::Relaxed);
+        r
+    })
+    .map_err(Failure::from)?;
     drop(watcher);
+    if lost.load(Ordering::Relaxed) {
+        return Err(runtime(match failed {
+            Some(state) => format!("the terminal was lost: the scan was stopped first: {state}"),
+            None => "the terminal was lost: the scans were stopped, forces are off".into(),
+        }));
+    }
     if let Some(state) = failed {
         return Err(runtime(format!("the scan did not complete: {state}")));
     }
@@ -335,7 +386,9 @@ fn start_triggers(lp: &LoadedProfile) -> Option<crate::triggers::TriggerWatcher>
     {
         Ok(w) => w,
         Err(e) => {
-            eprintln!("triggers unavailable ({e}); scans start without them");
+            crate::terminal::err(format_args!(
+                "triggers unavailable ({e}); scans start without them"
+            ));
             return None;
         }
     };
@@ -344,11 +397,13 @@ fn start_triggers(lp: &LoadedProfile) -> Option<crate::triggers::TriggerWatcher>
     for _ in 0..lp.profile.triggers.len() {
         match w.events.recv_timeout(std::time::Duration::from_secs(2)) {
             Ok(TriggerEvent::Connected(s)) => {
-                eprintln!("trigger {s} connected");
+                crate::terminal::err(format_args!("trigger {s} connected"));
                 connected += 1;
             }
             Ok(TriggerEvent::Absent { source, why }) => {
-                eprintln!("trigger {source}: {why}; scans start without it")
+                crate::terminal::err(format_args!(
+                    "trigger {source}: {why}; scans start without it"
+                ));
             }
             _ => {}
         }
