@@ -288,3 +288,42 @@ fn the_console_drives_the_emulated_falcon_once_homed() {
         x.iter().cloned().fold(f64::MIN, f64::max) - x.iter().cloned().fold(f64::MAX, f64::min);
     assert!(span > 0.025, "x spans only {span} m");
 }
+
+/// An unwritable dataset folder is refused when the console starts, before
+/// anything moves (as `scan --out` is): one message naming the folder and
+/// `--dataset`, exit 1, and no terminal set up.
+#[test]
+fn an_unwritable_dataset_folder_is_refused_before_anything_moves() {
+    let tmp = tempfile::tempdir().unwrap();
+    // A path under a regular file: nobody, not even root, can create it.
+    let file = tmp.path().join("a-file");
+    std::fs::write(&file, b"not a folder").unwrap();
+    let ds = file.join("ds");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hapticlab"))
+        .args(["console", "--profile"])
+        .arg(fast_profile())
+        .arg("--dataset")
+        .arg(&ds)
+        .current_dir(tmp.path())
+        .stdin(std::process::Stdio::null())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "one message: {stderr}");
+    assert!(
+        lines[0].contains(&format!(
+            "cannot record into {}",
+            ds.join(".unsaved").display()
+        )) && lines[0].contains("Not a directory")
+            && lines[0].contains("--dataset"),
+        "{stderr}"
+    );
+    // Nothing was drawn: the terminal was never opened.
+    assert!(
+        out.stdout.is_empty(),
+        "{:?}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+}
