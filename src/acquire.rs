@@ -276,6 +276,23 @@ pub fn simulate_dataset(
     opts: &SimulateOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Vec<SavedScan>, AcquireError> {
+    simulate_dataset_until(
+        lp,
+        opts,
+        progress,
+        &std::sync::atomic::AtomicBool::new(false),
+    )
+}
+
+/// [`simulate_dataset`], stopping early when `stop` is raised: no scan is
+/// started after it; the scans already running finish (virtual time: a
+/// fraction of a second each), and those finished are returned.
+pub fn simulate_dataset_until(
+    lp: &LoadedProfile,
+    opts: &SimulateOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+    stop: &std::sync::atomic::AtomicBool,
+) -> Result<Vec<SavedScan>, AcquireError> {
     if lp.profile.textures.is_empty() {
         return Err(AcquireError::BadInput(format!(
             "{}: the profile has no [[textures]] to simulate",
@@ -318,6 +335,9 @@ pub fn simulate_dataset(
                 s.spawn(|| {
                     let mut mine = Vec::new();
                     loop {
+                        if stop.load(Ordering::Relaxed) {
+                            break;
+                        }
                         let j = next.fetch_add(1, Ordering::Relaxed);
                         let Some((label, i)) = jobs.get(j) else { break };
                         let path = scan_file(&opts.out, label, *i);

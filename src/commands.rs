@@ -183,22 +183,52 @@ fn simulate(
     if opts.threads == 0 {
         opts.threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     }
+    // A lost terminal (SIGHUP, a hang-up, a pipe nobody reads) stops the
+    // batch after the scans already running; nothing here prints with
+    // println!, which would panic on it.
+    let lost = Arc::new(AtomicBool::new(false));
+    signal_hook::flag::register(signal_hook::consts::SIGHUP, lost.clone()).map_err(runtime)?;
+    let finished = AtomicBool::new(false);
     let started = std::time::Instant::now();
-    let saved = acquire::simulate_dataset(&lp, &opts, &|done, _| pb.set_position(done as u64))
-        .map_err(Failure::from)?;
+    let saved = std::thread::scope(|scope| {
+        scope.spawn(|| {
+            while !finished.load(Ordering::Relaxed) && !lost.load(Ordering::Relaxed) {
+                if crate::terminal::lost() {
+                    lost.store(true, Ordering::Relaxed);
+                }
+                std::thread::sleep(std::time::Duration::from_millis(50));
+            }
+        });
+        let r = acquire::simulate_dataset_until(
+            &lp,
+            &opts,
+            &|done, _| pb.set_position(done as u64),
+            &lost,
+        );
+        finished.store(true, Ordering::Relaxed);
+        r
+    })
+    .map_err(Failure::from)?;
     pb.finish_and_clear();
     let secs = started.elapsed().as_secs_f64();
     let samples: usize = saved.iter().map(|s| s.rows).sum();
     let sim_s = samples as f64 / lp.profile.device.rate_hz;
-    if json {
+    if lost.load(Ordering::Relaxed) {
+        return Err(runtime(format!(
+            "the terminal was lost: simulate stopped after {} of {total} scans (in {})",
+            saved.len(),
+            out.display()
+        )));
+    }
+    let printed = if json {
         let files: Vec<String> = saved.iter().map(|s| s.path.display().to_string()).collect();
         let v = serde_json::json!({
             "profile": lp.profile.name, "seed": opts.seed, "out": out.display().to_string(),
             "scans": saved.len(), "samples": samples, "wall_s": secs, "files": files,
         });
-        println!("{v}");
+        crate::terminal::out(format_args!("{v}"))
     } else {
-        println!(
+        crate::terminal::out(format_args!(
             "simulated {} scans ({} per texture, {} samples) into {} in {:.2} s (seed {})",
             saved.len(),
             per_class,
@@ -206,12 +236,18 @@ fn simulate(
             out.display(),
             secs,
             opts.seed
-        );
-        println!(
+        )) && crate::terminal::out(format_args!(
             "recorded scan time {:.0} s: {:.0}x real time",
             sim_s,
             sim_s / secs.max(1e-9)
-        );
+        ))
+    };
+    if !printed {
+        return Err(runtime(format!(
+            "the terminal was lost: {} scans were simulated into {}, but the summary could not be printed",
+            saved.len(),
+            out.display()
+        )));
     }
     Ok(())
 }
