@@ -46,6 +46,20 @@ fn readable(fd: RawFd, ms: i32) -> bool {
 
 impl Pty {
     fn console(ds: &Path, cwd: &Path) -> Pty {
+        let profile = fast_profile();
+        Pty::start(
+            &[
+                "console",
+                "--profile",
+                profile.to_str().unwrap(),
+                "--dataset",
+                ds.to_str().unwrap(),
+            ],
+            cwd,
+        )
+    }
+
+    fn start(args: &[&str], cwd: &Path) -> Pty {
         let pty = native_pty_system()
             .openpty(PtySize {
                 rows: 48,
@@ -55,10 +69,7 @@ impl Pty {
             })
             .unwrap();
         let mut cmd = CommandBuilder::new(env!("CARGO_BIN_EXE_hapticlab"));
-        cmd.args(["console", "--profile"]);
-        cmd.arg(fast_profile());
-        cmd.arg("--dataset");
-        cmd.arg(ds);
+        cmd.args(args);
         cmd.cwd(cwd);
         cmd.env("TERM", "xterm-256color");
         let child = pty.slave.spawn_command(cmd).unwrap();
@@ -280,4 +291,38 @@ fn headless_scan_whose_output_is_closed_stops_the_scan_and_exits() {
     );
     // No later scan was started.
     assert!(!out.join("S2").join("S2_002.csv").exists());
+}
+
+#[test]
+fn closing_the_terminal_ends_a_replay_with_exit_1() {
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path().join("ds");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hapticlab"))
+        .args(["simulate", "--profile"])
+        .arg(fast_profile())
+        .arg("--out")
+        .arg(&ds)
+        .args(["--per-class", "1", "--threads", "1"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{out:?}");
+    let profile = fast_profile();
+    let mut s = Pty::start(
+        &[
+            "replay",
+            "--profile",
+            profile.to_str().unwrap(),
+            ds.to_str().unwrap(),
+        ],
+        tmp.path(),
+    );
+    s.wait_for("S2_001");
+    s.close_master();
+    let (status, took) = s.wait_exit(PATIENCE);
+    assert_exited_cleanly(&status, took);
+    assert_eq!(
+        status.exit_code(),
+        1,
+        "a lost terminal is a runtime failure"
+    );
 }
