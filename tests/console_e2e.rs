@@ -172,7 +172,11 @@ fn scan_predict_and_quit_in_a_pseudo_terminal() {
     s.send("l\x7f\x7fS2\r");
     s.wait_for("mounting texture S2", PATIENCE);
     s.send("s");
-    s.wait_for("scan complete", PATIENCE);
+    // "stores it" comes once the recorder has written the scan and the
+    // console has read it back; "scan complete" alone comes earlier, with the
+    // motion's end, and a key sent then finds no scan yet (on a busy machine
+    // the file takes a while: `q` then quit without asking).
+    s.wait_for("stores it", PATIENCE);
     s.send("p");
     let screen = s.wait_for("Predicted ", PATIENCE);
     let label = screen
@@ -263,7 +267,11 @@ fn the_console_drives_the_emulated_falcon_once_homed() {
     // The simulated hand pulls the grip out and pushes it in.
     s.wait_for("Homed    yes", PATIENCE);
     s.send("s");
-    s.wait_for("scan complete", PATIENCE);
+    // "stores it" comes once the recorder has written the scan and the
+    // console has read it back; "scan complete" alone comes earlier, with the
+    // motion's end, and a key sent then finds no scan yet (on a busy machine
+    // the file takes a while: `q` then quit without asking).
+    s.wait_for("stores it", PATIENCE);
     s.send("q");
     s.wait_for("Quit?", PATIENCE);
     s.send("y");
