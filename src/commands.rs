@@ -207,19 +207,20 @@ fn simulate(
         );
         finished.store(true, Ordering::Relaxed);
         r
-    })
-    .map_err(Failure::from)?;
+    });
     pb.finish_and_clear();
-    let secs = started.elapsed().as_secs_f64();
-    let samples: usize = saved.iter().map(|s| s.rows).sum();
-    let sim_s = samples as f64 / lp.profile.device.rate_hz;
+    // A lost terminal is the reason, whatever else failed after it.
     if lost.load(Ordering::Relaxed) {
+        let done = saved.as_ref().map_or(0, Vec::len);
         return Err(runtime(format!(
-            "the terminal was lost: simulate stopped after {} of {total} scans (in {})",
-            saved.len(),
+            "the terminal was lost: simulate stopped after {done} of {total} scans (in {})",
             out.display()
         )));
     }
+    let saved = saved.map_err(Failure::from)?;
+    let secs = started.elapsed().as_secs_f64();
+    let samples: usize = saved.iter().map(|s| s.rows).sum();
+    let sim_s = samples as f64 / lp.profile.device.rate_hz;
     let printed = if json {
         let files: Vec<String> = saved.iter().map(|s| s.path.display().to_string()).collect();
         let v = serde_json::json!({
