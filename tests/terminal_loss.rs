@@ -4,7 +4,8 @@
 //! group gets SIGHUP; and headless `scan` whose standard output stops being
 //! read. Each time the process must exit by itself (0 or 1, never killed by
 //! a signal or aborted) within 2 s, and the scan must be on disk, kept with
-//! an `# aborted` line.
+//! an `# aborted` line. `replay` and `simulate` losing their terminal exit 1
+//! too, never by a panic.
 
 use std::io::{Read, Write};
 use std::os::fd::RawFd;
@@ -325,4 +326,56 @@ fn closing_the_terminal_ends_a_replay_with_exit_1() {
         1,
         "a lost terminal is a runtime failure"
     );
+}
+
+#[test]
+fn simulate_whose_output_is_closed_stops_and_exits_1() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("sim");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_hapticlab"))
+        .args(["simulate", "--profile"])
+        .arg(fast_profile())
+        .arg("--out")
+        .arg(&out)
+        .args(["--per-class", "500", "--threads", "1"])
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Nobody reads its output any more.
+    drop(child.stdout.take());
+    let mut stderr = child.stderr.take().unwrap();
+    let closed = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if closed.elapsed() > PATIENCE {
+            let _ = child.kill();
+            panic!("simulate did not stop");
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    let mut msg = String::new();
+    stderr.read_to_string(&mut msg).unwrap();
+    use std::os::unix::process::ExitStatusExt;
+    assert!(status.signal().is_none(), "killed by a signal: {status:?}");
+    assert_eq!(status.code(), Some(1), "{status:?} {msg}");
+    assert!(
+        msg.contains("the terminal was lost: simulate stopped after"),
+        "{msg}"
+    );
+    // Stopped early: far fewer than the 2000 asked for, each one complete.
+    let files: Vec<_> = std::fs::read_dir(&out)
+        .map(|d| {
+            d.flat_map(|e| std::fs::read_dir(e.unwrap().path()).unwrap())
+                .collect()
+        })
+        .unwrap_or_default();
+    assert!(files.len() < 2000, "{} files", files.len());
+    for f in files {
+        let rec = hapticlab::recording::read(&f.unwrap().path()).unwrap();
+        assert!(rec.is_complete());
+    }
 }
