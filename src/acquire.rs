@@ -276,6 +276,23 @@ pub fn simulate_dataset(
     opts: &SimulateOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Vec<SavedScan>, AcquireError> {
+    simulate_dataset_until(
+        lp,
+        opts,
+        progress,
+        &std::sync::atomic::AtomicBool::new(false),
+    )
+}
+
+/// [`simulate_dataset`], stopping early when `stop` is raised: no scan is
+/// started after it; the scans already running finish (virtual time: a
+/// fraction of a second each), and those finished are returned.
+pub fn simulate_dataset_until(
+    lp: &LoadedProfile,
+    opts: &SimulateOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+    stop: &std::sync::atomic::AtomicBool,
+) -> Result<Vec<SavedScan>, AcquireError> {
     if lp.profile.textures.is_empty() {
         return Err(AcquireError::BadInput(format!(
             "{}: the profile has no [[textures]] to simulate",
@@ -318,6 +335,9 @@ pub fn simulate_dataset(
                 s.spawn(|| {
                     let mut mine = Vec::new();
                     loop {
+                        if stop.load(Ordering::Relaxed) {
+                            break;
+                        }
                         let j = next.fetch_add(1, Ordering::Relaxed);
                         let Some((label, i)) = jobs.get(j) else { break };
                         let path = scan_file(&opts.out, label, *i);
@@ -464,6 +484,12 @@ pub fn injected_faults(lp: &LoadedProfile) -> Option<String> {
 
 /// Make `dir` and check a file can be created in it (then remove it).
 pub fn check_writable(dir: &Path) -> Result<(), AcquireError> {
+    check_writable_for(dir, "--out")
+}
+
+/// [`check_writable`], the message naming the command-line `option` that
+/// chose the folder.
+pub fn check_writable_for(dir: &Path, option: &str) -> Result<(), AcquireError> {
     let probe = dir.join(format!(".hapticlab-write-check-{}", std::process::id()));
     let result = std::fs::create_dir_all(dir).and_then(|()| {
         std::fs::OpenOptions::new()
@@ -475,7 +501,7 @@ pub fn check_writable(dir: &Path) -> Result<(), AcquireError> {
     let _ = std::fs::remove_file(&probe);
     result.map_err(|e| {
         AcquireError::Runtime(format!(
-            "cannot record into {}: {e}; nothing was scanned: choose a writable folder with --out (or fix this one's permissions)",
+            "cannot record into {}: {e}; nothing was scanned: choose a writable folder with {option} (or fix this one's permissions)",
             dir.display()
         ))
     })
@@ -503,6 +529,18 @@ pub fn scan_live_with(
     lp: &LoadedProfile,
     req: &LiveScans,
     stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    hooks: LiveHooks<'_>,
+) -> Result<Vec<ScanReport>, AcquireError> {
+    scan_live_stopping(lp, req, stop, &|| "interrupted by a signal".into(), hooks)
+}
+
+/// [`scan_live_with`], where `why` says why `stop` was raised: a scan it
+/// stops is kept with that reason in its `# aborted` line.
+pub fn scan_live_stopping(
+    lp: &LoadedProfile,
+    req: &LiveScans,
+    stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    why: &dyn Fn() -> String,
     hooks: LiveHooks<'_>,
 ) -> Result<Vec<ScanReport>, AcquireError> {
     let LiveHooks {
@@ -609,9 +647,12 @@ pub fn scan_live_with(
         });
         let started = Instant::now();
         let (stats, recorded, reason);
+        let mut stopping = false;
         loop {
-            if stop.load(Ordering::Relaxed) {
-                servo_stop.store(true, Ordering::Relaxed);
+            if stop.load(Ordering::Relaxed) && !stopping {
+                // The scan stops, kept with the reason; the loop halts after.
+                handle.send(Command::Stop(why()));
+                stopping = true;
             }
             // Nobody displays telemetry here: drain it so none counts as dropped.
             let _ = handle.telemetry.try_iter().count();
@@ -641,7 +682,7 @@ pub fn scan_live_with(
                     (stats, recorded, reason) = (s, samples > 0, aborted);
                     break;
                 }
-                Ok(ServoEvent::Notice { message }) => eprintln!("note: {message}"),
+                Ok(ServoEvent::Notice { message }) => on_note(&format!("note: {message}")),
                 Ok(_) => {}
                 Err(crossbeam_channel::RecvTimeoutError::Timeout) => {
                     if started.elapsed() > per_scan_limit {

@@ -5,7 +5,7 @@
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
@@ -189,22 +189,53 @@ fn simulate(
     if opts.threads == 0 {
         opts.threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     }
+    // A lost terminal (SIGHUP, a hang-up, a pipe nobody reads) stops the
+    // batch after the scans already running; nothing here prints with
+    // println!, which would panic on it.
+    let lost = Arc::new(AtomicBool::new(false));
+    signal_hook::flag::register(signal_hook::consts::SIGHUP, lost.clone()).map_err(runtime)?;
+    let finished = AtomicBool::new(false);
     let started = std::time::Instant::now();
-    let saved = acquire::simulate_dataset(&lp, &opts, &|done, _| pb.set_position(done as u64))
-        .map_err(Failure::from)?;
+    let saved = std::thread::scope(|scope| {
+        scope.spawn(|| {
+            while !finished.load(Ordering::Relaxed) && !lost.load(Ordering::Relaxed) {
+                if crate::terminal::lost() {
+                    lost.store(true, Ordering::Relaxed);
+                }
+                std::thread::sleep(std::time::Duration::from_millis(50));
+            }
+        });
+        let r = acquire::simulate_dataset_until(
+            &lp,
+            &opts,
+            &|done, _| pb.set_position(done as u64),
+            &lost,
+        );
+        finished.store(true, Ordering::Relaxed);
+        r
+    });
     pb.finish_and_clear();
+    // A lost terminal is the reason, whatever else failed after it.
+    if lost.load(Ordering::Relaxed) {
+        let done = saved.as_ref().map_or(0, Vec::len);
+        return Err(runtime(format!(
+            "the terminal was lost: simulate stopped after {done} of {total} scans (in {})",
+            out.display()
+        )));
+    }
+    let saved = saved.map_err(Failure::from)?;
     let secs = started.elapsed().as_secs_f64();
     let samples: usize = saved.iter().map(|s| s.rows).sum();
     let sim_s = samples as f64 / lp.profile.device.rate_hz;
-    if json {
+    let printed = if json {
         let files: Vec<String> = saved.iter().map(|s| s.path.display().to_string()).collect();
         let v = serde_json::json!({
             "profile": lp.profile.name, "seed": opts.seed, "out": out.display().to_string(),
             "scans": saved.len(), "samples": samples, "wall_s": secs, "files": files,
         });
-        println!("{v}");
+        crate::terminal::out(format_args!("{v}"))
     } else {
-        println!(
+        crate::terminal::out(format_args!(
             "simulated {} scans ({} per texture, {} samples) into {} in {:.2} s (seed {})",
             saved.len(),
             per_class,
@@ -212,12 +243,18 @@ fn simulate(
             out.display(),
             secs,
             opts.seed
-        );
-        println!(
+        )) && crate::terminal::out(format_args!(
             "recorded scan time {:.0} s: {:.0}x real time",
             sim_s,
             sim_s / secs.max(1e-9)
-        );
+        ))
+    };
+    if !printed {
+        return Err(runtime(format!(
+            "the terminal was lost: {} scans were simulated into {}, but the summary could not be printed",
+            saved.len(),
+            out.display()
+        )));
     }
     Ok(())
 }
@@ -253,7 +290,11 @@ fn scan(
     }
     // Before anything moves: the recordings must have somewhere to go.
     acquire::check_writable(&out.join(label)).map_err(Failure::from)?;
+    // `stop`: end the session (SIGINT, SIGTERM, or the terminal gone);
+    // `lost`: the terminal has gone (SIGHUP, a hang-up, a pipe nobody reads,
+    // a line that could not be written).
     let stop = Arc::new(AtomicBool::new(false));
+    let lost = Arc::new(AtomicBool::new(false));
     for sig in [
         signal_hook::consts::SIGINT,
         signal_hook::consts::SIGTERM,
@@ -261,11 +302,28 @@ fn scan(
     ] {
         signal_hook::flag::register(sig, stop.clone()).map_err(runtime)?;
     }
-    eprintln!(
+    signal_hook::flag::register(signal_hook::consts::SIGHUP, lost.clone()).map_err(runtime)?;
+    let terminal_gone = || {
+        lost.store(true, Ordering::Relaxed);
+        stop.store(true, Ordering::Relaxed);
+    };
+    // Nothing may print with println!/eprintln! here: they panic on a
+    // terminal that has gone. A line that cannot be written stops the scan.
+    let say = |args: std::fmt::Arguments<'_>| {
+        if !crate::terminal::out(args) {
+            terminal_gone();
+        }
+    };
+    let tell = |args: std::fmt::Arguments<'_>| {
+        if !crate::terminal::err(args) {
+            terminal_gone();
+        }
+    };
+    tell(format_args!(
         "scanning {label} on the {} device: {count} scan(s) of about {:.0} s each; Ctrl-C stops safely",
         lp.profile.device.kind.name(),
         acquire::path_duration_s(&lp)
-    );
+    ));
     let mut n = 0;
     let mut failed = None;
     let req = acquire::LiveScans {
@@ -278,7 +336,7 @@ fn scan(
     // Hands-free triggers: used when at least one is plugged in; never fatal.
     let watcher = start_triggers(&lp);
     let triggers = watcher.as_ref().map(|w| w.events.clone());
-    let mut on_note = |m: &str| eprintln!("{m}");
+    let mut on_note = |m: &str| tell(format_args!("{m}"));
     let mut on_scan = |r: &acquire::ScanReport| {
         n += 1;
         let s = &r.saved;
@@ -290,13 +348,13 @@ fn scan(
             (Some(reason), None) => format!("aborted ({reason}), samples kept, incomplete"),
             (None, None) => "complete".into(),
         };
-        println!(
+        say(format_args!(
             "scan {n}: {} — {} samples, {state}",
             s.path.display(),
             s.rows
-        );
+        ));
         if r.stats.ticks > 0 {
-            println!("  loop: {}", r.stats.summary());
+            say(format_args!("  loop: {}", r.stats.summary()));
         }
         if s.aborted.is_some() || s.error.is_some() {
             let kept = if s.rows > 0 {
@@ -316,8 +374,38 @@ fn scan(
         on_note: &mut on_note,
         triggers,
     };
-    let reports = acquire::scan_live_with(&lp, &req, stop, hooks).map_err(Failure::from)?;
+    let why = || {
+        if lost.load(Ordering::Relaxed) {
+            "terminal lost".to_string()
+        } else {
+            "interrupted by a signal".to_string()
+        }
+    };
+    // The terminal is watched while the scan runs: a hang-up or a pipe
+    // nobody reads any more stops it within a poll (50 ms).
+    let done = AtomicBool::new(false);
+    let reports = std::thread::scope(|scope| {
+        scope.spawn(|| {
+            while !done.load(Ordering::Relaxed) && !stop.load(Ordering::Relaxed) {
+                if crate::terminal::lost() {
+                    terminal_gone();
+                    break;
+                }
+                std::thread::sleep(std::time::Duration::from_millis(50));
+            }
+        });
+        let r = acquire::scan_live_stopping(&lp, &req, stop.clone(), &why, hooks);
+        done.store(true, Ordering::Relaxed);
+        r
+    })
+    .map_err(Failure::from)?;
     drop(watcher);
+    if lost.load(Ordering::Relaxed) {
+        return Err(runtime(match failed {
+            Some(state) => format!("the terminal was lost: the scan was stopped first: {state}"),
+            None => "the terminal was lost: the scans were stopped, forces are off".into(),
+        }));
+    }
     if let Some(state) = failed {
         return Err(runtime(format!("the scan did not complete: {state}")));
     }
@@ -341,7 +429,9 @@ fn start_triggers(lp: &LoadedProfile) -> Option<crate::triggers::TriggerWatcher>
     {
         Ok(w) => w,
         Err(e) => {
-            eprintln!("triggers unavailable ({e}); scans start without them");
+            crate::terminal::err(format_args!(
+                "triggers unavailable ({e}); scans start without them"
+            ));
             return None;
         }
     };
@@ -350,11 +440,13 @@ fn start_triggers(lp: &LoadedProfile) -> Option<crate::triggers::TriggerWatcher>
     for _ in 0..lp.profile.triggers.len() {
         match w.events.recv_timeout(std::time::Duration::from_secs(2)) {
             Ok(TriggerEvent::Connected(s)) => {
-                eprintln!("trigger {s} connected");
+                crate::terminal::err(format_args!("trigger {s} connected"));
                 connected += 1;
             }
             Ok(TriggerEvent::Absent { source, why }) => {
-                eprintln!("trigger {source}: {why}; scans start without it")
+                crate::terminal::err(format_args!(
+                    "trigger {source}: {why}; scans start without it"
+                ));
             }
             _ => {}
         }

@@ -9,8 +9,11 @@
 //! finished jobs, advance a replay, draw (`impl Widget for &App`, a pure
 //! function of state), then wait for keys until the next frame is due. Keys
 //! become [`app::Action`]s, which [`execute`] carries out. On quit, error,
-//! panic or SIGINT/SIGTERM/SIGHUP the servo is shut down (forces off, any
-//! scan kept as aborted) and the terminal restored.
+//! panic, SIGINT/SIGTERM, or a lost terminal (SIGHUP, a hang-up, a failed
+//! read or draw) the servo is shut down first (forces off, any scan kept as
+//! aborted with the reason), then the terminal is restored, fallibly; a lost
+//! terminal exits 1. The servo also watches the loop's heartbeat (one a
+//! frame): a loop stuck for a second stops the motion on its own.
 
 pub mod app;
 pub mod dataset;
@@ -59,22 +62,43 @@ fn runtime(m: impl std::fmt::Display) -> Failure {
     Failure::Runtime(m.to_string())
 }
 
-/// Restores the terminal when dropped (quit, error, or unwinding).
-struct TerminalGuard;
+/// How a console session ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Ending {
+    /// The user quit.
+    Quit,
+    /// SIGINT or SIGTERM asked the session to end.
+    Signal,
+    /// The terminal has gone (SIGHUP, a hang-up, a read or write that
+    /// failed): why.
+    TerminalLost(String),
+}
 
-impl Drop for TerminalGuard {
-    fn drop(&mut self) {
-        ratatui::restore();
+impl Ending {
+    /// Why a scan still running is stopped (its `# aborted` line).
+    pub fn stop_reason(&self) -> String {
+        match self {
+            Ending::Quit => "the console was quit during the scan".into(),
+            Ending::Signal => "interrupted by a signal (SIGINT or SIGTERM)".into(),
+            Ending::TerminalLost(why) => format!("terminal lost ({why})"),
+        }
+    }
+
+    /// The session's result: a lost terminal is a runtime failure (exit 1).
+    fn result(&self, stopped: &str) -> Result<(), Failure> {
+        match self {
+            Ending::TerminalLost(why) => {
+                Err(runtime(format!("the terminal was lost ({why}); {stopped}")))
+            }
+            _ => Ok(()),
+        }
     }
 }
 
-/// Raw mode and the alternate screen (and ratatui's panic hook, which
-/// restores the terminal before the panic message is printed).
-fn open_terminal() -> Result<ratatui::DefaultTerminal, Failure> {
-    ratatui::try_init().map_err(|e| {
-        ratatui::restore();
-        runtime(format!("cannot open the terminal: {e}"))
-    })
+/// Raw mode and the alternate screen, entered and left fallibly (see
+/// [`crate::terminal`]: ratatui's own hooks panic on a terminal that has gone).
+fn open_terminal() -> Result<crate::terminal::Screen, Failure> {
+    crate::terminal::enter().map_err(|e| runtime(format!("cannot open the terminal: {e}")))
 }
 
 /// `hapticlab` / `hapticlab console`: the live console.
@@ -91,6 +115,8 @@ pub fn run(lp: LoadedProfile, dataset: Option<PathBuf>) -> Result<(), Failure> {
         dataset.clone(),
     );
     let texture = lp.profile.texture(&app.label).map(|t| t.label.clone());
+    // Before anything moves: scans must have somewhere to go (as `scan --out`).
+    check_dataset_writable(&dataset)?;
     // A profile's texture or firmware file that cannot be used is bad input
     // (exit 2); a device that cannot be opened is a runtime failure (1).
     let mut lab = Lab::start(&lp, &dataset, texture.as_deref()).map_err(|e| {
@@ -107,16 +133,17 @@ pub fn run(lp: LoadedProfile, dataset: Option<PathBuf>) -> Result<(), Failure> {
         app.model = Some(m);
     }
     let jobs = Jobs::default();
-    let mut terminal = open_terminal()?;
-    let guard = TerminalGuard;
-    let result = run_loop(&mut terminal, &mut app, Some(&mut lab), &jobs, &signals);
-    drop(guard);
-    // The device is made safe: the loop halts, forces zero, any scan is kept as aborted.
-    let saved = lab.shutdown();
+    let mut screen = open_terminal()?;
+    let ending = run_loop(&mut screen, &mut app, Some(&mut lab), &jobs, &signals);
+    // The motion first, whatever ended the session: the loop halts, forces
+    // zero, any scan is kept as aborted with the reason.
+    let saved = lab.shutdown(&ending.stop_reason());
+    // Then the terminal, fallibly (it may have gone).
+    drop(screen);
     let interrupted = saved.iter().filter(|s| !s.complete).count();
     let (counts, unsaved) = dataset::count(&dataset);
     let stored: usize = counts.iter().map(|(_, n)| n).sum();
-    println!(
+    crate::terminal::out(format_args!(
         "hapticlab console closed: {stored} recording(s) in {}{}{}",
         dataset.display(),
         if unsaved > 0 {
@@ -132,8 +159,33 @@ pub fn run(lp: LoadedProfile, dataset: Option<PathBuf>) -> Result<(), Failure> {
         } else {
             String::new()
         }
-    );
-    result.map_err(runtime)
+    ));
+    ending.result(&if interrupted > 0 {
+        format!(
+            "the motion was stopped first (forces off) and the scan kept as incomplete in {}",
+            dataset.join(dataset::UNSAVED_DIR).display()
+        )
+    } else {
+        "the motion was stopped first (forces off)".into()
+    })
+}
+
+/// Scans are recorded under `<dataset>/.unsaved/`: check a file can be
+/// created there, as `scan` checks `--out`, without leaving folders behind
+/// that were not there before.
+fn check_dataset_writable(dataset: &Path) -> Result<(), Failure> {
+    let unsaved = dataset.join(dataset::UNSAVED_DIR);
+    // The folders the check creates, deepest first, to remove again.
+    let created: Vec<PathBuf> = unsaved
+        .ancestors()
+        .take_while(|p| !p.as_os_str().is_empty() && !p.exists())
+        .map(Path::to_path_buf)
+        .collect();
+    let checked = crate::acquire::check_writable_for(&unsaved, "--dataset");
+    for dir in &created {
+        let _ = std::fs::remove_dir(dir);
+    }
+    checked.map_err(Failure::from)
 }
 
 /// `hapticlab replay FILE|DIR`: recordings through the same dashboard.
@@ -171,11 +223,10 @@ pub fn replay(lp: LoadedProfile, path: &Path, dataset: Option<PathBuf>) -> Resul
     }
     let jobs = Jobs::default();
     open_replay(&mut app, &jobs, path.to_path_buf(), files, train_dir);
-    let mut terminal = open_terminal()?;
-    let guard = TerminalGuard;
-    let result = run_loop(&mut terminal, &mut app, None, &jobs, &signals);
-    drop(guard);
-    result.map_err(runtime)
+    let mut screen = open_terminal()?;
+    let ending = run_loop(&mut screen, &mut app, None, &jobs, &signals);
+    drop(screen);
+    ending.result("the replay was closed")
 }
 
 fn refresh_dataset(app: &mut App) {
@@ -230,27 +281,37 @@ fn open_recording(app: &mut App, i: usize) {
     }
 }
 
-/// Draw, drain, and handle keys until the app quits or a signal arrives.
+/// Draw, drain, and handle keys until the app quits, a signal arrives or
+/// the terminal goes. Returns at once (within a frame) on a lost terminal:
+/// the caller stops the motion before it touches the terminal again.
 pub fn run_loop<B: Backend>(
     terminal: &mut Terminal<B>,
     app: &mut App,
     mut lab: Option<&mut Lab>,
     jobs: &Jobs,
     signals: &Signals,
-) -> Result<(), String>
+) -> Ending
 where
     B::Error: std::fmt::Display,
 {
-    let input = event::Input::start().map_err(|e| format!("terminal input: {e}"))?;
+    let input = match event::Input::start() {
+        Ok(i) => i,
+        Err(e) => return Ending::TerminalLost(format!("terminal input: {e}")),
+    };
     let mut last_key = Instant::now();
     if let Ok(size) = terminal.size() {
         app.resize(size.width, size.height);
     }
     let mut last = Instant::now();
     while !app.quit {
-        if signals.raised() || event::terminal_hung_up() {
-            app.warn("signal or hang-up: stopping the servo and leaving");
-            break;
+        if signals.hung_up() {
+            return Ending::TerminalLost("SIGHUP".into());
+        }
+        if event::terminal_hung_up() {
+            return Ending::TerminalLost("hang-up".into());
+        }
+        if signals.raised() {
+            return Ending::Signal;
         }
         let started = Instant::now();
         // The world, once per frame.
@@ -264,9 +325,9 @@ where
         run_actions(actions, app, lab.as_deref_mut(), jobs);
         app.advance(started.duration_since(last).as_secs_f64());
         last = started;
-        terminal
-            .draw(|f| f.render_widget(&*app, f.area()))
-            .map_err(|e| format!("cannot draw: {e}"))?;
+        if let Err(e) = terminal.draw(|f| f.render_widget(&*app, f.area())) {
+            return Ending::TerminalLost(format!("cannot draw: {e}"));
+        }
         // Keys until the next frame is due: 30 fps while anything moves or
         // the user types, 20 (the panels' minimum) when the console sits idle.
         let idle = app.mode() == crate::servo::Mode::Manual
@@ -279,21 +340,19 @@ where
             if left.is_zero() || app.quit {
                 break;
             }
-            match input
-                .next(left)
-                .map_err(|e| format!("terminal input: {e}"))?
-            {
-                Some(Event::Key(k)) => {
+            match input.next(left) {
+                Ok(Some(Event::Key(k))) => {
                     last_key = Instant::now();
                     let actions = app.handle_key(k);
                     run_actions(actions, app, lab.as_deref_mut(), jobs);
                 }
-                Some(Event::Resize(w, h)) => app.resize(w, h),
-                None => {}
+                Ok(Some(Event::Resize(w, h))) => app.resize(w, h),
+                Ok(None) => {}
+                Err(e) => return Ending::TerminalLost(format!("terminal input: {e}")),
             }
         }
     }
-    Ok(())
+    Ending::Quit
 }
 
 fn run_actions(mut actions: Vec<Action>, app: &mut App, mut lab: Option<&mut Lab>, jobs: &Jobs) {

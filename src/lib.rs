@@ -26,4 +26,5 @@ pub mod recorder;
 pub mod recording;
 pub mod servo;
 pub mod study;
+pub mod terminal;
 pub mod triggers;

@@ -28,7 +28,8 @@ fn main() {
         dataset: None,
     });
     if let Err(f) = hapticlab::commands::run(command) {
-        eprintln!("hapticlab: error: {}", f.message());
+        // Fallibly: the terminal may be the reason for the failure.
+        hapticlab::terminal::err(format_args!("hapticlab: error: {}", f.message()));
         std::process::exit(f.exit_code());
     }
 }

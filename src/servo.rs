@@ -11,6 +11,12 @@
 //! samples go to the recorder's block pool, which loses none. Every force is
 //! checked finite and clamped. Dropping the loop — normal exit, error,
 //! panic — zeroes the device's forces.
+//!
+//! The last line of defence against a front end that has gone: the loop
+//! halts on its own (forces zero, any scan kept as aborted) when its command
+//! channel disconnects, and — for a front end that opts in by heartbeating
+//! ([`ServoHandle::heartbeat`]) — stops the motion when the heartbeat stops
+//! for [`WATCHDOG_S`].
 
 pub mod clock;
 pub mod controller;
@@ -19,10 +25,10 @@ pub mod trajectory;
 
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::thread::JoinHandle;
 
-use crossbeam_channel::{Receiver, Sender, TrySendError, bounded};
+use crossbeam_channel::{Receiver, Sender, TryRecvError, TrySendError, bounded};
 use serde::Serialize;
 
 use crate::device::{HapticDevice, Reading};
@@ -67,8 +73,16 @@ pub enum Command {
     Abort,
     /// Scale the path speeds (1.0 = the profile's).
     SetSpeedScale(f64),
+    /// Stop the motion and any scan for this reason (kept in the scan's
+    /// `# aborted` line); forces zero (manual mode).
+    Stop(String),
     Shutdown,
 }
+
+/// Seconds without a heartbeat, once a front end has started heartbeating,
+/// after which the loop stops the motion on its own: the front end is stuck
+/// or gone (a terminal that blocks, a thread that died).
+pub const WATCHDOG_S: f64 = 1.0;
 
 /// A snapshot of one tick, for displays. Lossy: dropped when nobody reads.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -171,6 +185,11 @@ pub struct ServoLoop<D: HapticDevice, C: Clock> {
     halted: Option<Halt>,
     /// The device's link counters when the scan began.
     link_at_scan_start: Option<crate::device::LinkStats>,
+    /// The front end's heartbeat (armed by its first beat), the last value
+    /// seen and the loop time it was first seen at.
+    heartbeat: Option<Arc<AtomicU64>>,
+    beat: u64,
+    beat_at: f64,
 }
 
 impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
@@ -214,7 +233,18 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
             force: [0.0; 3],
             halted: None,
             link_at_scan_start: None,
+            heartbeat: None,
+            beat: 0,
+            beat_at: 0.0,
         }
+    }
+
+    /// Watch a front end's heartbeat: once it has beaten at all, the motion
+    /// stops (forces zero, any scan kept as aborted) when it stays unchanged
+    /// for [`WATCHDOG_S`] seconds of loop time.
+    pub fn watch_heartbeat(&mut self, beat: Arc<AtomicU64>) {
+        self.beat = beat.load(Ordering::Relaxed);
+        self.heartbeat = Some(beat);
     }
 
     pub fn mode(&self) -> Mode {
@@ -259,6 +289,7 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
             }
             Command::StartScan { path, meta } => self.start_scan(path, meta),
             Command::Abort => self.stop_motion("aborted by the user"),
+            Command::Stop(reason) => self.stop_motion(&reason),
             Command::SetSpeedScale(s) => {
                 if s.is_finite() && s > 0.0 {
                     self.speed_scale = s.clamp(0.1, 4.0);
@@ -348,15 +379,19 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
         }
         // Commands: a few per tick, never waiting.
         for _ in 0..8 {
-            let Some(cmd) = self
-                .links
-                .commands
-                .as_ref()
-                .and_then(|rx| rx.try_recv().ok())
-            else {
+            let Some(rx) = self.links.commands.as_ref() else {
                 break;
             };
-            self.apply(cmd);
+            match rx.try_recv() {
+                Ok(cmd) => self.apply(cmd),
+                Err(TryRecvError::Empty) => break,
+                Err(TryRecvError::Disconnected) => {
+                    // Nobody can steer the loop any more: make the device safe and end.
+                    let reason = "the front end is gone (its command channel closed)";
+                    self.halt(Halt::Interrupted, reason);
+                    return Err(Halt::Interrupted);
+                }
+            }
         }
         if self
             .links
@@ -426,6 +461,7 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
         self.reading = reading;
         let dt = self.last_t.map_or(self.period, |t| now - t);
         self.last_t = Some(now);
+        self.check_heartbeat(now);
 
         // The set-point and whether this tick is recorded.
         let mut scanning = false;
@@ -536,6 +572,28 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
         Ok(())
     }
 
+    /// The watchdog: a front end that heartbeat and then stopped is stuck or
+    /// gone; whatever moves is stopped (once: the loop is then in manual mode).
+    fn check_heartbeat(&mut self, now: f64) {
+        let Some(hb) = &self.heartbeat else {
+            return;
+        };
+        let v = hb.load(Ordering::Relaxed);
+        if v != self.beat {
+            self.beat = v;
+            self.beat_at = now;
+            return;
+        }
+        let moving = self.mode != Mode::Manual || self.scan_path.is_some() || self.sink.is_active();
+        if v > 0 && moving && now - self.beat_at > WATCHDOG_S {
+            let reason = format!(
+                "the front end stopped responding (no heartbeat for {:.1} s): motion stopped, forces off",
+                now - self.beat_at
+            );
+            self.stop_motion(&reason);
+        }
+    }
+
     fn halt(&mut self, h: Halt, reason: &str) {
         self.end_scan(Some(reason.to_string()));
         self.trajectory = None;
@@ -578,6 +636,8 @@ pub struct ServoHandle {
     pub events: Receiver<ServoEvent>,
     recorder: Option<Recorder>,
     pub stop: Arc<AtomicBool>,
+    /// Bumped by [`ServoHandle::heartbeat`]; watched by the loop.
+    beat: Arc<AtomicU64>,
     thread: Option<JoinHandle<(Halt, LoopStats)>>,
 }
 
@@ -595,6 +655,8 @@ where
     let (tel_tx, tel_rx) = bounded(TELEMETRY_CAPACITY);
     let (ev_tx, ev_rx) = bounded(256);
     let stop = Arc::new(AtomicBool::new(false));
+    let beat = Arc::new(AtomicU64::new(0));
+    let watched = beat.clone();
     let (recorder, sink) = crate::recorder::start();
     let links = Links {
         commands: Some(cmd_rx),
@@ -623,6 +685,7 @@ where
             let device = make();
             let clock = clock::RealClock::start().with_spin(profile.device.spin_us);
             let mut servo = ServoLoop::new(device, clock, &profile, sink, links);
+            servo.watch_heartbeat(watched);
             let halt = servo.run();
             let stats = servo.stats();
             (halt, stats)
@@ -633,6 +696,7 @@ where
         events: ev_rx,
         recorder: Some(recorder),
         stop,
+        beat,
         thread: Some(thread),
     })
 }
@@ -640,6 +704,13 @@ where
 impl ServoHandle {
     pub fn send(&self, c: Command) {
         let _ = self.commands.send(c);
+    }
+
+    /// Say the front end is alive (once a frame). The first beat arms the
+    /// loop's watchdog: from then on, no beat for [`WATCHDOG_S`] stops the
+    /// motion. Front ends that never beat (headless `scan`) are not watched.
+    pub fn heartbeat(&self) {
+        self.beat.fetch_add(1, Ordering::Relaxed);
     }
 
     /// Stop the loop and wait for it (and the recorder) to finish.

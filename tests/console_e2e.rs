@@ -13,6 +13,9 @@ use std::time::{Duration, Instant};
 use portable_pty::{Child, CommandBuilder, PtySize, native_pty_system};
 
 const COLS: u16 = 160;
+/// Every wait: generous, so that a machine busy with other work (both cores
+/// taken) slows the test down but never fails it.
+const PATIENCE: Duration = Duration::from_secs(60);
 const ROWS: u16 = 48;
 
 fn fast_profile() -> PathBuf {
@@ -163,15 +166,19 @@ fn scan_predict_and_quit_in_a_pseudo_terminal() {
     simulate(&ds);
     let profile = fast_profile();
     let mut s = Session::console(&profile, &ds, tmp.path());
-    s.wait_for("Device", Duration::from_secs(20));
-    s.wait_for("Homed    yes", Duration::from_secs(10));
+    s.wait_for("Device", PATIENCE);
+    s.wait_for("Homed    yes", PATIENCE);
     // Label S2: the simulator mounts texture S2.
     s.send("l\x7f\x7fS2\r");
-    s.wait_for("mounting texture S2", Duration::from_secs(10));
+    s.wait_for("mounting texture S2", PATIENCE);
     s.send("s");
-    s.wait_for("scan complete", Duration::from_secs(30));
+    // "stores it" comes once the recorder has written the scan and the
+    // console has read it back; "scan complete" alone comes earlier, with the
+    // motion's end, and a key sent then finds no scan yet (on a busy machine
+    // the file takes a while: `q` then quit without asking).
+    s.wait_for("stores it", PATIENCE);
     s.send("p");
-    let screen = s.wait_for("Predicted ", Duration::from_secs(30));
+    let screen = s.wait_for("Predicted ", PATIENCE);
     let label = screen
         .split("Predicted ")
         .nth(1)
@@ -182,9 +189,9 @@ fn scan_predict_and_quit_in_a_pseudo_terminal() {
     assert!(screen.contains("recorded as S2: right"), "{screen}");
     // Quitting with the scan unstored asks first.
     s.send("q");
-    s.wait_for("Quit?", Duration::from_secs(5));
+    s.wait_for("Quit?", PATIENCE);
     s.send("y");
-    let status = s.wait_exit(Duration::from_secs(15));
+    let status = s.wait_exit(PATIENCE);
     assert!(status.success(), "{status:?}");
     assert!(s.restored(), "the alternate screen was not left");
     assert!(
@@ -200,13 +207,13 @@ fn sigterm_mid_scan_keeps_the_scan_and_restores_the_terminal() {
     let ds = tmp.path().join("ds");
     let profile = fast_profile();
     let mut s = Session::console(&profile, &ds, tmp.path());
-    s.wait_for("Homed    yes", Duration::from_secs(20));
+    s.wait_for("Homed    yes", PATIENCE);
     s.send("s");
-    s.wait_for("% recorded", Duration::from_secs(20));
+    s.wait_for("% recorded", PATIENCE);
     let pid = s.child.process_id().unwrap();
     // SAFETY: kill(2) on our own child's pid.
     assert_eq!(unsafe { libc::kill(pid as i32, libc::SIGTERM) }, 0);
-    let status = s.wait_exit(Duration::from_secs(15));
+    let status = s.wait_exit(PATIENCE);
     assert!(status.success(), "{status:?}");
     assert!(s.restored(), "the alternate screen was not left");
     let scans: Vec<_> = std::fs::read_dir(ds.join(".unsaved"))
@@ -220,18 +227,21 @@ fn sigterm_mid_scan_keeps_the_scan_and_restores_the_terminal() {
     assert!(rec.aborted().is_some());
 }
 
+/// SIGHUP says the terminal has gone: the console stops the servo first,
+/// restores the terminal (here it is still there) and exits 1.
 #[test]
 fn sighup_quits_cleanly() {
     let tmp = tempfile::tempdir().unwrap();
     let profile = fast_profile();
     let ds = tmp.path().join("ds");
     let mut s = Session::console(&profile, &ds, tmp.path());
-    s.wait_for("Homed    yes", Duration::from_secs(20));
+    s.wait_for("Homed    yes", PATIENCE);
     let pid = s.child.process_id().unwrap();
     // SAFETY: kill(2) on our own child's pid.
     assert_eq!(unsafe { libc::kill(pid as i32, libc::SIGHUP) }, 0);
-    let status = s.wait_exit(Duration::from_secs(15));
-    assert!(status.success(), "{status:?}");
+    let status = s.wait_exit(PATIENCE);
+    assert_eq!(status.exit_code(), 1, "{status:?}");
+    assert!(status.signal().is_none(), "{status:?}");
     assert!(s.restored(), "the alternate screen was not left");
 }
 
@@ -253,15 +263,19 @@ fn the_console_drives_the_emulated_falcon_once_homed() {
     let ds = tmp.path().join("ds");
     let profile = fast_emulator_profile(tmp.path());
     let mut s = Session::console(&profile, &ds, tmp.path());
-    s.wait_for("falcon-emulator", Duration::from_secs(20));
+    s.wait_for("falcon-emulator", PATIENCE);
     // The simulated hand pulls the grip out and pushes it in.
-    s.wait_for("Homed    yes", Duration::from_secs(20));
+    s.wait_for("Homed    yes", PATIENCE);
     s.send("s");
-    s.wait_for("scan complete", Duration::from_secs(30));
+    // "stores it" comes once the recorder has written the scan and the
+    // console has read it back; "scan complete" alone comes earlier, with the
+    // motion's end, and a key sent then finds no scan yet (on a busy machine
+    // the file takes a while: `q` then quit without asking).
+    s.wait_for("stores it", PATIENCE);
     s.send("q");
-    s.wait_for("Quit?", Duration::from_secs(5));
+    s.wait_for("Quit?", PATIENCE);
     s.send("y");
-    let status = s.wait_exit(Duration::from_secs(15));
+    let status = s.wait_exit(PATIENCE);
     assert!(status.success(), "{status:?}");
     assert!(s.restored(), "the alternate screen was not left");
     let scans: Vec<_> = std::fs::read_dir(ds.join(".unsaved"))
@@ -281,4 +295,43 @@ fn the_console_drives_the_emulated_falcon_once_homed() {
     let span =
         x.iter().cloned().fold(f64::MIN, f64::max) - x.iter().cloned().fold(f64::MAX, f64::min);
     assert!(span > 0.025, "x spans only {span} m");
+}
+
+/// An unwritable dataset folder is refused when the console starts, before
+/// anything moves (as `scan --out` is): one message naming the folder and
+/// `--dataset`, exit 1, and no terminal set up.
+#[test]
+fn an_unwritable_dataset_folder_is_refused_before_anything_moves() {
+    let tmp = tempfile::tempdir().unwrap();
+    // A path under a regular file: nobody, not even root, can create it.
+    let file = tmp.path().join("a-file");
+    std::fs::write(&file, b"not a folder").unwrap();
+    let ds = file.join("ds");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_hapticlab"))
+        .args(["console", "--profile"])
+        .arg(fast_profile())
+        .arg("--dataset")
+        .arg(&ds)
+        .current_dir(tmp.path())
+        .stdin(std::process::Stdio::null())
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    let lines: Vec<&str> = stderr.lines().collect();
+    assert_eq!(lines.len(), 1, "one message: {stderr}");
+    assert!(
+        lines[0].contains(&format!(
+            "cannot record into {}",
+            ds.join(".unsaved").display()
+        )) && lines[0].contains("Not a directory")
+            && lines[0].contains("--dataset"),
+        "{stderr}"
+    );
+    // Nothing was drawn: the terminal was never opened.
+    assert!(
+        out.stdout.is_empty(),
+        "{:?}",
+        String::from_utf8_lossy(&out.stdout)
+    );
 }

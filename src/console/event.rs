@@ -1,6 +1,6 @@
 //! The console's inputs besides telemetry: terminal events (keys, resizes)
 //! and the signals that end the session cleanly (SIGINT, SIGTERM, SIGHUP
-//! raise a flag; the loop sees it, shuts down the servo and restores the
+//! raise a flag; the loop sees it, stops the servo, then restores the
 //! terminal).
 //!
 //! Terminal events are read on their own thread and handed over through a
@@ -67,42 +67,38 @@ impl Input {
     }
 }
 
-/// Whether the terminal on standard input has gone (its other end closed:
-/// an SSH connection dropped, a terminal window closed).
+/// Whether the terminal has gone (its other end closed: an SSH connection
+/// dropped, a terminal window closed); see [`crate::terminal::lost`].
 pub fn terminal_hung_up() -> bool {
-    // SAFETY: isatty and poll on fd 0 with a zero timeout only inspect it.
-    unsafe {
-        if libc::isatty(0) != 1 {
-            return false;
-        }
-        let mut fd = libc::pollfd {
-            fd: 0,
-            events: libc::POLLIN,
-            revents: 0,
-        };
-        libc::poll(&mut fd, 1, 0) > 0
-            && fd.revents & (libc::POLLHUP | libc::POLLERR | libc::POLLNVAL) != 0
-    }
+    crate::terminal::lost()
 }
 
-/// A flag raised by SIGINT, SIGTERM or SIGHUP.
+/// Flags raised by signals: SIGINT or SIGTERM ask the session to end;
+/// SIGHUP says its terminal has gone.
 #[derive(Clone)]
-pub struct Signals(Arc<AtomicBool>);
+pub struct Signals {
+    stop: Arc<AtomicBool>,
+    hangup: Arc<AtomicBool>,
+}
 
 impl Signals {
     pub fn register() -> io::Result<Signals> {
-        let flag = Arc::new(AtomicBool::new(false));
-        for sig in [
-            signal_hook::consts::SIGINT,
-            signal_hook::consts::SIGTERM,
-            signal_hook::consts::SIGHUP,
-        ] {
-            signal_hook::flag::register(sig, flag.clone())?;
+        let stop = Arc::new(AtomicBool::new(false));
+        let hangup = Arc::new(AtomicBool::new(false));
+        for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+            signal_hook::flag::register(sig, stop.clone())?;
         }
-        Ok(Signals(flag))
+        signal_hook::flag::register(signal_hook::consts::SIGHUP, hangup.clone())?;
+        Ok(Signals { stop, hangup })
     }
 
+    /// SIGINT, SIGTERM or SIGHUP arrived.
     pub fn raised(&self) -> bool {
-        self.0.load(Ordering::Relaxed)
+        self.stop.load(Ordering::Relaxed) || self.hung_up()
+    }
+
+    /// SIGHUP arrived: the terminal has gone.
+    pub fn hung_up(&self) -> bool {
+        self.hangup.load(Ordering::Relaxed)
     }
 }

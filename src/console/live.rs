@@ -136,6 +136,9 @@ impl Lab {
         let Some(h) = &self.handle else {
             return vec![];
         };
+        // The console is alive: without this the servo's watchdog stops the
+        // motion after servo::WATCHDOG_S (a loop stuck on a dead terminal).
+        h.heartbeat();
         // Whether the loop had ended before its last events are drained, so
         // none sent before the end is missed.
         let finished = h.is_finished();
@@ -190,11 +193,15 @@ impl Lab {
         }
     }
 
-    /// Stop the loop (any scan kept as aborted); scans still being written.
-    pub fn shutdown(mut self) -> Vec<SavedScan> {
+    /// Stop the loop: forces zero, any scan kept as aborted for `reason`;
+    /// the scans still being written.
+    pub fn shutdown(mut self, reason: &str) -> Vec<SavedScan> {
         self.handle
             .take()
-            .map(|h| h.shutdown().1)
+            .map(|h| {
+                h.send(Command::Stop(reason.to_string()));
+                h.shutdown().1
+            })
             .unwrap_or_default()
     }
 }
