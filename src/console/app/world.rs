@@ -5,12 +5,15 @@
 use std::path::PathBuf;
 
 use crate::acquire::HOMING_HELP;
-use crate::servo::{ServoEvent, Telemetry};
+use crate::servo::{Mode, ServoEvent, Telemetry};
 
 use super::super::dataset::{JobResult, ModelInfo};
 use super::super::keymap::Key;
 use super::super::scan::{ScanView, predict};
 use super::{Action, App};
+
+/// How near the typed target the probe must be to have arrived, per axis.
+const ARRIVED_M: f64 = 0.0005;
 
 impl App {
     /// One telemetry frame from the servo.
@@ -22,12 +25,28 @@ impl App {
         }
         self.live.push(t);
         self.speed_scale = t.speed_scale;
+        if let Some(g) = self.gliding_to {
+            if t.mode != Mode::Target {
+                self.gliding_to = None;
+            } else if (0..3).all(|a| (t.pos_m[a] - g[a]).abs() < ARRIVED_M) {
+                self.gliding_to = None;
+                self.info(format!(
+                    "at the target ({:.2}, {:.2}, {:.2}) cm: holding",
+                    t.pos_m[0] * 100.0,
+                    t.pos_m[1] * 100.0,
+                    t.pos_m[2] * 100.0
+                ));
+            }
+        }
     }
 
     pub fn on_servo_event(&mut self, e: ServoEvent) {
         match e {
             ServoEvent::ScanStarted { path } => {
-                self.info(format!("recording the scan leg to {}", path.display()));
+                self.info(format!(
+                    "on the texture: recording the stroke to {}",
+                    path.display()
+                ));
             }
             ServoEvent::ScanEnded {
                 aborted, samples, ..
@@ -38,8 +57,9 @@ impl App {
                     Some(r) => {
                         self.queue_left = 0;
                         self.queued_run = false;
+                        let queue = self.end_queue();
                         self.warn(format!(
-                            "scan aborted ({r}): {samples} samples kept, incomplete"
+                            "scan aborted ({r}): {samples} samples kept, incomplete{queue}"
                         ));
                     }
                 }
@@ -48,7 +68,8 @@ impl App {
                 self.scan_running = false;
                 self.queue_left = 0;
                 self.queued_run = false;
-                self.warn(format!("motion stopped: {reason}"));
+                let queue = self.end_queue();
+                self.warn(format!("motion stopped: {reason}{queue}"));
             }
             ServoEvent::Notice { message } => self.warn(message),
         }
@@ -66,6 +87,9 @@ impl App {
         self.last_scan = Some(view);
         if !complete {
             self.queue_left = 0;
+            self.queued_run = false;
+            self.queue_total = 0;
+            self.queue_stored = 0;
             return vec![];
         }
         if !self.queued_run {
@@ -109,8 +133,20 @@ impl App {
                 } else {
                     " (incomplete: training skips it)"
                 };
+                if self.queue_total > 0 {
+                    self.queue_stored += 1;
+                }
                 if self.queued_run && self.scan_running {
                     self.info(format!("stored {}{note}{left}", path.display()));
+                } else if self.queue_total > 0 {
+                    // The last scan of an automatic run.
+                    let (n, total) = (self.queue_stored, self.queue_total);
+                    self.queue_total = 0;
+                    self.queue_stored = 0;
+                    self.info(format!(
+                        "automatic scans done: {n} of {total} stored (the last as {}){note}",
+                        path.display()
+                    ));
                 } else {
                     self.info(format!("stored {}{note}", path.display()));
                 }
@@ -118,9 +154,21 @@ impl App {
             Err(e) => {
                 self.queue_left = 0;
                 self.queued_run = false;
-                self.error(format!("could not store the scan: {e}"));
+                let queue = self.end_queue();
+                self.error(format!("could not store the scan: {e}{queue}"));
             }
         }
+    }
+
+    /// Ends an automatic run cut short; what to add to the message.
+    fn end_queue(&mut self) -> String {
+        if self.queue_total == 0 {
+            return String::new();
+        }
+        let (n, total) = (self.queue_stored, self.queue_total);
+        self.queue_total = 0;
+        self.queue_stored = 0;
+        format!("; automatic scans stopped: {n} of {total} stored")
     }
 
     /// A finished job; may ask for more (a prediction after training).
