@@ -8,7 +8,7 @@ use ratatui::style::{Color, Modifier, Style};
 use ratatui::text::{Line, Span};
 use ratatui::widgets::Widget;
 
-use super::Page;
+use super::{Page, cut_at_word};
 use crate::console::app::{App, Level};
 use crate::console::form::Overlay;
 use crate::console::keymap::Key;
@@ -184,7 +184,8 @@ pub fn render_footer(app: &App, pages: &[Page], area: Rect, buf: &mut Buffer) {
             Style::new().fg(Color::Red).add_modifier(Modifier::BOLD),
         ),
     };
-    Line::styled(format!("{prefix}{}", app.status.text), style).render(
+    let status = cut_at_word(&format!("{prefix}{}", app.status.text), width);
+    Line::styled(status, style).render(
         Rect {
             y: area.y + 1,
             height: 1,
