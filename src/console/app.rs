@@ -110,6 +110,9 @@ pub struct App {
     /// A scan was requested and has not ended yet.
     pub scan_running: bool,
     pub last_scan: Option<ScanView>,
+    /// The last scan was left unstored by an earlier session: `w` stores
+    /// it, but quitting does not ask about it again.
+    pub last_scan_earlier: bool,
     pub dataset: DatasetView,
     pub model: Option<Model>,
     pub replay: Option<Replay>,
@@ -149,6 +152,7 @@ impl App {
             gliding_to: None,
             scan_running: false,
             last_scan: None,
+            last_scan_earlier: false,
             dataset: DatasetView {
                 dir: dataset,
                 ..DatasetView::default()
@@ -211,9 +215,11 @@ impl App {
 
     /// Whether quitting now would leave the last scan unstored.
     pub fn unsaved_scan(&self) -> bool {
-        self.last_scan
-            .as_ref()
-            .is_some_and(|s| s.stored.is_none() && s.samples > 0)
+        !self.last_scan_earlier
+            && self
+                .last_scan
+                .as_ref()
+                .is_some_and(|s| s.stored.is_none() && s.samples > 0)
     }
 
     /// Pages at the current size (see [`super::panels::pages`]).

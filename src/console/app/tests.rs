@@ -471,3 +471,32 @@ fn the_status_line_says_when_the_probe_reaches_the_target() {
     a.on_telemetry(&t);
     assert!(a.status.text.contains("at the target"), "{}", a.status.text);
 }
+
+#[test]
+fn an_unsaved_scan_from_an_earlier_session_can_be_stored() {
+    let mut a = app();
+    a.dataset.unsaved = 1;
+    a.on_unsaved_found(fixtures::scan_view(false));
+    assert!(
+        a.status.text.contains("earlier session"),
+        "{}",
+        a.status.text
+    );
+    assert_eq!(a.dataset.unsaved, 1, "counted once");
+    // Quitting does not ask about it again…
+    assert!(!a.unsaved_scan());
+    // …but w stores it, under the label typed (S2 here).
+    a.handle_key(key('w'));
+    assert!(matches!(&a.overlay, Some(Overlay::Form(f)) if f.kind == FormKind::Store));
+    type_text(&mut a, "s2");
+    assert_eq!(
+        a.handle_key(code(KeyCode::Enter)),
+        vec![Action::Store { label: "S2".into() }],
+        "typed s2, stored as the profile's S2"
+    );
+    // A new scan of this session replaces it and is asked about again.
+    a.on_scan_saved(fixtures::scan_view(false));
+    assert!(a.unsaved_scan());
+    a.on_unsaved_found(fixtures::scan_view(true));
+    assert!(a.last_scan.as_ref().unwrap().prediction.is_none(), "kept");
+}

@@ -75,9 +75,25 @@ impl App {
         }
     }
 
+    /// A scan an earlier session left unstored in `.unsaved/` (already
+    /// counted there): shown as the last scan, so `w` stores it.
+    pub fn on_unsaved_found(&mut self, view: ScanView) {
+        if self.last_scan.is_some() {
+            return;
+        }
+        self.info(format!(
+            "{} is a scan an earlier session did not store: {} stores it under a label",
+            view.path.display(),
+            self.key_name(Key::Store)
+        ));
+        self.last_scan = Some(view);
+        self.last_scan_earlier = true;
+    }
+
     /// A scan the recorder finished writing, analysed.
     pub fn on_scan_saved(&mut self, view: ScanView) -> Vec<Action> {
         self.scan_running = false;
+        self.last_scan_earlier = false;
         self.dataset.unsaved += 1;
         let complete = view.complete;
         let analysed = match &view.features {
