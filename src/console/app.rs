@@ -507,7 +507,7 @@ impl App {
                     Form::text(FormKind::Label, "label", &self.label, hint)
                 } else {
                     let hint = format!(
-                        "each scan of {} is stored as it completes; {} stops",
+                        "each scan of {} is stored as it completes; {} then y stops them",
                         self.label,
                         self.key_name(Key::Abort)
                     );

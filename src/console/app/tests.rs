@@ -465,11 +465,19 @@ fn the_status_line_says_when_the_probe_reaches_the_target() {
     assert!(a.status.text.contains("gliding"), "{}", a.status.text);
     let mut t = fixtures::telemetry(0.1, Mode::Target);
     t.pos_m = [0.004, 0.0, -0.06];
+    t.setpoint_m = [0.005, 0.0, -0.06];
     a.on_telemetry(&t);
     assert!(a.status.text.contains("gliding"), "{}", a.status.text);
-    t.pos_m = [0.0099, 0.0001, -0.0601];
+    // The set-point arrives; the probe rests 0.8 mm below it.
+    t.pos_m = [0.01, -0.0008, -0.06];
+    t.setpoint_m = [0.01, 0.0, -0.06];
     a.on_telemetry(&t);
-    assert!(a.status.text.contains("at the target"), "{}", a.status.text);
+    assert!(
+        a.status.text.contains("at the target (1.00, 0.00, -6.00) cm")
+            && a.status.text.contains("0.8 mm from it"),
+        "{}",
+        a.status.text
+    );
 }
 
 #[test]

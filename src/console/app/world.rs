@@ -12,8 +12,9 @@ use super::super::keymap::Key;
 use super::super::scan::{ScanView, predict};
 use super::{Action, App};
 
-/// How near the typed target the probe must be to have arrived, per axis.
-const ARRIVED_M: f64 = 0.0005;
+/// How near the typed target the glide's set-point must be to have
+/// arrived, per axis.
+const ARRIVED_M: f64 = 0.00001;
 
 impl App {
     /// One telemetry frame from the servo.
@@ -28,13 +29,20 @@ impl App {
         if let Some(g) = self.gliding_to {
             if t.mode != Mode::Target {
                 self.gliding_to = None;
-            } else if (0..3).all(|a| (t.pos_m[a] - g[a]).abs() < ARRIVED_M) {
+            } else if (0..3).all(|a| (t.setpoint_m[a] - g[a]).abs() < ARRIVED_M) {
+                // The glide is over; the probe may rest a little off the
+                // target (its weight, a texture under it): say how far.
                 self.gliding_to = None;
+                let off = (0..3)
+                    .map(|a| (t.pos_m[a] - g[a]).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
                 self.info(format!(
-                    "at the target ({:.2}, {:.2}, {:.2}) cm: holding",
-                    t.pos_m[0] * 100.0,
-                    t.pos_m[1] * 100.0,
-                    t.pos_m[2] * 100.0
+                    "at the target ({:.2}, {:.2}, {:.2}) cm: holding, the probe {:.1} mm from it",
+                    g[0] * 100.0,
+                    g[1] * 100.0,
+                    g[2] * 100.0,
+                    off * 1000.0
                 ));
             }
         }
