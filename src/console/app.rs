@@ -468,15 +468,18 @@ impl App {
                         let p = s.path.display().to_string();
                         self.info(format!("the last scan is already stored as {p}"));
                     }
-                    Some(_) => {
+                    Some(scan) => {
                         let hint = format!(
                             "saved as {}/<label>/<label>_NNN.csv; Enter store, Esc cancel",
                             self.dataset.dir.display()
                         );
+                        // The label it was recorded under (an earlier
+                        // session's may differ from the current one).
+                        let label = scan.label.clone().unwrap_or_else(|| self.label.clone());
                         self.overlay = Some(Overlay::Form(Form::text(
                             FormKind::Store,
                             "label",
-                            &self.label,
+                            &label,
                             hint,
                         )));
                     }

@@ -473,7 +473,9 @@ fn the_status_line_says_when_the_probe_reaches_the_target() {
     t.setpoint_m = [0.01, 0.0, -0.06];
     a.on_telemetry(&t);
     assert!(
-        a.status.text.contains("at the target (1.00, 0.00, -6.00) cm")
+        a.status
+            .text
+            .contains("at the target (1.00, 0.00, -6.00) cm")
             && a.status.text.contains("0.8 mm from it"),
         "{}",
         a.status.text
@@ -493,9 +495,13 @@ fn an_unsaved_scan_from_an_earlier_session_can_be_stored() {
     assert_eq!(a.dataset.unsaved, 1, "counted once");
     // Quitting does not ask about it again…
     assert!(!a.unsaved_scan());
-    // …but w stores it, under the label typed (S2 here).
+    // …but w stores it, offering the label it was recorded under (S2,
+    // not the session's S1); a label typed in another case is the profile's.
+    assert_eq!(a.label, "S1");
     a.handle_key(key('w'));
-    assert!(matches!(&a.overlay, Some(Overlay::Form(f)) if f.kind == FormKind::Store));
+    assert!(
+        matches!(&a.overlay, Some(Overlay::Form(f)) if f.kind == FormKind::Store && f.value(0) == "S2")
+    );
     type_text(&mut a, "s2");
     assert_eq!(
         a.handle_key(code(KeyCode::Enter)),
