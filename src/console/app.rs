@@ -109,6 +109,9 @@ pub struct App {
     pub gliding_to: Option<[f64; 3]>,
     /// A scan was requested and has not ended yet.
     pub scan_running: bool,
+    /// A scan's motion ended and its file is not reported saved yet:
+    /// quitting now asks too.
+    pub scan_saving: bool,
     pub last_scan: Option<ScanView>,
     /// The last scan was left unstored by an earlier session: `w` stores
     /// it, but quitting does not ask about it again.
@@ -151,6 +154,7 @@ impl App {
             queue_stored: 0,
             gliding_to: None,
             scan_running: false,
+            scan_saving: false,
             last_scan: None,
             last_scan_earlier: false,
             dataset: DatasetView {
@@ -348,7 +352,7 @@ impl App {
                 .replay
                 .as_ref()
                 .is_none_or(|_| self.source != Source::ReplayOnly);
-        if unsaved || self.scan_busy() {
+        if unsaved || self.scan_busy() || self.scan_saving {
             self.overlay = Some(Overlay::ConfirmQuit);
             return vec![];
         }

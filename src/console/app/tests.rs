@@ -237,6 +237,22 @@ fn q_asks_before_losing_an_unsaved_scan_and_ctrl_c_quits_now() {
     assert!(a.quit);
     let mut b = app();
     assert_eq!(b.handle_key(key('q')), vec![Action::Quit]);
+    // Between the end of a scan's motion and its saved file, q asks too.
+    let mut d = app();
+    d.handle_key(key('s'));
+    d.on_servo_event(ServoEvent::ScanEnded {
+        path: "x".into(),
+        samples: 10,
+        aborted: None,
+        stats: Default::default(),
+    });
+    assert!(!d.scan_busy());
+    assert_eq!(d.handle_key(key('q')), vec![]);
+    assert_eq!(d.overlay, Some(Overlay::ConfirmQuit));
+    d.handle_key(key('n'));
+    d.on_scan_saved(fixtures::scan_view(false));
+    d.on_stored(Ok("ds/S1/S1_001.csv".into()));
+    assert_eq!(d.handle_key(key('q')), vec![Action::Quit], "all stored");
     let mut c = app();
     c.on_scan_saved(fixtures::scan_view(false));
     let ctrl_c = KeyEvent::new(KeyCode::Char('c'), KeyModifiers::CONTROL);

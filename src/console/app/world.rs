@@ -60,6 +60,8 @@ impl App {
                 aborted, samples, ..
             } => {
                 self.scan_running = false;
+                // The recorder reports the file next (none without samples).
+                self.scan_saving = samples > 0;
                 match aborted {
                     None => self.info(format!("scan complete: {samples} samples; analysing")),
                     Some(r) => {
@@ -90,9 +92,9 @@ impl App {
             return;
         }
         self.info(format!(
-            "{} is a scan an earlier session did not store: {} stores it under a label",
-            view.path.display(),
-            self.key_name(Key::Store)
+            "an earlier session left a scan unstored: {} stores it ({})",
+            self.key_name(Key::Store),
+            view.path.display()
         ));
         self.last_scan = Some(view);
         self.last_scan_earlier = true;
@@ -101,6 +103,7 @@ impl App {
     /// A scan the recorder finished writing, analysed.
     pub fn on_scan_saved(&mut self, view: ScanView) -> Vec<Action> {
         self.scan_running = false;
+        self.scan_saving = false;
         self.last_scan_earlier = false;
         self.dataset.unsaved += 1;
         let complete = view.complete;

@@ -65,6 +65,10 @@ fn confirm_quit(app: &App, area: Rect, buf: &mut Buffer) {
         lines.push(Line::raw(format!(
             "A scan is running{queued}: quitting aborts it and keeps its samples as incomplete."
         )));
+    } else if app.scan_saving {
+        lines.push(Line::raw(
+            "The scan that just ended is still being saved and analysed.",
+        ));
     }
     if app.unsaved_scan() {
         let name = app
