@@ -169,8 +169,7 @@ fn scan_predict_and_quit_in_a_pseudo_terminal() {
     s.send("l\x7f\x7fS2\r");
     s.wait_for("mounting texture S2", Duration::from_secs(10));
     s.send("s");
-    // "scan complete: … analysing" comes first; p needs the analysed scan.
-    s.wait_for("p predicts", Duration::from_secs(30));
+    s.wait_for("scan complete", Duration::from_secs(30));
     s.send("p");
     let screen = s.wait_for("Predicted ", Duration::from_secs(30));
     let label = screen
