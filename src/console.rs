@@ -128,6 +128,11 @@ pub fn run(lp: LoadedProfile, dataset: Option<PathBuf>) -> Result<(), Failure> {
     })?;
     app.mounted = lab.texture.clone();
     refresh_dataset(&mut app);
+    // A scan an earlier session left unstored can be stored from here (w).
+    let mut ex = FeatureExtractor::new(&lp.profile.analysis);
+    if let Some(view) = scan::newest_unsaved(&dataset, &mut ex) {
+        app.on_unsaved_found(view);
+    }
     if let Some((m, file)) = dataset::load_saved_model(&lp, &dataset) {
         app.dataset.model = Some(dataset::ModelInfo::of(&m, Some(file)));
         app.model = Some(m);

@@ -101,9 +101,21 @@ pub struct App {
     pub queue_left: usize,
     /// The running scan belongs to an automatic run (stored when it completes).
     pub queued_run: bool,
+    /// Scans asked for in the automatic run under way (0: none), and how
+    /// many of them are stored so far: the run's end is announced.
+    pub queue_total: usize,
+    pub queue_stored: usize,
+    /// A target typed in the form, until the probe gets there.
+    pub gliding_to: Option<[f64; 3]>,
     /// A scan was requested and has not ended yet.
     pub scan_running: bool,
+    /// A scan's motion ended and its file is not reported saved yet:
+    /// quitting now asks too.
+    pub scan_saving: bool,
     pub last_scan: Option<ScanView>,
+    /// The last scan was left unstored by an earlier session: `w` stores
+    /// it, but quitting does not ask about it again.
+    pub last_scan_earlier: bool,
     pub dataset: DatasetView,
     pub model: Option<Model>,
     pub replay: Option<Replay>,
@@ -138,8 +150,13 @@ impl App {
             label,
             queue_left: 0,
             queued_run: false,
+            queue_total: 0,
+            queue_stored: 0,
+            gliding_to: None,
             scan_running: false,
+            scan_saving: false,
             last_scan: None,
+            last_scan_earlier: false,
             dataset: DatasetView {
                 dir: dataset,
                 ..DatasetView::default()
@@ -202,9 +219,11 @@ impl App {
 
     /// Whether quitting now would leave the last scan unstored.
     pub fn unsaved_scan(&self) -> bool {
-        self.last_scan
-            .as_ref()
-            .is_some_and(|s| s.stored.is_none() && s.samples > 0)
+        !self.last_scan_earlier
+            && self
+                .last_scan
+                .as_ref()
+                .is_some_and(|s| s.stored.is_none() && s.samples > 0)
     }
 
     /// Pages at the current size (see [`super::panels::pages`]).
@@ -225,6 +244,33 @@ impl App {
     fn texture_for(&self, label: &str) -> Option<String> {
         let sim = matches!(&self.source, Source::Live { backend } if backend == "sim");
         (sim && self.profile.profile.texture(label).is_some()).then(|| label.to_string())
+    }
+
+    /// A typed label as the profile spells it: `s2` is texture `S2`.
+    fn profile_spelling(&self, label: &str) -> String {
+        let textures = &self.profile.profile.textures;
+        if textures.iter().any(|t| t.label == label) {
+            return label.to_string();
+        }
+        textures
+            .iter()
+            .find(|t| t.label.eq_ignore_ascii_case(label))
+            .map_or_else(|| label.to_string(), |t| t.label.clone())
+    }
+
+    /// A profile texture the label may have meant (one letter off, or a
+    /// prefix), to suggest when it names none.
+    fn suggest_texture(&self, label: &str) -> Option<&str> {
+        let l = label.to_lowercase();
+        self.profile
+            .profile
+            .textures
+            .iter()
+            .map(|t| t.label.as_str())
+            .find(|t| {
+                let t = t.to_lowercase();
+                t.starts_with(&l) || l.starts_with(&t) || one_edit_apart(&t, &l)
+            })
     }
 
     /// A key press: state changes here, effects returned as actions.
@@ -294,13 +340,19 @@ impl App {
         vec![Action::Train { then_predict }]
     }
 
+    /// Whether a scan is running or queued: quitting or aborting now would
+    /// cut it short.
+    pub fn scan_busy(&self) -> bool {
+        self.scan_running || self.queue_left > 0
+    }
+
     fn quit_key(&mut self) -> Vec<Action> {
-        if self.unsaved_scan()
+        let unsaved = self.unsaved_scan()
             && self
                 .replay
                 .as_ref()
-                .is_none_or(|_| self.source != Source::ReplayOnly)
-        {
+                .is_none_or(|_| self.source != Source::ReplayOnly);
+        if unsaved || self.scan_busy() || self.scan_saving {
             self.overlay = Some(Overlay::ConfirmQuit);
             return vec![];
         }
@@ -308,11 +360,26 @@ impl App {
         vec![Action::Quit]
     }
 
+    /// Abort the running scan and the rest of its queue, now.
+    fn abort_scan(&mut self) -> Vec<Action> {
+        let queued = self.queue_left;
+        self.queue_left = 0;
+        self.queued_run = false;
+        self.warn(if queued > 0 {
+            format!(
+                "aborting: forces off, the samples so far are kept (incomplete); {queued} queued scan(s) cancelled"
+            )
+        } else {
+            "aborting: forces off, the samples so far are kept (incomplete)".to_string()
+        });
+        vec![Action::Abort]
+    }
+
     fn live_key(&mut self, k: Key) -> Vec<Action> {
         let busy_scan = |app: &mut App| {
             let abort = app.key_name(Key::Abort);
             app.warn(format!(
-                "a scan is running: wait for it or press {abort} to abort it"
+                "a scan is running: wait for it, or {abort} then y aborts it"
             ));
             vec![]
         };
@@ -386,11 +453,10 @@ impl App {
                 vec![Action::StartScan]
             }
             Key::Abort => {
-                if self.scan_running || self.queue_left > 0 {
-                    self.queue_left = 0;
-                    self.queued_run = false;
-                    self.warn("aborting: forces off, the samples so far are kept (incomplete)");
-                    vec![Action::Abort]
+                if self.scan_busy() {
+                    // A reflex Esc must not cost a scan: ask first.
+                    self.overlay = Some(Overlay::ConfirmAbort);
+                    vec![]
                 } else if self.mode() != Mode::Manual {
                     self.info("motion stopped: Manual mode, forces off");
                     vec![Action::Abort]
@@ -406,15 +472,18 @@ impl App {
                         let p = s.path.display().to_string();
                         self.info(format!("the last scan is already stored as {p}"));
                     }
-                    Some(_) => {
+                    Some(scan) => {
                         let hint = format!(
                             "saved as {}/<label>/<label>_NNN.csv; Enter store, Esc cancel",
                             self.dataset.dir.display()
                         );
+                        // The label it was recorded under (an earlier
+                        // session's may differ from the current one).
+                        let label = scan.label.clone().unwrap_or_else(|| self.label.clone());
                         self.overlay = Some(Overlay::Form(Form::text(
                             FormKind::Store,
                             "label",
-                            &self.label,
+                            &label,
                             hint,
                         )));
                     }
@@ -445,7 +514,7 @@ impl App {
                     Form::text(FormKind::Label, "label", &self.label, hint)
                 } else {
                     let hint = format!(
-                        "each scan of {} is stored as it completes; {} stops",
+                        "each scan of {} is stored as it completes; {} then y stops them",
                         self.label,
                         self.key_name(Key::Abort)
                     );
@@ -614,12 +683,27 @@ impl App {
                     self.quit = true;
                     vec![Action::Quit]
                 }
-                KeyCode::Char('w') => {
+                KeyCode::Char('w') if self.unsaved_scan() => {
                     self.overlay = None;
                     self.live_key(Key::Store)
                 }
                 _ => {
-                    self.info("not quitting");
+                    self.info(if self.scan_busy() {
+                        "not quitting: the scan goes on"
+                    } else {
+                        "not quitting"
+                    });
+                    vec![]
+                }
+            },
+            Overlay::ConfirmAbort => match ev.code {
+                KeyCode::Char('y') | KeyCode::Char('Y') if self.scan_busy() => self.abort_scan(),
+                KeyCode::Char('y') | KeyCode::Char('Y') => {
+                    self.info("the scan had already ended: nothing to abort");
+                    vec![]
+                }
+                _ => {
+                    self.info("not aborted: the scan goes on");
                     vec![]
                 }
             },
@@ -664,6 +748,7 @@ impl App {
                     *v = cm / 100.0;
                 }
                 self.target_m = Some(m);
+                self.gliding_to = Some(m);
                 self.info(format!(
                     "Target mode: gliding to ({}, {}, {}) cm",
                     form.value(0),
@@ -673,30 +758,48 @@ impl App {
                 Ok(vec![Action::SetTarget(m)])
             }
             FormKind::Store => {
-                let label = form.value(0).to_string();
+                let label = self.profile_spelling(form.value(0));
                 check_label(&label)?;
                 self.label = label.clone();
                 Ok(vec![Action::Store { label }])
             }
             FormKind::Label => {
-                let label = form.value(0).to_string();
+                let typed = form.value(0);
+                let label = self.profile_spelling(typed);
                 check_label(&label)?;
+                let spelt = if label == typed {
+                    String::new()
+                } else {
+                    format!(" (as the profile spells {typed})")
+                };
                 self.label = label.clone();
                 match self.texture_for(&label) {
                     Some(t) if self.mounted.as_deref() != Some(t.as_str()) => {
                         self.info(format!(
-                            "label {label}: mounting texture {t} in the simulator"
+                            "label {label}{spelt}: mounting texture {t} in the simulator"
                         ));
                         Ok(vec![Action::Mount(t)])
                     }
                     Some(_) => {
-                        self.info(format!("label {label}: its texture is already mounted"));
+                        self.info(format!(
+                            "label {label}{spelt}: its texture is already mounted"
+                        ));
                         Ok(vec![])
                     }
                     None => {
+                        let known = self.profile.profile.texture(&label).is_some();
+                        let hint = match self.suggest_texture(&label) {
+                            Some(t) if !known => format!("; did you mean {t}?"),
+                            _ => String::new(),
+                        };
                         let why = match &self.mounted {
-                            Some(m) => format!(" (not a profile texture: {m} stays mounted)"),
-                            None => String::new(),
+                            Some(m) if !known => {
+                                format!(" (not a profile texture: {m} stays mounted{hint})")
+                            }
+                            _ if !known && !hint.is_empty() => {
+                                format!(" (not a profile texture{hint})")
+                            }
+                            _ => spelt,
                         };
                         self.info(format!("label {label}{why}"));
                         Ok(vec![])
@@ -715,6 +818,8 @@ impl App {
                 }
                 self.queue_left = n - 1;
                 self.queued_run = true;
+                self.queue_total = n;
+                self.queue_stored = 0;
                 self.scan_running = true;
                 self.info(format!(
                     "{n} automatic scans of {}: each is stored as it completes",
@@ -723,5 +828,24 @@ impl App {
                 Ok(vec![Action::StartScan])
             }
         }
+    }
+}
+
+/// Whether two words differ by one letter changed, added or removed.
+fn one_edit_apart(a: &str, b: &str) -> bool {
+    let (a, b): (Vec<char>, Vec<char>) = (a.chars().collect(), b.chars().collect());
+    let (short, long) = if a.len() <= b.len() {
+        (&a, &b)
+    } else {
+        (&b, &a)
+    };
+    if short.len() < 2 {
+        // "S5" is not a typo of "S1".
+        return false;
+    }
+    match long.len() - short.len() {
+        0 => short.len() > 2 && a.iter().zip(&b).filter(|(x, y)| x != y).count() == 1,
+        1 => (0..long.len()).any(|i| long[..i] == short[..i] && long[i + 1..] == short[i..]),
+        _ => false,
     }
 }

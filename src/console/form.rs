@@ -8,8 +8,11 @@ use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
 #[derive(Debug, Clone, PartialEq)]
 pub enum Overlay {
     Help,
-    /// Quit although the last scan is not stored.
+    /// Quit although a scan is running or queued, or the last scan is not
+    /// stored.
     ConfirmQuit,
+    /// Abort the running scan (and the rest of a queue)?
+    ConfirmAbort,
     Form(Form),
 }
 
@@ -29,6 +32,8 @@ pub enum FormKind {
 pub struct Field {
     pub name: &'static str,
     pub text: String,
+    /// Still the prefilled value: the first character typed replaces it.
+    pub prefilled: bool,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -65,6 +70,7 @@ impl Form {
         let f = |name, v: f64| Field {
             name,
             text: format!("{v:.2}"),
+            prefilled: true,
         };
         Form::new(
             FormKind::Target,
@@ -79,6 +85,7 @@ impl Form {
             vec![Field {
                 name,
                 text: value.to_string(),
+                prefilled: true,
             }],
             hint,
         )
@@ -98,7 +105,8 @@ impl Form {
     }
 
     /// Edit with a key: characters, Backspace, Tab/↑/↓ between fields,
-    /// Enter submits, Esc cancels.
+    /// Enter submits, Esc cancels. The first character typed into a field
+    /// that still holds its prefilled value replaces it; Backspace edits it.
     pub fn key(&mut self, ev: &KeyEvent) -> FormOutcome {
         let n = self.fields.len().max(1);
         match ev.code {
@@ -109,18 +117,24 @@ impl Form {
             KeyCode::Backspace => {
                 if let Some(f) = self.fields.get_mut(self.focus) {
                     f.text.pop();
+                    f.prefilled = false;
                 }
             }
             KeyCode::Char('u') if ev.modifiers.contains(KeyModifiers::CONTROL) => {
                 if let Some(f) = self.fields.get_mut(self.focus) {
                     f.text.clear();
+                    f.prefilled = false;
                 }
             }
             KeyCode::Char(c) if !ev.modifiers.contains(KeyModifiers::CONTROL) => {
-                if let Some(f) = self.fields.get_mut(self.focus)
-                    && f.text.chars().count() < 64
-                {
-                    f.text.push(c);
+                if let Some(f) = self.fields.get_mut(self.focus) {
+                    if f.prefilled {
+                        f.text.clear();
+                        f.prefilled = false;
+                    }
+                    if f.text.chars().count() < 64 {
+                        f.text.push(c);
+                    }
                 }
             }
             _ => {}
@@ -147,5 +161,28 @@ mod tests {
         assert_eq!(f.value(1), "2.05");
         assert_eq!(f.key(&k(KeyCode::Enter)), FormOutcome::Submit);
         assert_eq!(f.key(&k(KeyCode::Esc)), FormOutcome::Cancel);
+    }
+
+    #[test]
+    fn the_first_key_replaces_the_prefilled_value() {
+        let mut f = Form::target([1.0, 2.0, -3.0], String::new());
+        f.key(&k(KeyCode::Char('4')));
+        assert_eq!(f.value(0), "4");
+        f.key(&k(KeyCode::Char('.')));
+        f.key(&k(KeyCode::Char('5')));
+        assert_eq!(f.value(0), "4.5", "only the first key replaces");
+        // The next field is still prefilled: its first key replaces it too.
+        f.key(&k(KeyCode::Tab));
+        f.key(&k(KeyCode::Char('-')));
+        f.key(&k(KeyCode::Char('1')));
+        assert_eq!(f.value(1), "-1");
+        // Backspace edits a prefilled value instead of clearing it.
+        f.key(&k(KeyCode::Tab));
+        f.key(&k(KeyCode::Backspace));
+        f.key(&k(KeyCode::Char('5')));
+        assert_eq!(f.value(2), "-3.05");
+        let mut q = Form::text(FormKind::Queue, "scans", "5", String::new());
+        q.key(&k(KeyCode::Char('3')));
+        assert_eq!(q.value(0), "3", "not 53");
     }
 }

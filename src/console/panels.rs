@@ -17,9 +17,16 @@
 //! ┌Spectrum────────┐┌Prediction─────────┐┌Dataset────────────────┐
 //! └────────────────┘└───────────────────┘└───────────────────────┘
 //!
-//! medium (≥ 100×30): 1 Live = Device, Position/Force, Workspace over
-//! Traces │ Surface trace;  2 Analysis = Surface trace, Spectrum │
-//! Prediction, Dataset
+//! medium (≥ 100×30), page 1 Live: the whole dashboard but the Dataset
+//! ┌Device──────┐┌Position──┐┌Workspace────────────────────────────┐
+//! │            │└──────────┘│                                     │
+//! │            │┌Force─────┐│                                     │
+//! └────────────┘└──────────┘└─────────────────────────────────────┘
+//! ┌Traces (y, fy)─────────────────┐┌Surface trace (the window)───────┐
+//! └───────────────────────────────┘└─────────────────────────────────┘
+//! ┌Spectrum───────────────────────┐┌Prediction───────────────────────┐
+//! └───────────────────────────────┘└─────────────────────────────────┘
+//! page 2 Analysis = Surface trace, Spectrum │ Prediction, Dataset
 //!
 //! small (80×24): 1 Live = Device │ Position/Force over Traces;
 //! 2 Scan = Surface trace over Spectrum │ Prediction; 3 Workspace =
@@ -118,8 +125,8 @@ fn position_force(r: Rect) -> Vec<(Panel, Rect)> {
 
 fn top_row(r: Rect) -> Vec<(Panel, Rect)> {
     let [d, pf, w] = Layout::horizontal([
-        Constraint::Length(38),
-        Constraint::Length(36),
+        Constraint::Length(40),
+        Constraint::Length(34),
         Constraint::Min(30),
     ])
     .areas(r);
@@ -131,7 +138,7 @@ fn top_row(r: Rect) -> Vec<(Panel, Rect)> {
 
 fn large(r: Rect) -> Vec<(Panel, Rect)> {
     let [a, b, c] = Layout::vertical([
-        Constraint::Length(12),
+        Constraint::Length(TOP_ROW),
         Constraint::Fill(1),
         Constraint::Fill(1),
     ])
@@ -154,12 +161,23 @@ fn large(r: Rect) -> Vec<(Panel, Rect)> {
     v
 }
 
+/// The top row's height: the Device panel's nine rows and its frame.
+const TOP_ROW: u16 = 11;
+
 fn medium_live(r: Rect) -> Vec<(Panel, Rect)> {
-    let [a, b] = Layout::vertical([Constraint::Length(12), Constraint::Fill(1)]).areas(r);
+    let [a, b, c] = Layout::vertical([
+        Constraint::Length(TOP_ROW),
+        Constraint::Fill(3),
+        Constraint::Fill(2),
+    ])
+    .areas(r);
     let mut v = top_row(a);
     let [t, s] = Layout::horizontal([Constraint::Fill(1); 2]).areas(b);
     v.push((Panel::Traces, t));
     v.push((Panel::Surface, s));
+    let [sp, pr] = Layout::horizontal([Constraint::Fill(1); 2]).areas(c);
+    v.push((Panel::Spectrum, sp));
+    v.push((Panel::Prediction, pr));
     v
 }
 
@@ -211,6 +229,13 @@ pub fn frame(title: &str) -> Block<'static> {
 
 /// Chart bounds around `values`, padded, never empty.
 pub fn bounds(values: impl Iterator<Item = f64>) -> [f64; 2] {
+    bounds_spanning(values, 0.0)
+}
+
+/// Chart bounds around `values` spanning at least `min_span`, centred on
+/// the data: a probe holding still draws a flat line with its noise, not
+/// encoder steps blown up to the panel's height.
+pub fn bounds_spanning(values: impl Iterator<Item = f64>, min_span: f64) -> [f64; 2] {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for v in values.filter(|v| v.is_finite()) {
         lo = lo.min(v);
@@ -219,8 +244,67 @@ pub fn bounds(values: impl Iterator<Item = f64>) -> [f64; 2] {
     if !lo.is_finite() {
         return [-1.0, 1.0];
     }
+    if hi - lo < min_span {
+        let mid = (lo + hi) / 2.0;
+        lo = mid - min_span / 2.0;
+        hi = mid + min_span / 2.0;
+    }
     let pad = ((hi - lo) * 0.08).max(1e-3);
     [lo - pad, hi + pad]
+}
+
+/// The first of `titles` (longest first) that fits a frame `width` wide;
+/// the last one cut at a word, with `…`, when none does.
+pub fn fit_title(titles: &[String], width: u16) -> String {
+    // The frame's corners and the spaces around the title.
+    let room = usize::from(width).saturating_sub(4);
+    if let Some(t) = titles.iter().find(|t| t.chars().count() <= room) {
+        return t.clone();
+    }
+    cut_at_word(titles.last().map_or("", String::as_str), room)
+}
+
+/// `text` cut at a word boundary to at most `width` characters, with `…`.
+pub fn cut_at_word(text: &str, width: usize) -> String {
+    if text.chars().count() <= width {
+        return text.to_string();
+    }
+    if width == 0 {
+        return String::new();
+    }
+    let head: String = text.chars().take(width - 1).collect();
+    let cut = head.rfind(' ').map_or(head.as_str(), |i| &head[..i]);
+    format!("{}…", cut.trim_end())
+}
+
+/// Lines cut at a word (with `…`) where they are wider than `width`; each
+/// cut line keeps its first span's style.
+pub fn fit_lines(lines: Vec<Line<'_>>, width: usize) -> Vec<Line<'static>> {
+    lines
+        .into_iter()
+        .map(|l| {
+            let style = l.spans.first().map_or(l.style, |s| l.style.patch(s.style));
+            let text: String = l.spans.iter().map(|s| s.content.as_ref()).collect();
+            Line::styled(cut_at_word(&text, width), style)
+        })
+        .collect()
+}
+
+/// A path shortened in the middle to `width` characters, keeping its start
+/// and its file name: `recordings/…/S2_031.csv`.
+pub fn elide_middle(text: &str, width: usize) -> String {
+    let n = text.chars().count();
+    if n <= width {
+        return text.to_string();
+    }
+    if width < 3 {
+        return text.chars().skip(n - width).collect();
+    }
+    let tail = (width - 1) * 2 / 3;
+    let head = width - 1 - tail;
+    let start: String = text.chars().take(head).collect();
+    let end: String = text.chars().skip(n - tail).collect();
+    format!("{start}…{end}")
 }
 
 /// Centimetres with two decimals, from metres.

@@ -108,6 +108,23 @@ pub fn analyse(rec: &Recording, path: &Path, ex: &mut FeatureExtractor) -> ScanV
     }
 }
 
+/// The newest scan an earlier session left in `<dataset>/.unsaved/`,
+/// analysed, so the console can show and store it; `None` when there is
+/// none or it cannot be read (it stays where it is either way).
+pub fn newest_unsaved(dataset: &Path, ex: &mut FeatureExtractor) -> Option<ScanView> {
+    let dir = dataset.join(super::dataset::UNSAVED_DIR);
+    let newest = std::fs::read_dir(&dir)
+        .ok()?
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x == "csv"))
+        .filter_map(|p| Some((std::fs::metadata(&p).ok()?.modified().ok()?, p)))
+        .max()?
+        .1;
+    let rec = crate::recording::read(&newest).ok()?;
+    Some(analyse(&rec, &newest, ex))
+}
+
 /// Classify features with `model`; a recording that is one of the model's
 /// training examples is left out of it first (leave-one-out), so replaying
 /// a training set does not find each scan as its own nearest neighbour.
@@ -145,6 +162,33 @@ pub fn predict(model: &Model, features: &[f64], file: &Path) -> Result<Predictio
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_newest_unsaved_scan_of_an_earlier_session_is_found() {
+        let d = tempfile::tempdir().unwrap();
+        let lp = crate::profile::LoadedProfile::thesis();
+        let mut ex = FeatureExtractor::new(&lp.profile.analysis);
+        assert!(newest_unsaved(d.path(), &mut ex).is_none(), "no folder");
+        let dir = d.path().join(crate::console::dataset::UNSAVED_DIR);
+        std::fs::create_dir_all(&dir).unwrap();
+        assert!(newest_unsaved(d.path(), &mut ex).is_none(), "empty");
+        let text = "# hapticlab recording v1\n# label = \"S1\"\nt_s,x_m,y_m\n0.000,0.0,0.0\n0.001,0.0001,0.0\n# end samples = 2\n";
+        std::fs::write(dir.join("scan-001.csv"), text).unwrap();
+        let old = std::time::SystemTime::now() - std::time::Duration::from_secs(60);
+        std::fs::File::options()
+            .write(true)
+            .open(dir.join("scan-001.csv"))
+            .unwrap()
+            .set_modified(old)
+            .unwrap();
+        std::fs::write(dir.join("scan-002.csv"), text.replace("S1", "S4")).unwrap();
+        std::fs::write(dir.join("notes.txt"), "not a scan").unwrap();
+        let v = newest_unsaved(d.path(), &mut ex).unwrap();
+        assert_eq!(v.path, dir.join("scan-002.csv"));
+        assert_eq!(v.label.as_deref(), Some("S4"));
+        assert_eq!(v.samples, 2);
+        assert!(v.stored.is_none());
+    }
 
     #[test]
     fn a_synthetic_scan_has_its_peak_at_bin_7() {

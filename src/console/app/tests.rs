@@ -61,7 +61,11 @@ fn s_starts_once_and_esc_aborts() {
     assert_eq!(a.handle_key(key('s')), vec![]);
     assert!(a.status.text.contains("a scan is running"));
     assert_eq!(a.handle_key(key('m')), vec![]);
-    assert_eq!(a.handle_key(code(KeyCode::Esc)), vec![Action::Abort]);
+    // Esc asks first; only y aborts.
+    assert_eq!(a.handle_key(code(KeyCode::Esc)), vec![]);
+    assert_eq!(a.overlay, Some(Overlay::ConfirmAbort));
+    assert_eq!(a.handle_key(key('y')), vec![Action::Abort]);
+    assert!(a.overlay.is_none());
     a.on_servo_event(ServoEvent::ScanEnded {
         path: "x".into(),
         samples: 10,
@@ -178,8 +182,21 @@ fn l_mounts_a_profile_texture_and_n_runs_a_training_session() {
         a.on_scan_saved(fixtures::scan_view(false)),
         vec![store.clone(), Action::StartScan]
     );
+    a.on_stored(Ok("ds/S3/S3_002.csv".into()));
+    assert!(a.status.text.contains("1 more to go"), "{}", a.status.text);
     assert_eq!(a.on_scan_saved(fixtures::scan_view(false)), vec![store]);
     assert!(!a.queued_run && a.queue_left == 0);
+    // The end of the run is announced when its last scan is stored.
+    a.on_stored(Ok("ds/S3/S3_003.csv".into()));
+    assert!(
+        a.status
+            .text
+            .contains("automatic scans done: 3 of 3 stored"),
+        "{}",
+        a.status.text
+    );
+    a.on_stored(Ok("ds/S3/S3_004.csv".into()));
+    assert!(a.status.text.starts_with("stored "), "{}", a.status.text);
     // A label that names no texture keeps the mounted one.
     a.handle_key(key('l'));
     for _ in 0..2 {
@@ -220,6 +237,22 @@ fn q_asks_before_losing_an_unsaved_scan_and_ctrl_c_quits_now() {
     assert!(a.quit);
     let mut b = app();
     assert_eq!(b.handle_key(key('q')), vec![Action::Quit]);
+    // Between the end of a scan's motion and its saved file, q asks too.
+    let mut d = app();
+    d.handle_key(key('s'));
+    d.on_servo_event(ServoEvent::ScanEnded {
+        path: "x".into(),
+        samples: 10,
+        aborted: None,
+        stats: Default::default(),
+    });
+    assert!(!d.scan_busy());
+    assert_eq!(d.handle_key(key('q')), vec![]);
+    assert_eq!(d.overlay, Some(Overlay::ConfirmQuit));
+    d.handle_key(key('n'));
+    d.on_scan_saved(fixtures::scan_view(false));
+    d.on_stored(Ok("ds/S1/S1_001.csv".into()));
+    assert_eq!(d.handle_key(key('q')), vec![Action::Quit], "all stored");
     let mut c = app();
     c.on_scan_saved(fixtures::scan_view(false));
     let ctrl_c = KeyEvent::new(KeyCode::Char('c'), KeyModifiers::CONTROL);
@@ -310,4 +343,190 @@ fn no_measurement_until_the_falcon_is_homed_and_the_user_is_told_how() {
     assert!(a.status.text.contains("homed"), "{}", a.status.text);
     a.overlay = None;
     assert_eq!(a.handle_key(key('s')), vec![Action::StartScan]);
+}
+
+/// A console three scans into an automatic run of five (queued after an
+/// earlier scan that is not stored).
+fn queue_running() -> App {
+    let mut a = app();
+    a.on_scan_saved(fixtures::scan_view(false));
+    a.handle_key(key('n'));
+    assert_eq!(type_text(&mut a, "5"), vec![]);
+    assert_eq!(a.handle_key(code(KeyCode::Enter)), vec![Action::StartScan]);
+    assert!(a.scan_running && a.queue_left == 4);
+    a
+}
+
+#[test]
+fn q_during_a_scan_or_a_queue_asks_before_quitting() {
+    let mut a = app();
+    a.handle_key(key('s'));
+    assert_eq!(a.handle_key(key('q')), vec![], "q must not quit mid-scan");
+    assert_eq!(a.overlay, Some(Overlay::ConfirmQuit));
+    assert!(!a.quit);
+    assert_eq!(a.handle_key(code(KeyCode::Esc)), vec![]);
+    assert!(a.overlay.is_none() && !a.quit && a.scan_running);
+    assert!(
+        a.status.text.contains("the scan goes on"),
+        "{}",
+        a.status.text
+    );
+    // During a queue too, and y quits.
+    let mut b = queue_running();
+    assert_eq!(b.handle_key(key('q')), vec![]);
+    assert_eq!(b.overlay, Some(Overlay::ConfirmQuit));
+    assert_eq!(b.handle_key(key('y')), vec![Action::Quit]);
+    assert!(b.quit);
+}
+
+#[test]
+fn esc_closes_a_form_or_the_help_without_touching_the_queue() {
+    let mut a = queue_running();
+    // The store form (the earlier scan is unsaved): a reflex Esc closes it.
+    a.handle_key(key('w'));
+    assert!(matches!(&a.overlay, Some(Overlay::Form(f)) if f.kind == FormKind::Store));
+    assert_eq!(a.handle_key(code(KeyCode::Esc)), vec![]);
+    assert!(a.overlay.is_none());
+    a.handle_key(key('?'));
+    assert_eq!(a.handle_key(code(KeyCode::Esc)), vec![]);
+    assert!(a.overlay.is_none());
+    assert!(a.scan_running && a.queued_run && a.queue_left == 4);
+    // A second reflex Esc only asks; a third closes the question.
+    assert_eq!(a.handle_key(code(KeyCode::Esc)), vec![]);
+    assert_eq!(a.overlay, Some(Overlay::ConfirmAbort));
+    assert_eq!(a.handle_key(code(KeyCode::Esc)), vec![]);
+    assert!(a.overlay.is_none());
+    assert!(a.scan_running && a.queued_run && a.queue_left == 4);
+    // The footer says what Esc does now.
+    let hints = crate::console::panels::footer::hints(&a);
+    assert!(
+        hints
+            .iter()
+            .any(|(k, what)| k == "Esc" && what.contains("abort scan + queue")),
+        "{hints:?}"
+    );
+}
+
+#[test]
+fn the_abort_confirmation_aborts_the_scan_and_cancels_the_queue() {
+    let mut a = queue_running();
+    a.handle_key(code(KeyCode::Esc));
+    a.handle_key(key('?'));
+    assert!(a.overlay.is_none(), "any other key keeps scanning");
+    assert!(a.queue_left == 4);
+    a.handle_key(code(KeyCode::Esc));
+    assert_eq!(a.handle_key(key('y')), vec![Action::Abort]);
+    assert!(a.queue_left == 0 && !a.queued_run);
+    assert!(
+        a.status.text.contains("4 queued scan(s) cancelled"),
+        "{}",
+        a.status.text
+    );
+    a.on_servo_event(ServoEvent::ScanEnded {
+        path: "x".into(),
+        samples: 10,
+        aborted: Some("aborted by the user".into()),
+        stats: Default::default(),
+    });
+    assert!(
+        a.status
+            .text
+            .contains("automatic scans stopped: 0 of 5 stored"),
+        "{}",
+        a.status.text
+    );
+    // With nothing running, Esc in Manual mode has nothing to abort.
+    assert!(!a.scan_busy());
+    assert_eq!(a.handle_key(code(KeyCode::Esc)), vec![]);
+    assert!(a.overlay.is_none());
+}
+
+#[test]
+fn a_label_in_another_case_is_the_profile_texture() {
+    let mut a = app();
+    a.handle_key(key('l'));
+    type_text(&mut a, "s3");
+    assert_eq!(
+        a.handle_key(code(KeyCode::Enter)),
+        vec![Action::Mount("S3".into())]
+    );
+    assert_eq!(a.label, "S3");
+    assert!(
+        a.status.text.contains("as the profile spells s3"),
+        "{}",
+        a.status.text
+    );
+    // A near miss is suggested, not mounted.
+    a.mounted = Some("S3".into());
+    a.handle_key(key('l'));
+    type_text(&mut a, "S33");
+    assert_eq!(a.handle_key(code(KeyCode::Enter)), vec![]);
+    assert_eq!(a.label, "S33");
+    assert!(
+        a.status.text.contains("did you mean S3?"),
+        "{}",
+        a.status.text
+    );
+}
+
+#[test]
+fn the_status_line_says_when_the_probe_reaches_the_target() {
+    let mut a = app();
+    a.handle_key(key('t'));
+    type_text(&mut a, "1");
+    assert_eq!(
+        a.handle_key(code(KeyCode::Enter)),
+        vec![Action::SetTarget([0.01, 0.0, -0.06])]
+    );
+    assert!(a.status.text.contains("gliding"), "{}", a.status.text);
+    let mut t = fixtures::telemetry(0.1, Mode::Target);
+    t.pos_m = [0.004, 0.0, -0.06];
+    t.setpoint_m = [0.005, 0.0, -0.06];
+    a.on_telemetry(&t);
+    assert!(a.status.text.contains("gliding"), "{}", a.status.text);
+    // The set-point arrives; the probe rests 0.8 mm below it.
+    t.pos_m = [0.01, -0.0008, -0.06];
+    t.setpoint_m = [0.01, 0.0, -0.06];
+    a.on_telemetry(&t);
+    assert!(
+        a.status
+            .text
+            .contains("at the target (1.00, 0.00, -6.00) cm")
+            && a.status.text.contains("0.8 mm from it"),
+        "{}",
+        a.status.text
+    );
+}
+
+#[test]
+fn an_unsaved_scan_from_an_earlier_session_can_be_stored() {
+    let mut a = app();
+    a.dataset.unsaved = 1;
+    a.on_unsaved_found(fixtures::scan_view(false));
+    assert!(
+        a.status.text.contains("earlier session"),
+        "{}",
+        a.status.text
+    );
+    assert_eq!(a.dataset.unsaved, 1, "counted once");
+    // Quitting does not ask about it again…
+    assert!(!a.unsaved_scan());
+    // …but w stores it, offering the label it was recorded under (S2,
+    // not the session's S1); a label typed in another case is the profile's.
+    assert_eq!(a.label, "S1");
+    a.handle_key(key('w'));
+    assert!(
+        matches!(&a.overlay, Some(Overlay::Form(f)) if f.kind == FormKind::Store && f.value(0) == "S2")
+    );
+    type_text(&mut a, "s2");
+    assert_eq!(
+        a.handle_key(code(KeyCode::Enter)),
+        vec![Action::Store { label: "S2".into() }],
+        "typed s2, stored as the profile's S2"
+    );
+    // A new scan of this session replaces it and is asked about again.
+    a.on_scan_saved(fixtures::scan_view(false));
+    assert!(a.unsaved_scan());
+    a.on_unsaved_found(fixtures::scan_view(true));
+    assert!(a.last_scan.as_ref().unwrap().prediction.is_none(), "kept");
 }

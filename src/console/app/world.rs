@@ -5,12 +5,16 @@
 use std::path::PathBuf;
 
 use crate::acquire::HOMING_HELP;
-use crate::servo::{ServoEvent, Telemetry};
+use crate::servo::{Mode, ServoEvent, Telemetry};
 
 use super::super::dataset::{JobResult, ModelInfo};
 use super::super::keymap::Key;
 use super::super::scan::{ScanView, predict};
 use super::{Action, App};
+
+/// How near the typed target the glide's set-point must be to have
+/// arrived, per axis.
+const ARRIVED_M: f64 = 0.00001;
 
 impl App {
     /// One telemetry frame from the servo.
@@ -22,24 +26,50 @@ impl App {
         }
         self.live.push(t);
         self.speed_scale = t.speed_scale;
+        if let Some(g) = self.gliding_to {
+            if t.mode != Mode::Target {
+                self.gliding_to = None;
+            } else if (0..3).all(|a| (t.setpoint_m[a] - g[a]).abs() < ARRIVED_M) {
+                // The glide is over; the probe may rest a little off the
+                // target (its weight, a texture under it): say how far.
+                self.gliding_to = None;
+                let off = (0..3)
+                    .map(|a| (t.pos_m[a] - g[a]).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                self.info(format!(
+                    "at the target ({:.2}, {:.2}, {:.2}) cm: holding, the probe {:.1} mm from it",
+                    g[0] * 100.0,
+                    g[1] * 100.0,
+                    g[2] * 100.0,
+                    off * 1000.0
+                ));
+            }
+        }
     }
 
     pub fn on_servo_event(&mut self, e: ServoEvent) {
         match e {
             ServoEvent::ScanStarted { path } => {
-                self.info(format!("recording the scan leg to {}", path.display()));
+                self.info(format!(
+                    "on the texture: recording the stroke to {}",
+                    path.display()
+                ));
             }
             ServoEvent::ScanEnded {
                 aborted, samples, ..
             } => {
                 self.scan_running = false;
+                // The recorder reports the file next (none without samples).
+                self.scan_saving = samples > 0;
                 match aborted {
                     None => self.info(format!("scan complete: {samples} samples; analysing")),
                     Some(r) => {
                         self.queue_left = 0;
                         self.queued_run = false;
+                        let queue = self.end_queue();
                         self.warn(format!(
-                            "scan aborted ({r}): {samples} samples kept, incomplete"
+                            "scan aborted ({r}): {samples} samples kept, incomplete{queue}"
                         ));
                     }
                 }
@@ -48,15 +78,33 @@ impl App {
                 self.scan_running = false;
                 self.queue_left = 0;
                 self.queued_run = false;
-                self.warn(format!("motion stopped: {reason}"));
+                let queue = self.end_queue();
+                self.warn(format!("motion stopped: {reason}{queue}"));
             }
             ServoEvent::Notice { message } => self.warn(message),
         }
     }
 
+    /// A scan an earlier session left unstored in `.unsaved/` (already
+    /// counted there): shown as the last scan, so `w` stores it.
+    pub fn on_unsaved_found(&mut self, view: ScanView) {
+        if self.last_scan.is_some() {
+            return;
+        }
+        self.info(format!(
+            "an earlier session left a scan unstored: {} stores it ({})",
+            self.key_name(Key::Store),
+            view.path.display()
+        ));
+        self.last_scan = Some(view);
+        self.last_scan_earlier = true;
+    }
+
     /// A scan the recorder finished writing, analysed.
     pub fn on_scan_saved(&mut self, view: ScanView) -> Vec<Action> {
         self.scan_running = false;
+        self.scan_saving = false;
+        self.last_scan_earlier = false;
         self.dataset.unsaved += 1;
         let complete = view.complete;
         let analysed = match &view.features {
@@ -66,6 +114,9 @@ impl App {
         self.last_scan = Some(view);
         if !complete {
             self.queue_left = 0;
+            self.queued_run = false;
+            self.queue_total = 0;
+            self.queue_stored = 0;
             return vec![];
         }
         if !self.queued_run {
@@ -109,8 +160,20 @@ impl App {
                 } else {
                     " (incomplete: training skips it)"
                 };
+                if self.queue_total > 0 {
+                    self.queue_stored += 1;
+                }
                 if self.queued_run && self.scan_running {
                     self.info(format!("stored {}{note}{left}", path.display()));
+                } else if self.queue_total > 0 {
+                    // The last scan of an automatic run.
+                    let (n, total) = (self.queue_stored, self.queue_total);
+                    self.queue_total = 0;
+                    self.queue_stored = 0;
+                    self.info(format!(
+                        "automatic scans done: {n} of {total} stored (the last as {}){note}",
+                        path.display()
+                    ));
                 } else {
                     self.info(format!("stored {}{note}", path.display()));
                 }
@@ -118,9 +181,21 @@ impl App {
             Err(e) => {
                 self.queue_left = 0;
                 self.queued_run = false;
-                self.error(format!("could not store the scan: {e}"));
+                let queue = self.end_queue();
+                self.error(format!("could not store the scan: {e}{queue}"));
             }
         }
+    }
+
+    /// Ends an automatic run cut short; what to add to the message.
+    fn end_queue(&mut self) -> String {
+        if self.queue_total == 0 {
+            return String::new();
+        }
+        let (n, total) = (self.queue_stored, self.queue_total);
+        self.queue_total = 0;
+        self.queue_stored = 0;
+        format!("; automatic scans stopped: {n} of {total} stored")
     }
 
     /// A finished job; may ask for more (a prediction after training).

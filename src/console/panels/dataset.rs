@@ -8,13 +8,17 @@ use ratatui::style::{Modifier, Style};
 use ratatui::text::Line;
 use ratatui::widgets::{Paragraph, Widget};
 
-use super::frame;
+use super::{elide_middle, fit_lines, frame};
 use crate::console::app::App;
 use crate::console::keymap::Key;
 
 pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
     let d = &app.dataset;
-    let mut v = vec![Line::raw(format!("folder {}", d.dir.display()))];
+    let room = usize::from(area.width.saturating_sub(2 + 7));
+    let mut v = vec![Line::raw(format!(
+        "folder {}",
+        elide_middle(&d.dir.display().to_string(), room)
+    ))];
     if d.counts.is_empty() {
         v.push(Line::raw(format!(
             "no recordings stored yet ({} stores a scan)",
@@ -101,5 +105,9 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
             v.push(Line::raw(rate(&|c| c.error_rate, "ER(%)")));
         }
     }
-    Paragraph::new(v).block(frame("Dataset")).render(area, buf);
+    // A line too long for the panel is cut at a word, not mid-word.
+    let inner = usize::from(area.width.saturating_sub(2));
+    Paragraph::new(fit_lines(v, inner))
+        .block(frame("Dataset"))
+        .render(area, buf);
 }

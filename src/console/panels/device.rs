@@ -7,9 +7,9 @@ use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
 use ratatui::style::{Color, Modifier, Style};
 use ratatui::text::{Line, Span};
-use ratatui::widgets::{Paragraph, Widget};
+use ratatui::widgets::{Paragraph, Widget, Wrap};
 
-use super::frame;
+use super::{elide_middle, frame};
 use crate::console::app::{App, Source};
 
 fn row<'a>(name: &'a str, value: impl Into<Span<'a>>) -> Line<'a> {
@@ -23,16 +23,21 @@ fn row<'a>(name: &'a str, value: impl Into<Span<'a>>) -> Line<'a> {
 }
 
 pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
+    // Room for a value after its 9-column name.
+    let room = usize::from(area.width.saturating_sub(2 + 9));
     let lines = match &app.replay {
-        Some(r) => replay_lines(app, r),
-        None => live_lines(app),
+        Some(r) => replay_lines(app, r, room),
+        None => live_lines(app, room),
     };
+    // Wrapped at words: a long value (the homing advice) pushes the rows
+    // below it down rather than being cut mid-word.
     Paragraph::new(lines)
+        .wrap(Wrap { trim: false })
         .block(frame("Device"))
         .render(area, buf);
 }
 
-fn live_lines(app: &App) -> Vec<Line<'_>> {
+fn live_lines(app: &App, room: usize) -> Vec<Line<'_>> {
     let backend = match &app.source {
         Source::Live { backend } if backend == "sim" => "sim (simulated Falcon)".to_string(),
         Source::Live { backend } => backend.clone(),
@@ -100,23 +105,34 @@ fn live_lines(app: &App) -> Vec<Line<'_>> {
     } else {
         "idle".into()
     };
-    let queue = if app.queue_left > 0 {
-        format!(" (+{} queued)", app.queue_left)
-    } else {
-        String::new()
-    };
-    lines.push(row("Scan", format!("{scan}{queue}")));
-    lines.push(row("Dataset", app.dataset.dir.display().to_string()));
+    lines.push(row("Scan", scan));
+    if app.queue_total > 0 {
+        lines.push(row(
+            "Queue",
+            format!(
+                "{} of {} stored, {} to start",
+                app.queue_stored, app.queue_total, app.queue_left
+            ),
+        ));
+    }
+    lines.push(row(
+        "Dataset",
+        elide_middle(&app.dataset.dir.display().to_string(), room),
+    ));
     lines
 }
 
-fn replay_lines<'a>(app: &'a App, r: &'a crate::console::replay::Replay) -> Vec<Line<'a>> {
+fn replay_lines<'a>(
+    app: &'a App,
+    r: &'a crate::console::replay::Replay,
+    room: usize,
+) -> Vec<Line<'a>> {
     let mut lines = vec![row("Backend", "replay of a recording")];
     let name = r
         .selected_path()
         .and_then(|p| p.file_name())
         .map_or("(none)".into(), |n| n.to_string_lossy().into_owned());
-    lines.push(row("File", name));
+    lines.push(row("File", elide_middle(&name, room)));
     if let Some(s) = &r.scan {
         lines.push(row(
             "Label",

@@ -8,9 +8,11 @@ use ratatui::style::{Color, Modifier, Style};
 use ratatui::text::{Line, Span};
 use ratatui::widgets::Widget;
 
-use super::Page;
+use super::{Page, cut_at_word};
 use crate::console::app::{App, Level};
+use crate::console::form::Overlay;
 use crate::console::keymap::Key;
+use crate::servo::Mode;
 
 pub fn render_header(app: &App, pages: &[Page], area: Rect, buf: &mut Buffer) {
     let bold = Style::new().add_modifier(Modifier::BOLD);
@@ -49,9 +51,43 @@ pub fn render_header(app: &App, pages: &[Page], area: Rect, buf: &mut Buffer) {
     Line::from(spans).render(area, buf);
 }
 
-/// The key hints for the current view, most important first.
+/// The key hints for what is on screen now, most important first: an
+/// open overlay's keys, a running scan's, the replay's, or the idle console's.
 pub fn hints(app: &App) -> Vec<(String, &'static str)> {
     let k = |key| app.keys.name(key);
+    let s = |t: &str| t.to_string();
+    match &app.overlay {
+        Some(Overlay::Help) => return vec![(s("any key"), "closes the help")],
+        Some(Overlay::ConfirmQuit) => {
+            let mut v = vec![(s("y"), "quit")];
+            if app.unsaved_scan() {
+                v.push((s("w"), "store first"));
+            }
+            v.push((
+                s("any other key"),
+                if app.scan_busy() {
+                    "stay, the scan goes on"
+                } else {
+                    "stay"
+                },
+            ));
+            return v;
+        }
+        Some(Overlay::ConfirmAbort) => {
+            return vec![
+                (s("y"), "abort the scan"),
+                (s("any other key"), "keep scanning"),
+            ];
+        }
+        Some(Overlay::Form(f)) => {
+            let mut v = vec![(s("Enter"), "ok"), (s("Esc"), "close the form")];
+            if f.fields.len() > 1 {
+                v.push((s("Tab"), "next field"));
+            }
+            return v;
+        }
+        None => {}
+    }
     if app.replay.is_some() {
         let mut v = vec![
             (k(Key::Help), "help"),
@@ -68,10 +104,25 @@ pub fn hints(app: &App) -> Vec<(String, &'static str)> {
         v.push((k(Key::Quit), "quit"));
         return v;
     }
-    vec![
-        (k(Key::Help), "help"),
-        (k(Key::Start), "start"),
-        (k(Key::Abort), "abort"),
+    if app.scan_busy() {
+        let abort = if app.queue_left > 0 {
+            "abort scan + queue (asks)"
+        } else {
+            "abort the scan (asks)"
+        };
+        return vec![
+            (k(Key::Help), "help"),
+            (k(Key::Abort), abort),
+            (k(Key::Quit), "quit (asks)"),
+            (format!("{}/{}", k(Key::Faster), k(Key::Slower)), "speed"),
+            (k(Key::Predict), "predict last"),
+        ];
+    }
+    let mut v = vec![(k(Key::Help), "help"), (k(Key::Start), "start")];
+    if app.mode() != Mode::Manual {
+        v.push((k(Key::Abort), "stop"));
+    }
+    v.extend([
         (k(Key::Store), "store"),
         (k(Key::Predict), "predict"),
         (k(Key::Mode), "mode"),
@@ -82,7 +133,8 @@ pub fn hints(app: &App) -> Vec<(String, &'static str)> {
         (k(Key::Evaluate), "evaluate"),
         (k(Key::Replay), "replay"),
         (k(Key::Quit), "quit"),
-    ]
+    ]);
+    v
 }
 
 pub fn render_footer(app: &App, pages: &[Page], area: Rect, buf: &mut Buffer) {
@@ -104,7 +156,7 @@ pub fn render_footer(app: &App, pages: &[Page], area: Rect, buf: &mut Buffer) {
     };
     let room = width.saturating_sub(pager.chars().count());
     for (key, what) in hints(app) {
-        let len = key.chars().count() + what.len() + 2;
+        let len = key.chars().count() + what.chars().count() + 2;
         if used + len > room {
             break;
         }
@@ -132,7 +184,8 @@ pub fn render_footer(app: &App, pages: &[Page], area: Rect, buf: &mut Buffer) {
             Style::new().fg(Color::Red).add_modifier(Modifier::BOLD),
         ),
     };
-    Line::styled(format!("{prefix}{}", app.status.text), style).render(
+    let status = cut_at_word(&format!("{prefix}{}", app.status.text), width);
+    Line::styled(status, style).render(
         Rect {
             y: area.y + 1,
             height: 1,

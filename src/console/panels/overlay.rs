@@ -26,25 +26,69 @@ fn centred(area: Rect, w: u16, h: u16) -> Rect {
 pub fn render(app: &App, o: &Overlay, area: Rect, buf: &mut Buffer) {
     match o {
         Overlay::Help => help(app, area, buf),
-        Overlay::ConfirmQuit => {
+        Overlay::ConfirmQuit => confirm_quit(app, area, buf),
+        Overlay::ConfirmAbort => {
             let r = centred(area, 60, 7);
             Clear.render(r, buf);
-            let name = app
-                .last_scan
-                .as_ref()
-                .map_or(String::new(), |s| s.path.display().to_string());
+            let what = if app.queue_left > 0 {
+                format!(
+                    "Abort the running scan and the {} queued after it?",
+                    app.queue_left
+                )
+            } else {
+                "Abort the running scan?".to_string()
+            };
             Paragraph::new(vec![
-                Line::raw("The last scan is not stored in the dataset"),
-                Line::raw(format!("(it stays in {name}).")),
+                Line::raw(what),
+                Line::raw("Forces go off; its samples so far are kept as incomplete."),
                 Line::raw(""),
-                Line::raw("y: quit anyway   w: store it first   any other key: stay"),
+                Line::raw("y: abort   any other key: keep scanning"),
             ])
             .wrap(Wrap { trim: true })
-            .block(frame("Quit?"))
+            .block(frame("Abort?"))
             .render(r, buf);
         }
         Overlay::Form(f) => form(f, area, buf),
     }
+}
+
+fn confirm_quit(app: &App, area: Rect, buf: &mut Buffer) {
+    let r = centred(area, 60, 8);
+    Clear.render(r, buf);
+    let mut lines = Vec::new();
+    if app.scan_busy() {
+        let queued = if app.queue_left > 0 {
+            format!(" ({} more queued)", app.queue_left)
+        } else {
+            String::new()
+        };
+        lines.push(Line::raw(format!(
+            "A scan is running{queued}: quitting aborts it and keeps its samples as incomplete."
+        )));
+    } else if app.scan_saving {
+        lines.push(Line::raw(
+            "The scan that just ended is still being saved and analysed.",
+        ));
+    }
+    if app.unsaved_scan() {
+        let name = app
+            .last_scan
+            .as_ref()
+            .map_or(String::new(), |s| s.path.display().to_string());
+        lines.push(Line::raw(format!(
+            "The last scan is not stored in the dataset (it stays in {name})."
+        )));
+    }
+    lines.push(Line::raw(""));
+    lines.push(Line::raw(if app.unsaved_scan() {
+        "y: quit anyway   w: store it first   any other key: stay"
+    } else {
+        "y: quit anyway   any other key: stay"
+    }));
+    Paragraph::new(lines)
+        .wrap(Wrap { trim: true })
+        .block(frame("Quit?"))
+        .render(r, buf);
 }
 
 fn form(f: &Form, area: Rect, buf: &mut Buffer) {
@@ -97,7 +141,7 @@ fn help(app: &App, area: Rect, buf: &mut Buffer) {
         ),
         (
             k(Key::Abort),
-            "abort the scan or motion (forces off); close a replay",
+            "abort a scan or queue (asks first); stop motion; leave a replay",
         ),
         (
             k(Key::Store),
@@ -151,10 +195,10 @@ fn help(app: &App, area: Rect, buf: &mut Buffer) {
         ),
         (
             k(Key::Quit),
-            "quit (asks if the last scan is not stored); Ctrl-C quits now",
+            "quit (asks during a scan or if one is not stored); Ctrl-C: now",
         ),
     ];
-    let h = rows.len() as u16 + 4;
+    let h = rows.len() as u16 + 5;
     let r = centred(area, 78, h);
     Clear.render(r, buf);
     let mut lines: Vec<Line> = rows
@@ -170,7 +214,10 @@ fn help(app: &App, area: Rect, buf: &mut Buffer) {
         })
         .collect();
     lines.push(Line::raw(
-        "  any key closes; change keys in the profile's [console] keys table",
+        "  any key closes; in forms Esc closes, the first key replaces the value;",
+    ));
+    lines.push(Line::raw(
+        "  change keys in the profile's [console] keys table",
     ));
     Paragraph::new(lines).block(frame("Keys")).render(r, buf);
 }

@@ -89,7 +89,21 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
                 .iter()
                 .map(|n| format!("{} {:.2e}", n.label, n.distance))
                 .collect();
-            v.push(Line::raw(format!("nearest: {}", near.join(", "))));
+            // As many neighbours as fit one row: a pair is never split.
+            let room = usize::from(area.width.saturating_sub(2));
+            let mut line = "nearest:".to_string();
+            for (i, n) in near.iter().enumerate() {
+                let more = if i + 1 < near.len() { ", …" } else { "" };
+                if line.chars().count() + 1 + n.chars().count() + more.chars().count() > room
+                    && i > 0
+                {
+                    line.push_str(" …");
+                    break;
+                }
+                line.push_str(if i == 0 { " " } else { ", " });
+                line.push_str(n);
+            }
+            v.push(Line::raw(line));
             v
         }
     };

@@ -1,12 +1,13 @@
 //! The Spectrum panel: bars of the feature bins (|X_k| of the window's DFT)
-//! of the scan on screen, with the strongest bin named in words.
+//! of the scan on screen, every bar the same width, with the strongest bin
+//! named in words.
 
 use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
 use ratatui::text::Line;
 use ratatui::widgets::{Paragraph, Widget, Wrap};
 
-use super::frame;
+use super::{fit_title, frame};
 use crate::console::app::App;
 
 /// Eighth blocks, from empty to full.
@@ -41,11 +42,20 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
         .enumerate()
         .fold((0, f64::MIN), |a, (i, v)| if v > a.1 { (i, v) } else { a });
     let last = s.first_bin + f.len() - 1;
-    let block = frame(&format!(
-        "Spectrum: peak bin {} (|X| {peak:.2e}), bins {}–{last}",
-        s.first_bin + peak_i,
-        s.first_bin,
-    ));
+    let peak_bin = s.first_bin + peak_i;
+    let title = fit_title(
+        &[
+            format!(
+                "Spectrum: peak bin {peak_bin} (|X| {peak:.2e}), bins {}–{last}",
+                s.first_bin
+            ),
+            format!("Spectrum: peak bin {peak_bin}, bins {}–{last}", s.first_bin),
+            format!("Spectrum: peak bin {peak_bin}"),
+            "Spectrum".into(),
+        ],
+        area.width,
+    );
+    let block = frame(&title);
     let inner = block.inner(area);
     block.render(area, buf);
     if inner.height < 2 || inner.width < 4 {
@@ -55,10 +65,14 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
     let rows = inner.height - 1;
     let cols = usize::from(inner.width);
     let n = f.len();
-    // Bins share the width evenly; merged (max) when there are more bins than columns.
+    // Every bar the same width: whole columns per bin, or (max of) several
+    // bins per column when there are more bins than columns.
     let per_col = n.div_ceil(cols).max(1);
     let bars = n.div_ceil(per_col);
-    let left = |b: usize| inner.x + (b * cols / bars) as u16;
+    let width = (cols / bars).max(1);
+    let left = |b: usize| inner.x + (b * width) as u16;
+    // A gap between bars when they are wide enough.
+    let drawn = if width > 2 { width - 1 } else { width } as u16;
     let top = if peak > 0.0 { peak } else { 1.0 };
     for b in 0..bars {
         let v = f[b * per_col..((b + 1) * per_col).min(n)]
@@ -66,13 +80,11 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
             .copied()
             .fold(0.0, f64::max);
         let eighths = ((v / top) * f64::from(rows) * 8.0).round().max(0.0) as u32;
-        let (x0, x1) = (left(b), left(b + 1));
-        // A gap between bars when they are wide enough.
-        let x1 = if x1 - x0 > 2 { x1 - 1 } else { x1 };
+        let x0 = left(b);
         for r in 0..rows {
             let level = eighths.saturating_sub(u32::from(r) * 8).min(8) as usize;
             let y = inner.y + rows - 1 - r;
-            for x in x0..x1.min(inner.right()) {
+            for x in x0..(x0 + drawn).min(inner.right()) {
                 buf[(x, y)].set_symbol(EIGHTHS[level]);
             }
         }
@@ -87,9 +99,7 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
     };
     put(inner.x, format!("{}", s.first_bin));
     let last_text = format!("{last}");
-    put(
-        inner.right().saturating_sub(last_text.len() as u16),
-        last_text,
-    );
-    put(left(peak_i / per_col), format!("^{}", s.first_bin + peak_i));
+    let end = left(bars - 1) + drawn;
+    put(end.saturating_sub(last_text.len() as u16), last_text);
+    put(left(peak_i / per_col), format!("^{peak_bin}"));
 }

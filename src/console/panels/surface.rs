@@ -1,16 +1,27 @@
 //! The Surface trace panel: the signal (the probe's height y) against the
 //! distance along the stroke for the last scan, or the one being replayed,
-//! with the analysis window marked by two dotted columns (the thesis's
-//! Figs 4.5a–4.8a).
+//! zoomed to the analysis window so the window fills the panel's width (the
+//! thesis's Figs 4.5a–4.8a). The signal axis spans at least half a
+//! millimetre (0.1 N for a force), so a flat texture draws a flat line with
+//! its noise. A scan that stops before the window shows its whole stroke.
 
 use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
 use ratatui::symbols::Marker;
 use ratatui::widgets::{Axis, Chart, Dataset, GraphType, Paragraph, Widget, Wrap};
 
-use super::{bounds, frame};
+use super::{bounds, bounds_spanning, fit_title, frame};
 use crate::console::app::App;
 use crate::console::scan::unit_of;
+
+/// The smallest span of the signal axis, by unit.
+fn min_span(unit: &str) -> f64 {
+    match unit {
+        "mm" => 0.5,
+        "N" => 0.1,
+        _ => 0.0,
+    }
+}
 
 pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
     let Some(s) = app.scan() else {
@@ -28,47 +39,66 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
         .path
         .file_name()
         .map_or(String::new(), |n| n.to_string_lossy().into_owned());
-    let title = format!(
-        "Surface trace: {} vs {} — {name}, window {:.1}–{:.1} {au} between ••",
+    let (signal, axis) = (
         s.channel.trim_end_matches("_m"),
         s.axis.trim_end_matches("_m"),
-        s.window[0],
-        s.window[1]
     );
+    let [w0, w1] = s.window;
+    // The window's points, with one on each side so the curve meets the edges.
+    let first = s.trace.iter().position(|p| p.0 >= w0);
+    let last = s.trace.iter().rposition(|p| p.0 <= w1);
+    let zoomed = match (first, last) {
+        (Some(a), Some(b)) if b > a => {
+            Some(&s.trace[a.saturating_sub(1)..(b + 2).min(s.trace.len())])
+        }
+        _ => None,
+    };
+    let window = format!("{w0:.1}–{w1:.1} {au}");
+    let titles: Vec<String> = if zoomed.is_some() {
+        vec![
+            format!("Surface trace: {signal} vs {axis} in the window {window} — {name}"),
+            format!("Surface trace: {signal} vs {axis}, window {window}"),
+            format!("Surface trace, window {window}"),
+            "Surface trace".into(),
+        ]
+    } else {
+        vec![
+            format!("Surface trace: {signal} vs {axis} — {name} ends before the window {window}"),
+            format!("Surface trace: ends before the window {window}"),
+            "Surface trace: short of the window".into(),
+            "Surface trace".into(),
+        ]
+    };
+    let title = fit_title(&titles, area.width);
     if s.trace.is_empty() {
         Paragraph::new("the scan has no samples")
             .block(frame(&title))
             .render(area, buf);
         return;
     }
-    let [xlo, xhi] = bounds(s.trace.iter().map(|p| p.0).chain(s.window));
-    let [ylo, yhi] = bounds(s.trace.iter().map(|p| p.1));
-    let edge = |x: f64| -> Vec<(f64, f64)> {
-        (0..=40)
-            .map(|i| (x, ylo + (yhi - ylo) * f64::from(i) / 40.0))
-            .collect()
+    let (points, [xlo, xhi]) = match zoomed {
+        Some(p) => (p, [w0, w1]),
+        None => (&s.trace[..], bounds(s.trace.iter().map(|p| p.0))),
     };
-    let (e0, e1) = (edge(s.window[0]), edge(s.window[1]));
+    let [ylo, yhi] = bounds_spanning(
+        points
+            .iter()
+            .filter(|p| (xlo..=xhi).contains(&p.0))
+            .map(|p| p.1),
+        min_span(su),
+    );
     let datasets = vec![
         Dataset::default()
             .marker(Marker::Braille)
             .graph_type(GraphType::Line)
-            .data(&s.trace),
-        Dataset::default()
-            .marker(Marker::Dot)
-            .graph_type(GraphType::Scatter)
-            .data(&e0),
-        Dataset::default()
-            .marker(Marker::Dot)
-            .graph_type(GraphType::Scatter)
-            .data(&e1),
+            .data(points),
     ];
     Chart::new(datasets)
         .block(frame(&title))
         .x_axis(Axis::default().bounds([xlo, xhi]).labels([
-            format!("{xlo:.0}"),
-            format!("{:.0} {au}", (xlo + xhi) / 2.0),
-            format!("{xhi:.0}"),
+            format!("{xlo:.1}"),
+            format!("{axis} {au}"),
+            format!("{xhi:.1}"),
         ]))
         .y_axis(Axis::default().bounds([ylo, yhi]).labels([
             format!("{ylo:.2}"),

@@ -85,7 +85,15 @@ fn surface_trace_panel_marks_the_window() {
     let app = fixtures::app(80, 24);
     let s = panel(Panel::Surface, &app, 80, 14);
     assert!(s.contains("window 60.0–89.7 mm"), "{s}");
-    assert!(s.contains('•'), "{s}");
+    // The window fills the width: its ends are the x axis's ends.
+    let axis = s.lines().nth(12).unwrap();
+    assert!(
+        axis.trim_start_matches('│')
+            .trim_start()
+            .starts_with("60.0")
+            && axis.ends_with("89.7│"),
+        "{s}"
+    );
     insta::assert_snapshot!(s);
 }
 
@@ -185,5 +193,175 @@ fn tiny_terminals_do_not_panic() {
     let app = fixtures::app(10, 5);
     for (w, h) in [(1, 1), (10, 5), (30, 8), (79, 23)] {
         screen(&app, w, h);
+    }
+}
+
+/// The panel titles of a screen, as drawn.
+fn titles(s: &str) -> Vec<&str> {
+    let mut v = Vec::new();
+    for line in s.lines() {
+        for part in line.split("┌ ").skip(1) {
+            if let Some(end) = part.find(" ─") {
+                v.push(&part[..end]);
+            }
+        }
+    }
+    v
+}
+
+#[test]
+fn the_first_page_at_120x40_is_the_whole_dashboard() {
+    let app = fixtures::app(120, 40);
+    let s = screen(&app, 120, 40);
+    let t = titles(&s);
+    for want in [
+        "Device",
+        "Position",
+        "Force",
+        "Traces",
+        "Surface trace",
+        "Spectrum",
+        "Prediction",
+    ] {
+        assert!(
+            t.iter().any(|t| t.starts_with(want)),
+            "no {want} on page 1 at 120x40: {t:?}\n{s}"
+        );
+    }
+    // Every title is whole: it ends in a word, not in a corner.
+    assert!(
+        s.lines().all(|l| !l.contains("┌ ") || l.contains(" ─")),
+        "{s}"
+    );
+    // Smaller terminals page: 80x24 has four pages, 120x40 two.
+    assert_eq!(super::pages(120, 40).len(), 2);
+    assert_eq!(super::pages(80, 24).len(), 4);
+}
+
+#[test]
+fn long_paths_are_elided_in_the_middle_and_a_queue_has_its_own_row() {
+    let mut app = fixtures::app(120, 40);
+    app.dataset.dir =
+        "/home/lab/experiments/2026-11-23/falcon-session-with-a-long-name/recordings".into();
+    app.queue_total = 5;
+    app.queue_stored = 2;
+    app.queue_left = 2;
+    let s = panel(Panel::Device, &app, 40, 11);
+    let row = s.lines().find(|l| l.contains("Dataset")).unwrap();
+    assert!(
+        row.contains('…') && row.ends_with("name/recordings│"),
+        "{s}"
+    );
+    assert!(row.starts_with("│Dataset  /home/lab"), "{s}");
+    assert!(s.contains("Queue    2 of 5 stored, 2 to start"), "{s}");
+    assert!(s.contains("stroke 50 % recorded  "), "{s}");
+    let d = panel(Panel::Dataset, &app, 60, 14);
+    assert!(d.contains("folder /home/lab") && d.contains("…"), "{d}");
+    insta::assert_snapshot!("device_with_a_queue", s);
+}
+
+#[test]
+fn elide_and_cut_keep_whole_words_and_both_ends() {
+    assert_eq!(super::elide_middle("abc", 5), "abc");
+    let e = super::elide_middle("recordings/session-test/S2/S2_031.csv", 20);
+    assert_eq!(e.chars().count(), 20);
+    assert!(e.starts_with("record") && e.ends_with("S2_031.csv"), "{e}");
+    assert_eq!(
+        super::cut_at_word("stroke 52 % recorded (+3 queued)", 25),
+        "stroke 52 % recorded…"
+    );
+    assert_eq!(
+        super::fit_title(&["a long title here".into(), "short".into()], 12),
+        "short"
+    );
+}
+
+/// A probe holding still at y = -5 mm, its encoder jittering one step.
+fn holding_still() -> App {
+    let mut app = fixtures::app(80, 24);
+    app.live.clear();
+    for i in 0..=3000 {
+        let mut t = fixtures::telemetry(i as f64 * 0.001, Mode::Target);
+        t.pos_m[1] = -0.005 + if i % 7 < 3 { 2e-6 } else { 0.0 };
+        t.force_n[1] = -0.2 + if i % 5 < 2 { 1e-4 } else { 0.0 };
+        app.on_telemetry(&t);
+    }
+    app
+}
+
+#[test]
+fn traces_of_a_still_probe_are_flat_lines_with_their_labels_above() {
+    let app = holding_still();
+    let s = panel(Panel::Traces, &app, 80, 12);
+    // At least 0.5 mm and 0.1 N of span, padded 8 %: the step is a hair.
+    assert!(s.contains("-5.29") && s.contains("-4.71"), "{s}");
+    assert!(s.contains("-0.26") && s.contains("-0.14"), "{s}");
+    assert!(!s.contains('⣿'), "solid blocks:\n{s}");
+    let curve_rows = s
+        .lines()
+        .filter(|l| l.chars().any(|c| ('\u{2801}'..='\u{28ff}').contains(&c)))
+        .count();
+    assert!(curve_rows <= 2, "{s}");
+    // The name and value have a row of their own, above the plots.
+    let top = s.lines().nth(1).unwrap();
+    assert!(
+        top.contains("y -5.000 mm") && top.contains("fy -0.200 N"),
+        "{s}"
+    );
+    assert!(
+        !top.chars().any(|c| ('\u{2801}'..='\u{28ff}').contains(&c)),
+        "{s}"
+    );
+    insta::assert_snapshot!(s);
+}
+
+#[test]
+fn a_flat_texture_is_a_flat_line_not_bars() {
+    let mut app = fixtures::app(80, 24);
+    let scan = app.last_scan.as_mut().unwrap();
+    for (i, p) in scan.trace.iter_mut().enumerate() {
+        p.1 = -4.8 + if i % 3 == 0 { 0.002 } else { 0.0 };
+    }
+    let s = panel(Panel::Surface, &app, 80, 14);
+    let curve_rows = s
+        .lines()
+        .filter(|l| l.chars().any(|c| ('\u{2801}'..='\u{28ff}').contains(&c)))
+        .count();
+    assert!(curve_rows <= 2, "{s}");
+    assert!(s.contains("-5.09") && s.contains("-4.51"), "{s}");
+}
+
+#[test]
+fn every_spectrum_bin_is_drawn_the_same_width() {
+    let mut app = fixtures::app(80, 24);
+    let scan = app.last_scan.as_mut().unwrap();
+    let n = 49;
+    scan.features = Ok(vec![1.0; n]);
+    for w in [40, 53, 60, 77, 100, 119, 160, 200] {
+        let s = panel(Panel::Spectrum, &app, w, 8);
+        // The top row of bars: every bin full height.
+        let row: Vec<char> = s.lines().nth(1).unwrap().chars().collect();
+        let runs: Vec<usize> = row
+            .split(|c| *c != '█')
+            .map(<[char]>::len)
+            .filter(|l| *l > 0)
+            .collect();
+        let cols = usize::from(w) - 2;
+        if cols >= n {
+            let width = cols / n;
+            let drawn = if width > 2 { width - 1 } else { width };
+            assert_eq!(runs.iter().sum::<usize>(), n * drawn, "at {w}:\n{s}");
+            if width > 2 {
+                assert_eq!(runs.len(), n, "at {w}:\n{s}");
+                assert!(runs.iter().all(|r| *r == drawn), "at {w}: {runs:?}\n{s}");
+            }
+        } else {
+            // Two bins per column: as many columns as bars, one each.
+            assert_eq!(
+                runs.iter().sum::<usize>(),
+                n.div_ceil(n.div_ceil(cols)),
+                "at {w}:\n{s}"
+            );
+        }
     }
 }
