@@ -635,7 +635,12 @@ fn evaluate_cmd(
     if shuffle_seed.is_some() {
         eval.shuffle_seed = shuffle_seed;
     }
-    let split = evaluate::split(examples, &eval).map_err(bad)?;
+    let split = evaluate::split(examples, &eval).map_err(|e| match e {
+        evaluate::EvaluateError::NotEnough { .. } => {
+            bad(format!("{e}; cross-validate instead (--folds 5 or --loo)"))
+        }
+        e => bad(e),
+    })?;
     let model = Model::train_adapting_k(
         &lp.profile.name,
         &lp.profile.analysis,

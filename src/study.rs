@@ -1022,7 +1022,7 @@ pub fn run_evaluate(
             lp.profile.simulator.seed
         )
     } else {
-        format!("{} recordings", data.scans.len())
+        crate::classify::plural(data.scans.len(), "recording", "recordings")
     };
     if let Some((_, key, _, values)) = &sweep_spec {
         let s = sweep(&lp.profile, &data, key, values, &plan, &|_| {})?;
