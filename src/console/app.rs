@@ -266,7 +266,7 @@ impl App {
             Key::Evaluate => {
                 self.dataset.busy = Some("evaluating…".into());
                 self.info(format!(
-                    "evaluating on {} ({}, as the profile's [evaluation] says)",
+                    "evaluating {} by {} (the profile's [evaluation])",
                     self.dataset.dir.display(),
                     crate::study::Plan::new(&self.profile.profile, &Default::default()).describe()
                 ));

@@ -183,6 +183,8 @@ pub enum JobResult {
         entries: Vec<ReplayEntry>,
         /// The model the predictions came from, when one was trained for it.
         model: Option<Box<Model>>,
+        /// Incomplete recordings that training skipped.
+        skipped: usize,
     },
     Failed {
         what: &'static str,
@@ -273,11 +275,12 @@ impl Jobs {
     ) {
         let lp = lp.clone();
         self.spawn(move || {
-            let mut trained = None;
+            let (mut trained, mut skipped) = (None, 0);
             let model = match model {
                 Some(m) => Some(m),
-                None => train_dir.and_then(|d| train(&lp, &d).ok()).map(|(m, _)| {
+                None => train_dir.and_then(|d| train(&lp, &d).ok()).map(|(m, n)| {
                     trained = Some(Box::new(m.clone()));
+                    skipped = n;
                     m
                 }),
             };
@@ -304,6 +307,7 @@ impl Jobs {
             JobResult::Listed {
                 entries,
                 model: trained,
+                skipped,
             }
         });
     }

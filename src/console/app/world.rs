@@ -185,11 +185,17 @@ impl App {
                 self.dataset.report_method = Some(method);
                 vec![]
             }
-            JobResult::Listed { entries, model } => {
+            JobResult::Listed {
+                entries,
+                model,
+                skipped,
+            } => {
                 if let Some(m) = model
                     && self.model.is_none()
                 {
-                    self.dataset.model = Some(ModelInfo::of(&m, None));
+                    let mut info = ModelInfo::of(&m, None);
+                    info.skipped = skipped;
+                    self.dataset.model = Some(info);
                     // The recording already open was analysed before there was a model.
                     if let Some(s) = self.replay.as_mut().and_then(|r| r.scan.as_mut())
                         && s.prediction.is_none()
