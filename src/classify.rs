@@ -20,6 +20,14 @@
 //! stratified 5-fold cross-validation inside the training examples only
 //! (the best mean accuracy; a tie goes to the smaller k) and stores the
 //! scores as `k_selection`.
+//!
+//! [`Model::train_adapting_k`] is how the lab trains: it keeps the profile's
+//! k wherever every texture has at least k training scans, and otherwise
+//! chooses k as `k = "auto"` does (among the candidates no larger than the
+//! smallest texture's count), recording why in `k_fallback`. With fewer own
+//! scans than k, a texture's scans are outvoted by their neighbours' (with
+//! 4 of a texture and k = 10, six votes go elsewhere), so the profile's k
+//! would make a model that names almost nothing right.
 
 use std::cmp::Ordering;
 use std::path::{Path, PathBuf};
@@ -63,6 +71,10 @@ pub struct Model {
     /// cross-validated accuracy.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub k_selection: Option<Vec<KScore>>,
+    /// Why the profile's k was not used (a texture had fewer training
+    /// scans than k); `classifier.k` was then chosen as by `k = "auto"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub k_fallback: Option<KFallback>,
     /// The examples' features as the distance sees them (scaled), row-major.
     #[serde(skip)]
     matrix: Vec<f64>,
@@ -117,6 +129,28 @@ impl Scaling {
 pub struct KScore {
     pub k: usize,
     pub accuracy: f64,
+}
+
+/// The profile asked for `asked` neighbours, but texture `label` had only
+/// `scans` training scans; k was chosen by `folds`-fold cross-validation
+/// inside the training examples among the candidates up to `scans`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KFallback {
+    pub asked: usize,
+    pub label: String,
+    pub scans: usize,
+    pub folds: usize,
+}
+
+/// "S1 has 5 scans" in words: "1 scan", "5 scans".
+pub fn scans(n: usize) -> String {
+    plural(n, "scan", "scans")
+}
+
+/// `n` and the noun in the number it needs.
+pub fn plural(n: usize, one: &str, many: &str) -> String {
+    format!("{n} {}", if n == 1 { one } else { many })
 }
 
 /// The outcome of classifying one feature vector.
@@ -449,7 +483,7 @@ fn select_k(
     let d = matrix.len() / n.max(1);
     let mut fold_of = vec![0usize; n];
     let mut seen = vec![0usize; classes];
-    let folds = 5.min(n).max(2);
+    let folds = inner_folds(n);
     for (i, &c) in classes_of.iter().enumerate() {
         fold_of[i] = seen[c] % folds;
         seen[c] += 1;
@@ -504,6 +538,27 @@ fn select_k(
         .collect()
 }
 
+/// The folds of the inner cross-validation that chooses k among `n` examples.
+fn inner_folds(n: usize) -> usize {
+    5.min(n).max(2)
+}
+
+/// The texture with the fewest examples (the first in label order on a
+/// tie) and its count.
+fn smallest_class(examples: &[TrainingExample]) -> Option<(String, usize)> {
+    let mut counts: std::collections::BTreeMap<&str, usize> = std::collections::BTreeMap::new();
+    for e in examples {
+        *counts.entry(e.label.as_str()).or_default() += 1;
+    }
+    counts
+        .into_iter()
+        .fold(None, |best: Option<(&str, usize)>, (l, n)| match best {
+            Some((_, b)) if b <= n => best,
+            _ => Some((l, n)),
+        })
+        .map(|(l, n)| (l.to_string(), n))
+}
+
 impl Model {
     pub fn train(
         profile_name: &str,
@@ -531,6 +586,7 @@ impl Model {
             examples,
             scaling,
             k_selection: None,
+            k_fallback: None,
             matrix: Vec::new(),
             norms: Vec::new(),
             classes: Vec::new(),
@@ -560,6 +616,117 @@ impl Model {
             model.k_selection = Some(scores);
         }
         Ok(model)
+    }
+
+    /// Train as the lab does: with the classifier's k where every texture has
+    /// at least k training examples; otherwise k is chosen by inner
+    /// cross-validation on these examples only (as `k = "auto"`, among the
+    /// candidates no larger than the smallest texture's count) and
+    /// `k_fallback` says why. `k = "auto"` trains as [`Model::train`].
+    pub fn train_adapting_k(
+        profile_name: &str,
+        analysis: &Analysis,
+        classifier: &Classifier,
+        examples: Vec<TrainingExample>,
+    ) -> Result<Model, ClassifyError> {
+        let Some((label, fewest)) = smallest_class(&examples) else {
+            return Model::train(profile_name, analysis, classifier, examples);
+        };
+        if classifier.k_is_auto() || classifier.k == 0 || fewest >= classifier.k {
+            return Model::train(profile_name, analysis, classifier, examples);
+        }
+        let mut candidates: Vec<usize> = classifier
+            .k_candidates
+            .clone()
+            .unwrap_or_else(|| AUTO_K_CANDIDATES.to_vec())
+            .into_iter()
+            .filter(|&k| k <= fewest)
+            .collect();
+        if candidates.is_empty() {
+            candidates.push(1);
+        }
+        let mut auto = classifier.clone();
+        auto.k = crate::profile::K_AUTO;
+        auto.k_candidates = Some(candidates);
+        let folds = inner_folds(examples.len());
+        let mut model = Model::train(profile_name, analysis, &auto, examples)?;
+        // The model keeps the profile's settings; only k was chosen.
+        model.classifier.k_candidates = classifier.k_candidates.clone();
+        model.k_fallback = Some(KFallback {
+            asked: classifier.k,
+            label,
+            scans: fewest,
+            folds,
+        });
+        Ok(model)
+    }
+
+    /// The classifier settings the model was asked to train with: the
+    /// profile's k (or `auto`) rather than the k it chose.
+    pub fn asked_classifier(&self) -> Classifier {
+        let mut c = self.classifier.clone();
+        if let Some(f) = &self.k_fallback {
+            c.k = f.asked;
+        } else if self.k_selection.is_some() {
+            c.k = crate::profile::K_AUTO;
+        }
+        c
+    }
+
+    /// One line saying that (and why) the profile's k was not used, or
+    /// `None` when it was.
+    pub fn k_notice(&self) -> Option<String> {
+        let f = self.k_fallback.as_ref()?;
+        let chosen = match self.k_selection.as_deref() {
+            Some(s) if s.len() > 1 => format!(", chosen by {}-fold CV", f.folds),
+            _ => ", the largest it supports".to_string(),
+        };
+        Some(format!(
+            "k = {} needs at least {} per texture, {} has {}: using k = {}{chosen}",
+            f.asked,
+            scans(f.asked),
+            f.label,
+            f.scans,
+            self.classifier.k
+        ))
+    }
+
+    /// Using the model under a profile whose classifier settings differ
+    /// from the ones it was trained with is an error naming the first
+    /// field that differs (k as the profile gives it, not as chosen).
+    pub fn check_classifier(&self, classifier: &Classifier) -> Result<(), ClassifyError> {
+        let (m, p) = (&self.asked_classifier(), classifier);
+        let differ = |field: &'static str, model: String, profile: String| {
+            Err(ClassifyError::SettingsDiffer {
+                field,
+                model,
+                profile,
+            })
+        };
+        if m.k != p.k {
+            return differ("classifier.k", m.k_text(), p.k_text());
+        }
+        if m.metric != p.metric {
+            return differ("classifier.metric", json(&m.metric), json(&p.metric));
+        }
+        if m.weights != p.weights {
+            return differ("classifier.weights", json(&m.weights), json(&p.weights));
+        }
+        if m.standardize != p.standardize {
+            return differ(
+                "classifier.standardize",
+                json(&m.standardize),
+                json(&p.standardize),
+            );
+        }
+        if (m.k_is_auto() || self.k_fallback.is_some()) && m.k_candidates != p.k_candidates {
+            return differ(
+                "classifier.k_candidates",
+                json(&m.k_candidates),
+                json(&p.k_candidates),
+            );
+        }
+        Ok(())
     }
 
     /// Builds the distance-ready copy of the examples.

@@ -11,7 +11,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::acquire::{self, SimulateOptions};
 use crate::analysis::FeatureExtractor;
-use crate::classify::{Model, TrainingExample};
+use crate::classify::{Model, TrainingExample, plural};
 use crate::cli::{Command, ProfileArg};
 use crate::evaluate;
 use crate::profile::LoadedProfile;
@@ -631,19 +631,22 @@ fn train(profile: &ProfileArg, paths: &[PathBuf], out: &Path) -> Result<(), Fail
     let mut ex = FeatureExtractor::new(&lp.profile.analysis);
     let examples = load_examples(paths, &mut ex)?;
     let n = examples.len();
-    let model = Model::train(
+    let model = Model::train_adapting_k(
         &lp.profile.name,
         &lp.profile.analysis,
         &lp.profile.classifier,
         examples,
     )
     .map_err(bad)?;
+    if let Some(note) = model.k_notice() {
+        eprintln!("note: {note}");
+    }
     model.save(out).map_err(runtime)?;
     println!(
-        "trained k-NN (k = {}) on {} recordings of {} classes ({}); model saved to {}",
+        "trained k-NN (k = {}) on {} of {} ({}); model saved to {}",
         model.classifier.k,
-        n,
-        model.labels.len(),
+        plural(n, "recording", "recordings"),
+        plural(model.labels.len(), "class", "classes"),
         model.labels.join(", "),
         out.display()
     );
@@ -663,6 +666,16 @@ fn classify(
     model
         .check_settings(&lp.profile.analysis)
         .map_err(|e| bad(format!("{}: {e}", model_path.display())))?;
+    // Other classifier settings still classify, but never silently.
+    if let Err(e) = model.check_classifier(&lp.profile.classifier) {
+        eprintln!(
+            "warning: {}: {e}; classifying with the model's settings",
+            model_path.display()
+        );
+    }
+    if let Some(note) = model.k_notice() {
+        eprintln!("note: {}: {note}", model_path.display());
+    }
     let mut ex = FeatureExtractor::new(&model.analysis);
     let files = recording::collect_files(files).map_err(bad)?;
     let mut rows = Vec::new();
@@ -720,14 +733,22 @@ fn evaluate_cmd(
     if shuffle_seed.is_some() {
         eval.shuffle_seed = shuffle_seed;
     }
-    let split = evaluate::split(examples, &eval).map_err(bad)?;
-    let model = Model::train(
+    let split = evaluate::split(examples, &eval).map_err(|e| match e {
+        evaluate::EvaluateError::NotEnough { .. } => {
+            bad(format!("{e}; cross-validate instead (--folds 5 or --loo)"))
+        }
+        e => bad(e),
+    })?;
+    let model = Model::train_adapting_k(
         &lp.profile.name,
         &lp.profile.analysis,
         &lp.profile.classifier,
         split.train,
     )
     .map_err(bad)?;
+    if let Some(note) = model.k_notice() {
+        eprintln!("note: {note}");
+    }
     let report = evaluate::evaluate(&model, &split.test).map_err(bad)?;
     if json {
         println!("{}", serde_json::to_string(&report).map_err(runtime)?);

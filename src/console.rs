@@ -133,10 +133,7 @@ pub fn run(lp: LoadedProfile, dataset: Option<PathBuf>) -> Result<(), Failure> {
     if let Some(view) = scan::newest_unsaved(&dataset, &mut ex) {
         app.on_unsaved_found(view);
     }
-    if let Some((m, file)) = dataset::load_saved_model(&lp, &dataset) {
-        app.dataset.model = Some(dataset::ModelInfo::of(&m, Some(file)));
-        app.model = Some(m);
-    }
+    dataset::adopt_saved_model(&mut app, &dataset);
     let jobs = Jobs::default();
     let mut screen = open_terminal()?;
     let ending = run_loop(&mut screen, &mut app, Some(&mut lab), &jobs, &signals);
@@ -221,10 +218,7 @@ pub fn replay(lp: LoadedProfile, path: &Path, dataset: Option<PathBuf>) -> Resul
     );
     if let Some(d) = &train_dir {
         refresh_dataset(&mut app);
-        if let Some((m, file)) = dataset::load_saved_model(&lp, d) {
-            app.dataset.model = Some(dataset::ModelInfo::of(&m, Some(file)));
-            app.model = Some(m);
-        }
+        dataset::adopt_saved_model(&mut app, d);
     }
     let jobs = Jobs::default();
     open_replay(&mut app, &jobs, path.to_path_buf(), files, train_dir);

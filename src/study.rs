@@ -596,8 +596,12 @@ pub struct SweepPoint {
     pub accuracy_mean: f64,
     pub accuracy_std: f64,
     pub macro_f1: f64,
-    /// The k used per fold (differs from the value only with k = "auto").
+    /// The k used per fold (differs from the value with k = "auto", and
+    /// where a texture had fewer training scans than k: see `k_notice`).
     pub k: Vec<usize>,
+    /// Why the value's k gave way to one chosen by CV in some folds.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub k_notice: Option<String>,
     /// Recordings evaluated (simulated sweeps: scans that finished).
     pub recordings: usize,
     /// Simulated sweeps: scans that did not finish (left out).
@@ -694,6 +698,7 @@ fn point(value: &toml::Value, r: &CvReport, data: &Dataset) -> SweepPoint {
         accuracy_std: r.accuracy_std,
         macro_f1: r.macro_f1,
         k: r.folds.iter().map(|f| f.k).collect(),
+        k_notice: r.k_notice(),
         recordings: data.scans.len(),
         incomplete: data.incomplete.len(),
         error: None,
@@ -803,6 +808,7 @@ pub fn sweep_simulated(
                     accuracy_std: f64::NAN,
                     macro_f1: f64::NAN,
                     k: Vec::new(),
+                    k_notice: None,
                     recordings: data.scans.len(),
                     incomplete: data.incomplete.len(),
                     error: Some(f.message().to_string()),
@@ -860,6 +866,9 @@ impl Sweep {
                 ));
             }
             out.push('\n');
+            if let Some(n) = &p.k_notice {
+                out.push_str(&format!("{:<w$}  ({n})\n", ""));
+            }
         }
         if let Some(best) = self
             .points
@@ -1013,7 +1022,7 @@ pub fn run_evaluate(
             lp.profile.simulator.seed
         )
     } else {
-        format!("{} recordings", data.scans.len())
+        crate::classify::plural(data.scans.len(), "recording", "recordings")
     };
     if let Some((_, key, _, values)) = &sweep_spec {
         let s = sweep(&lp.profile, &data, key, values, &plan, &|_| {})?;
@@ -1037,6 +1046,9 @@ pub fn run_evaluate(
     };
     let examples = data.examples(&lp.profile.analysis)?;
     let report = validate(&lp.profile, examples, groups.as_deref(), &plan)?;
+    if let Some(n) = report.k_notice() {
+        eprintln!("note: {n}");
+    }
     if json {
         println!("{}", serde_json::to_string(&report).map_err(bad)?);
     } else {

@@ -312,10 +312,9 @@ impl App {
             Key::Evaluate => {
                 self.dataset.busy = Some("evaluating…".into());
                 self.info(format!(
-                    "evaluating on {} ({} to train, {} to test per class)",
+                    "evaluating {} by {} (the profile's [evaluation])",
                     self.dataset.dir.display(),
-                    self.profile.profile.evaluation.train_per_class,
-                    self.profile.profile.evaluation.test_per_class
+                    crate::study::Plan::new(&self.profile.profile, &Default::default()).describe()
                 ));
                 return vec![Action::Evaluate];
             }

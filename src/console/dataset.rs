@@ -11,11 +11,14 @@ use std::path::{Path, PathBuf};
 
 use crossbeam_channel::{Receiver, Sender, unbounded};
 
+use super::app::App;
+use super::keymap::Key;
 use crate::analysis::FeatureExtractor;
 use crate::classify::{Model, TrainingExample};
-use crate::evaluate::{self, Report};
-use crate::profile::LoadedProfile;
+use crate::evaluate::Report;
+use crate::profile::{LoadedProfile, SplitMethod};
 use crate::recording;
+use crate::study::{self, Dataset, Plan, ValidationArgs};
 
 /// The model file the console writes into (and reads from) a dataset folder.
 pub const MODEL_FILE: &str = "model.json";
@@ -30,18 +33,27 @@ pub struct DatasetView {
     /// Scans waiting in `.unsaved/`.
     pub unsaved: usize,
     pub model: Option<ModelInfo>,
+    /// Why the model saved in the folder is not used (other settings).
+    pub model_note: Option<String>,
     pub report: Option<Report>,
+    /// How the last evaluation split the recordings ("leave-one-out").
+    pub report_method: Option<String>,
     /// Work in progress ("training on 120 recordings…").
     pub busy: Option<String>,
 }
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct ModelInfo {
     pub examples: usize,
     pub labels: Vec<String>,
     pub k: usize,
     /// Where it came from or was saved.
     pub file: Option<PathBuf>,
+    /// Incomplete recordings in the folder that training skipped: with the
+    /// examples, the recordings the model accounts for.
+    pub skipped: usize,
+    /// Why k is not the profile's ([`Model::k_notice`]).
+    pub k_notice: Option<String>,
 }
 
 impl ModelInfo {
@@ -51,6 +63,8 @@ impl ModelInfo {
             labels: model.labels.clone(),
             k: model.classifier.k,
             file,
+            skipped: 0,
+            k_notice: model.k_notice(),
         }
     }
 }
@@ -58,6 +72,19 @@ impl ModelInfo {
 impl DatasetView {
     pub fn total(&self) -> usize {
         self.counts.iter().map(|(_, n)| n).sum()
+    }
+
+    /// "trained on 21 recordings, the dataset has 22" when the folder's
+    /// recordings are not the ones the model was trained on (by count).
+    pub fn stale_model(&self) -> Option<String> {
+        let m = self.model.as_ref()?;
+        let usable = self.total().saturating_sub(m.skipped);
+        (usable != m.examples).then(|| {
+            format!(
+                "trained on {}, the dataset has {usable}",
+                crate::classify::plural(m.examples, "recording", "recordings")
+            )
+        })
     }
 }
 
@@ -144,11 +171,20 @@ pub enum JobResult {
         saved: Result<PathBuf, String>,
         then_predict: bool,
     },
-    Evaluated(Box<Report>),
+    Evaluated {
+        report: Box<Report>,
+        /// How it was split ("leave-one-out").
+        method: String,
+        /// Why not as the profile says, and why k is not the profile's: one
+        /// line, or empty.
+        note: String,
+    },
     Listed {
         entries: Vec<ReplayEntry>,
         /// The model the predictions came from, when one was trained for it.
         model: Option<Box<Model>>,
+        /// Incomplete recordings that training skipped.
+        skipped: usize,
     },
     Failed {
         what: &'static str,
@@ -211,31 +247,20 @@ impl Jobs {
         });
     }
 
-    /// Split `dir` as the profile's `[evaluation]` says, train, test.
+    /// Evaluate on `dir` as the profile's `[evaluation]` says; when its
+    /// holdout split cannot be met, by stratified k-fold or leave-one-out.
     pub fn evaluate(&self, lp: &LoadedProfile, dir: &Path) {
         let (lp, dir) = (lp.clone(), dir.to_path_buf());
-        self.spawn(move || {
-            let run = || -> Result<Report, String> {
-                let mut ex = FeatureExtractor::new(&lp.profile.analysis);
-                let (examples, _) = load_examples(&dir, &mut ex)?;
-                let split =
-                    evaluate::split(examples, &lp.profile.evaluation).map_err(|e| e.to_string())?;
-                let model = Model::train(
-                    &lp.profile.name,
-                    &lp.profile.analysis,
-                    &lp.profile.classifier,
-                    split.train,
-                )
-                .map_err(|e| e.to_string())?;
-                evaluate::evaluate(&model, &split.test).map_err(|e| e.to_string())
-            };
-            match run() {
-                Ok(r) => JobResult::Evaluated(Box::new(r)),
-                Err(error) => JobResult::Failed {
-                    what: "evaluate",
-                    error,
-                },
-            }
+        self.spawn(move || match evaluate_dataset(&lp, &dir) {
+            Ok((report, method, note)) => JobResult::Evaluated {
+                report: Box::new(report),
+                method,
+                note,
+            },
+            Err(error) => JobResult::Failed {
+                what: "evaluate",
+                error,
+            },
         });
     }
 
@@ -250,11 +275,12 @@ impl Jobs {
     ) {
         let lp = lp.clone();
         self.spawn(move || {
-            let mut trained = None;
+            let (mut trained, mut skipped) = (None, 0);
             let model = match model {
                 Some(m) => Some(m),
-                None => train_dir.and_then(|d| train(&lp, &d).ok()).map(|(m, _)| {
+                None => train_dir.and_then(|d| train(&lp, &d).ok()).map(|(m, n)| {
                     trained = Some(Box::new(m.clone()));
+                    skipped = n;
                     m
                 }),
             };
@@ -281,15 +307,106 @@ impl Jobs {
             JobResult::Listed {
                 entries,
                 model: trained,
+                skipped,
             }
         });
     }
 }
 
+/// The validation the profile's `[evaluation]` asks for, or, when its
+/// holdout split needs more scans of a texture than there are, stratified
+/// 5-fold cross-validation (every texture has at least 5) or leave-one-out;
+/// and the note saying so.
+pub fn evaluation_plan(lp: &LoadedProfile, examples: &[TrainingExample]) -> (Plan, Option<String>) {
+    let mut plan = Plan::new(&lp.profile, &ValidationArgs::default());
+    plan.threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let mut counts: std::collections::BTreeMap<&str, usize> = std::collections::BTreeMap::new();
+    for e in examples {
+        *counts.entry(e.label.as_str()).or_default() += 1;
+    }
+    let Some((label, fewest)) =
+        counts
+            .iter()
+            .fold(None, |b: Option<(&str, usize)>, (l, n)| match b {
+                Some((_, m)) if m <= *n => b,
+                _ => Some((l, *n)),
+            })
+    else {
+        return (plan, None);
+    };
+    let e = &lp.profile.evaluation;
+    let why = match plan.method {
+        SplitMethod::Holdout if fewest < e.train_per_class + e.test_per_class => format!(
+            "the holdout split needs {} per texture ({} to train, {} to test), {label} has {fewest}",
+            crate::classify::scans(e.train_per_class + e.test_per_class),
+            e.train_per_class,
+            e.test_per_class
+        ),
+        SplitMethod::KFold if plan.group_by.is_none() && plan.folds > examples.len() => format!(
+            "{}-fold cross-validation needs at least {}, there are {}",
+            plan.folds,
+            crate::classify::plural(plan.folds, "recording", "recordings"),
+            examples.len()
+        ),
+        _ => return (plan, None),
+    };
+    if fewest >= 5 {
+        plan.method = SplitMethod::KFold;
+        plan.folds = 5;
+        plan.group_by = None;
+    } else {
+        plan.method = SplitMethod::LeaveOneOut;
+        plan.group_by = None;
+    }
+    let how = if plan.method == SplitMethod::KFold {
+        "stratified 5-fold cross-validation".to_string()
+    } else {
+        "leave-one-out".to_string()
+    };
+    (plan, Some(format!("{why}: evaluating by {how} instead")))
+}
+
+/// Evaluate the complete recordings in `dir`: the report, how it was split,
+/// and a note (empty, or why not as the profile says; why not its k).
+pub fn evaluate_dataset(
+    lp: &LoadedProfile,
+    dir: &Path,
+) -> Result<(Report, String, String), String> {
+    let an = &lp.profile.analysis;
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let data =
+        Dataset::load(&[dir.to_path_buf()], an, threads).map_err(|f| f.message().to_string())?;
+    if data.scans.is_empty() {
+        return Err(format!(
+            "no complete recordings in {} to evaluate",
+            dir.display()
+        ));
+    }
+    let examples = data.examples(an).map_err(|f| f.message().to_string())?;
+    let (plan, why) = evaluation_plan(lp, &examples);
+    let groups = match &plan.group_by {
+        Some(g) => Some(data.groups(g).map_err(|f| f.message().to_string())?),
+        None => None,
+    };
+    let r = study::validate(&lp.profile, examples, groups.as_deref(), &plan)
+        .map_err(|f| f.message().to_string())?;
+    let note: Vec<String> = why.into_iter().chain(r.k_notice()).collect();
+    let report = Report {
+        labels: r.labels,
+        confusion: r.confusion,
+        accuracy: r.accuracy,
+        per_class: r.per_class,
+        train: r.train,
+        test: r.test,
+        predictions: r.predictions,
+    };
+    Ok((report, plan.describe(), note.join("; ")))
+}
+
 fn train(lp: &LoadedProfile, dir: &Path) -> Result<(Model, usize), String> {
     let mut ex = FeatureExtractor::new(&lp.profile.analysis);
     let (examples, skipped) = load_examples(dir, &mut ex)?;
-    let model = Model::train(
+    let model = Model::train_adapting_k(
         &lp.profile.name,
         &lp.profile.analysis,
         &lp.profile.classifier,
@@ -300,32 +417,59 @@ fn train(lp: &LoadedProfile, dir: &Path) -> Result<(Model, usize), String> {
 }
 
 /// A model saved in the dataset folder by an earlier session, if it fits
-/// the profile's analysis settings.
-pub fn load_saved_model(lp: &LoadedProfile, dir: &Path) -> Option<(Model, PathBuf)> {
+/// the profile's analysis and classifier settings; otherwise why not (no
+/// file is not a reason).
+pub fn load_saved_model(
+    lp: &LoadedProfile,
+    dir: &Path,
+) -> Result<Option<(Model, PathBuf)>, String> {
     let file = dir.join(MODEL_FILE);
-    let model = Model::load(&file).ok()?;
-    model.check_settings(&lp.profile.analysis).ok()?;
-    Some((model, file))
+    if !file.exists() {
+        return Ok(None);
+    }
+    let not_used = |e: String| format!("{} not used: {e}", file.display());
+    let model = Model::load(&file).map_err(|e| not_used(e.to_string()))?;
+    model
+        .check_settings(&lp.profile.analysis)
+        .and_then(|()| model.check_classifier(&lp.profile.classifier))
+        .map_err(|e| not_used(e.to_string()))?;
+    Ok(Some((model, file)))
+}
+
+/// Take up the model saved in `dir` by an earlier session, or say on the
+/// status line and in the Dataset panel why it is not used.
+pub fn adopt_saved_model(app: &mut App, dir: &Path) {
+    match load_saved_model(&app.profile, dir) {
+        Ok(None) => {}
+        Ok(Some((m, file))) => {
+            let mut info = ModelInfo::of(&m, Some(file));
+            info.skipped = incomplete_outside(&m, dir);
+            app.dataset.model = Some(info);
+            app.dataset.model_note = None;
+            app.model = Some(m);
+        }
+        Err(why) => {
+            let text = format!("{why} ({} trains a new one)", app.keys.name(Key::Train));
+            app.warn(text.clone());
+            app.dataset.model_note = Some(text);
+        }
+    }
+}
+
+/// Recordings under `dir` that are not among the model's examples and are
+/// incomplete: the ones its training skipped (or would skip).
+fn incomplete_outside(model: &Model, dir: &Path) -> usize {
+    let Ok(files) = recording::collect_files(&[dir.to_path_buf()]) else {
+        return 0;
+    };
+    let known: std::collections::HashSet<&str> =
+        model.examples.iter().map(|e| e.file.as_str()).collect();
+    files
+        .iter()
+        .filter(|f| !known.contains(f.display().to_string().as_str()))
+        .filter(|f| recording::read(f).is_ok_and(|r| !r.is_complete()))
+        .count()
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn counts_label_folders_and_unsaved_scans() {
-        let d = tempfile::tempdir().unwrap();
-        for (label, n) in [("S2", 3), ("S1", 2)] {
-            std::fs::create_dir_all(d.path().join(label)).unwrap();
-            for i in 0..n {
-                std::fs::write(d.path().join(label).join(format!("{label}_{i}.csv")), "").unwrap();
-            }
-        }
-        std::fs::create_dir_all(d.path().join(UNSAVED_DIR)).unwrap();
-        std::fs::write(d.path().join(UNSAVED_DIR).join("scan-001.csv"), "").unwrap();
-        let (counts, unsaved) = count(d.path());
-        assert_eq!(counts, vec![("S1".into(), 2), ("S2".into(), 3)]);
-        assert_eq!(unsaved, 1);
-        assert_eq!(count(&d.path().join("missing")), (vec![], 0));
-    }
-}
+mod tests;

@@ -156,6 +156,7 @@ pub fn app(width: u16, height: u16) -> App {
         labels: vec!["S1".into(), "S2".into(), "S3".into(), "S4".into()],
         k: 10,
         file: None,
+        ..ModelInfo::default()
     });
     app.dataset.report = Some(report());
     app.info("scan complete: p predicts, w stores it");

@@ -144,8 +144,15 @@ pub fn predict(model: &Model, features: &[f64], file: &Path) -> Result<Predictio
             .filter(|e| !same(&e.file))
             .cloned()
             .collect();
-        let reduced = Model::train(&model.profile, &model.analysis, &model.classifier, rest)
-            .map_err(|e| e.to_string())?;
+        // k as the profile asked, chosen again without this recording
+        // where the profile's k needed choosing: no leak of the test scan.
+        let reduced = Model::train_adapting_k(
+            &model.profile,
+            &model.analysis,
+            &model.asked_classifier(),
+            rest,
+        )
+        .map_err(|e| e.to_string())?;
         let prediction = reduced.classify(features).map_err(|e| e.to_string())?;
         return Ok(PredictionView {
             prediction,

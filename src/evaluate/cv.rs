@@ -21,7 +21,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
 use super::{ClassRate, EvaluateError, PredictionRow, class_rates, class_seed, evaluate};
-use crate::classify::{Model, TrainingExample};
+use crate::classify::{KFallback, Model, TrainingExample, plural};
 use crate::profile::{Analysis, Classifier, SplitMethod};
 
 /// The test indices of each fold.
@@ -60,7 +60,8 @@ pub fn make_folds(
         (SplitMethod::KFold, None) => {
             if folds < 2 || folds > n {
                 return Err(EvaluateError::Folds(format!(
-                    "{folds} folds need 2 to {n} examples per fold count (there are {n} examples)"
+                    "k-fold cross-validation takes 2 to {} (one per example at most), not {folds}",
+                    plural(n, "fold", "folds")
                 )));
             }
             let mut by: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
@@ -88,7 +89,10 @@ pub fn make_folds(
             }
             if folds < 2 || folds > by.len() {
                 return Err(EvaluateError::Folds(format!(
-                    "{folds} grouped folds need at least {folds} groups, and there are {}",
+                    "{} need at least {}, and there {} {}",
+                    plural(folds, "grouped fold", "grouped folds"),
+                    plural(folds, "group", "groups"),
+                    if by.len() == 1 { "is" } else { "are" },
                     by.len()
                 )));
             }
@@ -205,6 +209,52 @@ pub struct FoldResult {
     pub accuracy: f64,
     /// The k used (chosen by the inner cross-validation when k = "auto").
     pub k: usize,
+    /// Why this fold's training part did not use the profile's k.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub k_fallback: Option<KFallback>,
+}
+
+/// One line saying in how many folds the profile's k gave way to a k
+/// chosen by CV inside the training part, and which k they chose; `None`
+/// when every fold used the profile's k.
+pub fn k_notice(folds: &[FoldResult]) -> Option<String> {
+    let fell: Vec<(&FoldResult, &KFallback)> = folds
+        .iter()
+        .filter_map(|f| f.k_fallback.as_ref().map(|k| (f, k)))
+        .collect();
+    let (_, worst) = fell.iter().min_by_key(|(_, k)| k.scans)?;
+    let mut chosen: BTreeMap<usize, usize> = BTreeMap::new();
+    for (f, _) in &fell {
+        *chosen.entry(f.k).or_default() += 1;
+    }
+    let chosen: Vec<String> = chosen
+        .iter()
+        .map(|(k, n)| format!("k = {k} in {}", plural(*n, "fold", "folds")))
+        .collect();
+    let head = format!(
+        "k = {} needs at least {} per texture, {} has {}",
+        worst.asked,
+        crate::classify::scans(worst.asked),
+        worst.label,
+        worst.scans
+    );
+    if folds.len() == 1 {
+        return Some(format!(
+            "{head} in the training part: using k = {}, chosen by {}-fold CV inside it",
+            fell[0].0.k, worst.folds
+        ));
+    }
+    let others = folds.len() - fell.len();
+    let others = if others > 0 {
+        format!(", the profile's k in the other {others}")
+    } else {
+        String::new()
+    };
+    Some(format!(
+        "{head} in a training part: k chosen by {}-fold CV inside each such part ({}{others})",
+        worst.folds,
+        chosen.join(", ")
+    ))
 }
 
 /// A cross-validation's result. Its JSON keeps the `evaluate --json`
@@ -280,7 +330,7 @@ pub fn cross_validate(
     seed: u64,
     threads: usize,
 ) -> Result<CvReport, EvaluateError> {
-    let run = |test_idx: &Vec<usize>| -> Result<(super::Report, usize), EvaluateError> {
+    let run = |test_idx: &Vec<usize>| -> Result<(super::Report, usize, Option<KFallback>), EvaluateError> {
         let mut is_test = vec![false; examples.len()];
         for &i in test_idx {
             is_test[i] = true;
@@ -292,12 +342,12 @@ pub fn cross_validate(
             .map(|(e, _)| e.clone())
             .collect();
         let test: Vec<TrainingExample> = test_idx.iter().map(|&i| examples[i].clone()).collect();
-        let model = Model::train(profile_name, analysis, classifier, train)?;
-        Ok((evaluate(&model, &test)?, model.classifier.k))
+        let model = Model::train_adapting_k(profile_name, analysis, classifier, train)?;
+        Ok((evaluate(&model, &test)?, model.classifier.k, model.k_fallback))
     };
     let threads = threads.clamp(1, folds.len().max(1));
-    let mut results: Vec<Option<Result<(super::Report, usize), EvaluateError>>> =
-        (0..folds.len()).map(|_| None).collect();
+    type FoldRun = Result<(super::Report, usize, Option<KFallback>), EvaluateError>;
+    let mut results: Vec<Option<FoldRun>> = (0..folds.len()).map(|_| None).collect();
     std::thread::scope(|s| {
         let chunks = results.chunks_mut(folds.len().div_ceil(threads).max(1));
         let mut start = 0;
@@ -321,7 +371,7 @@ pub fn cross_validate(
     let mut test = Vec::new();
     let mut fold_results = Vec::new();
     for r in results {
-        let (report, k) = r.expect("every fold ran")?;
+        let (report, k, k_fallback) = r.expect("every fold ran")?;
         for (i, li) in report.labels.iter().enumerate() {
             for (j, lj) in report.labels.iter().enumerate() {
                 let (Ok(a), Ok(b)) = (labels.binary_search(li), labels.binary_search(lj)) else {
@@ -334,6 +384,7 @@ pub fn cross_validate(
             tested: report.tested(),
             accuracy: report.accuracy,
             k,
+            k_fallback,
         });
         test.extend(report.test);
         predictions.extend(report.predictions);
@@ -365,6 +416,11 @@ pub fn cross_validate(
 }
 
 impl CvReport {
+    /// See [`k_notice`].
+    pub fn k_notice(&self) -> Option<String> {
+        k_notice(&self.folds)
+    }
+
     /// As [`super::Report::table`], plus the spread and the macro-F1.
     pub fn table(&self) -> String {
         let r = super::Report {

@@ -5,6 +5,7 @@
 use std::path::PathBuf;
 
 use crate::acquire::HOMING_HELP;
+use crate::classify::plural;
 use crate::servo::{Mode, ServoEvent, Telemetry};
 
 use super::super::dataset::{JobResult, ModelInfo};
@@ -209,21 +210,29 @@ impl App {
                 then_predict,
             } => {
                 let file = saved.as_ref().ok().cloned();
-                self.dataset.model = Some(ModelInfo::of(&model, file));
+                let mut info = ModelInfo::of(&model, file);
+                info.skipped = skipped;
+                self.dataset.model = Some(info);
+                self.dataset.model_note = None;
                 let skipped = if skipped > 0 {
                     format!(", {skipped} incomplete skipped")
                 } else {
                     String::new()
                 };
                 let text = format!(
-                    "trained k-NN (k = {}) on {} recordings of {}{skipped}",
+                    "trained k-NN (k = {}) on {} of {}{skipped}",
                     model.classifier.k,
-                    model.examples.len(),
+                    plural(model.examples.len(), "recording", "recordings"),
                     model.labels.join(", ")
                 );
-                match saved {
-                    Ok(p) => self.info(format!("{text}; saved {}", p.display())),
-                    Err(e) => self.warn(format!("{text}; not saved: {e}")),
+                // Why k is not the profile's comes first: it must be seen.
+                match (saved, model.k_notice()) {
+                    (Ok(p), None) => self.info(format!("{text}; saved {}", p.display())),
+                    (Ok(p), Some(n)) => self.warn(format!("{n}; {text}; saved {}", p.display())),
+                    (Err(e), n) => self.warn(format!(
+                        "{}{text}; not saved: {e}",
+                        n.map_or(String::new(), |n| format!("{n}; "))
+                    )),
                 }
                 self.model = Some(*model);
                 if then_predict {
@@ -231,21 +240,37 @@ impl App {
                 }
                 vec![]
             }
-            JobResult::Evaluated(report) => {
-                self.info(format!(
-                    "evaluation: {}/{} right ({:.1} %)",
+            JobResult::Evaluated {
+                report,
+                method,
+                note,
+            } => {
+                let text = format!(
+                    "evaluation by {method}: {}/{} right ({:.1} %)",
                     report.correct(),
                     report.tested(),
                     report.accuracy * 100.0
-                ));
+                );
+                if note.is_empty() {
+                    self.info(text);
+                } else {
+                    self.warn(format!("{note}; {text}"));
+                }
                 self.dataset.report = Some(*report);
+                self.dataset.report_method = Some(method);
                 vec![]
             }
-            JobResult::Listed { entries, model } => {
+            JobResult::Listed {
+                entries,
+                model,
+                skipped,
+            } => {
                 if let Some(m) = model
                     && self.model.is_none()
                 {
-                    self.dataset.model = Some(ModelInfo::of(&m, None));
+                    let mut info = ModelInfo::of(&m, None);
+                    info.skipped = skipped;
+                    self.dataset.model = Some(info);
                     // The recording already open was analysed before there was a model.
                     if let Some(s) = self.replay.as_mut().and_then(|r| r.scan.as_mut())
                         && s.prediction.is_none()
@@ -264,7 +289,14 @@ impl App {
                     r.listing = false;
                     let (right, n) = r.score();
                     if n > 0 {
-                        self.info(format!("replay: {right} of {n} recordings predicted right"));
+                        let text = format!(
+                            "replay: {right} of {} predicted right",
+                            plural(n, "recording", "recordings")
+                        );
+                        match self.model.as_ref().and_then(|m| m.k_notice()) {
+                            Some(note) => self.warn(format!("{note}; {text}")),
+                            None => self.info(text),
+                        }
                     }
                 }
                 vec![]

@@ -9,6 +9,7 @@ use ratatui::text::Line;
 use ratatui::widgets::{Paragraph, Widget};
 
 use super::{elide_middle, fit_lines, frame};
+use crate::classify::plural;
 use crate::console::app::App;
 use crate::console::keymap::Key;
 
@@ -27,8 +28,8 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
     } else {
         let per: Vec<String> = d.counts.iter().map(|(l, n)| format!("{l}: {n}")).collect();
         v.push(Line::raw(format!(
-            "{} recordings — {}",
-            d.total(),
+            "{} — {}",
+            plural(d.total(), "recording", "recordings"),
             per.join("  ")
         )));
     }
@@ -40,35 +41,46 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
     }
     v.push(Line::raw(match (&d.model, &d.busy) {
         (_, Some(b)) => b.clone(),
-        (Some(m), None) => {
-            let stale = if d.total() > m.examples {
-                format!(
-                    "; {} newer stored ({} retrains)",
-                    d.total() - m.examples,
-                    app.keys.name(Key::Train)
-                )
-            } else {
-                String::new()
-            };
-            format!(
-                "model: k-NN k = {} on {} recordings of {}{stale}",
+        (Some(m), None) => match d.stale_model() {
+            Some(stale) => format!(
+                "model: k-NN k = {} {stale} — press {}",
                 m.k,
-                m.examples,
+                app.keys.name(Key::Train)
+            ),
+            None => format!(
+                "model: k-NN k = {} on {} of {}",
+                m.k,
+                plural(m.examples, "recording", "recordings"),
                 m.labels.join(", ")
-            )
-        }
+            ),
+        },
         (None, None) => format!(
             "model: none ({} trains, {} evaluates)",
             app.keys.name(Key::Train),
             app.keys.name(Key::Evaluate)
         ),
     }));
+    // Why k is not the profile's, or why the saved model is not used.
+    if let Some(note) = d
+        .model
+        .as_ref()
+        .and_then(|m| m.k_notice.as_ref())
+        .or(d.model_note.as_ref())
+    {
+        v.push(Line::styled(
+            note.clone(),
+            Style::new().add_modifier(Modifier::DIM),
+        ));
+    }
     match &d.report {
         None => v.push(Line::raw("no evaluation yet")),
         Some(r) => {
             v.push(Line::styled(
                 format!(
-                    "evaluation: {}/{} right ({:.1} %); rows true, columns classified as",
+                    "evaluation{}: {}/{} right ({:.1} %); rows true, columns classified as",
+                    d.report_method
+                        .as_ref()
+                        .map_or(String::new(), |m| format!(" by {m}")),
                     r.correct(),
                     r.tested(),
                     r.accuracy * 100.0

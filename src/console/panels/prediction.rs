@@ -78,7 +78,8 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
             if rows > 4 + pr.votes.len() {
                 for (label, n) in &pr.votes {
                     let bar = "█".repeat(n * 12 / k);
-                    v.push(Line::raw(format!("{label:>6} {n:>3} votes {bar}")));
+                    let votes = if *n == 1 { "vote " } else { "votes" };
+                    v.push(Line::raw(format!("{label:>6} {n:>3} {votes} {bar}")));
                 }
             } else {
                 let votes: Vec<String> = pr.votes.iter().map(|(l, n)| format!("{l} {n}")).collect();

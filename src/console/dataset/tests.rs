@@ -1,0 +1,279 @@
+//! The console's dataset jobs on simulated folders: a first session with 5
+//! scans per texture trains and evaluates a sound model and says why k or
+//! the split is not the profile's; stale and mismatched models are flagged.
+
+use std::time::{Duration, Instant};
+
+use super::*;
+use crate::console::fixtures;
+use crate::console::panels::{Panel, render_panel};
+
+#[test]
+fn counts_label_folders_and_unsaved_scans() {
+    let d = tempfile::tempdir().unwrap();
+    for (label, n) in [("S2", 3), ("S1", 2)] {
+        std::fs::create_dir_all(d.path().join(label)).unwrap();
+        for i in 0..n {
+            std::fs::write(d.path().join(label).join(format!("{label}_{i}.csv")), "").unwrap();
+        }
+    }
+    std::fs::create_dir_all(d.path().join(UNSAVED_DIR)).unwrap();
+    std::fs::write(d.path().join(UNSAVED_DIR).join("scan-001.csv"), "").unwrap();
+    let (counts, unsaved) = count(d.path());
+    assert_eq!(counts, vec![("S1".into(), 2), ("S2".into(), 3)]);
+    assert_eq!(unsaved, 1);
+    assert_eq!(count(&d.path().join("missing")), (vec![], 0));
+}
+
+/// `per_class` simulated scans of every texture of the thesis profile.
+fn simulated(per_class: usize) -> (tempfile::TempDir, LoadedProfile) {
+    let d = tempfile::tempdir().unwrap();
+    let lp = LoadedProfile::thesis();
+    let opts = crate::acquire::SimulateOptions {
+        out: d.path().to_path_buf(),
+        per_class,
+        seed: 7,
+        threads: 2,
+        gzip: false,
+        overwrite: false,
+    };
+    crate::acquire::simulate_dataset(&lp, &opts, &|_, _| {}).unwrap();
+    (d, lp)
+}
+
+/// The next job result, waiting up to a minute (the machine may be busy).
+fn next_result(jobs: &Jobs) -> JobResult {
+    let deadline = Instant::now() + Duration::from_secs(60);
+    loop {
+        if let Some(r) = jobs.poll().into_iter().next() {
+            return r;
+        }
+        assert!(Instant::now() < deadline, "no job result within 60 s");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn text(buf: &ratatui::buffer::Buffer) -> String {
+    let a = buf.area;
+    let mut out = String::new();
+    for y in a.y..a.bottom() {
+        for x in a.x..a.right() {
+            out.push_str(buf[(x, y)].symbol());
+        }
+        out.push('\n');
+    }
+    out
+}
+
+fn dataset_panel(app: &App) -> String {
+    let area = ratatui::layout::Rect::new(0, 0, 110, 16);
+    let mut buf = ratatui::buffer::Buffer::empty(area);
+    render_panel(Panel::Dataset, app, area, &mut buf);
+    text(&buf)
+}
+
+fn examples(per_class: &[(&str, usize)]) -> Vec<TrainingExample> {
+    per_class
+        .iter()
+        .flat_map(|&(l, n)| {
+            (0..n).map(move |i| TrainingExample {
+                file: format!("{l}/{i}.csv"),
+                label: l.to_string(),
+                features: vec![i as f64],
+            })
+        })
+        .collect()
+}
+
+#[test]
+fn e_follows_the_profiles_evaluation_and_falls_back_when_the_split_cannot_be_met() {
+    let mut lp = LoadedProfile::thesis();
+    let (plan, note) = evaluation_plan(&lp, &examples(&[("S1", 30), ("S2", 31)]));
+    assert_eq!(plan.method, SplitMethod::Holdout);
+    assert_eq!(note, None);
+    let (plan, note) = evaluation_plan(&lp, &examples(&[("S1", 5), ("S2", 6)]));
+    assert_eq!((plan.method, plan.folds), (SplitMethod::KFold, 5));
+    assert_eq!(
+        note.as_deref(),
+        Some(
+            "the holdout split needs 30 scans per texture (20 to train, 10 to test), S1 has 5: \
+             evaluating by stratified 5-fold cross-validation instead"
+        )
+    );
+    let (plan, note) = evaluation_plan(&lp, &examples(&[("S1", 4), ("S2", 3)]));
+    assert_eq!(plan.method, SplitMethod::LeaveOneOut);
+    assert!(
+        note.unwrap()
+            .ends_with("S2 has 3: evaluating by leave-one-out instead")
+    );
+    // A profile asking for k-fold gets k-fold, with its folds.
+    lp.profile.evaluation.method = SplitMethod::KFold;
+    lp.profile.evaluation.folds = Some(4);
+    let (plan, note) = evaluation_plan(&lp, &examples(&[("S1", 5), ("S2", 5)]));
+    assert_eq!(
+        (plan.method, plan.folds, note),
+        (SplitMethod::KFold, 4, None)
+    );
+}
+
+#[test]
+fn a_first_session_of_five_scans_per_texture_trains_and_evaluates_a_sound_model() {
+    let (d, lp) = simulated(5);
+    let mut app = fixtures::app(120, 40);
+    app.model = None;
+    app.dataset = DatasetView {
+        dir: d.path().to_path_buf(),
+        ..DatasetView::default()
+    };
+    app.dataset.counts = count(d.path()).0;
+    let jobs = Jobs::default();
+
+    // e: the holdout split needs 30 per texture; it cross-validates instead.
+    jobs.evaluate(&lp, d.path());
+    let r = next_result(&jobs);
+    let JobResult::Evaluated {
+        report,
+        method,
+        note,
+    } = &r
+    else {
+        panic!("{r:?}");
+    };
+    assert!(report.accuracy >= 0.9, "accuracy {}", report.accuracy);
+    assert_eq!(method, "5-fold cross-validation, seed 0");
+    assert!(
+        note.starts_with(
+            "the holdout split needs 30 scans per texture (20 to train, 10 to test), S1 has 5: \
+             evaluating by stratified 5-fold cross-validation instead; \
+             k = 10 needs at least 10 scans per texture, S1 has 4 in a training part"
+        ),
+        "{note}"
+    );
+    app.on_job(r);
+    assert!(
+        app.status.text.starts_with("the holdout split needs 30"),
+        "{}",
+        app.status.text
+    );
+    assert!(
+        app.status
+            .text
+            .contains("evaluation by 5-fold cross-validation, seed 0: "),
+        "{}",
+        app.status.text
+    );
+    assert!(dataset_panel(&app).contains("evaluation by 5-fold cross-validation"));
+
+    // T: k = 10 cannot be met by 5 per texture; the status line says so.
+    jobs.train(&lp, d.path(), false);
+    let r = next_result(&jobs);
+    app.on_job(r);
+    assert!(
+        app.status
+            .text
+            .starts_with("k = 10 needs at least 10 scans per texture, S1 has 5: using k = "),
+        "{}",
+        app.status.text
+    );
+    assert!(
+        app.status.text.contains("trained k-NN"),
+        "{}",
+        app.status.text
+    );
+    let panel = dataset_panel(&app);
+    assert!(
+        panel.contains("on 20 recordings of S1, S2, S3, S4"),
+        "{panel}"
+    );
+    assert!(panel.contains("k = 10 needs at least 10 scans"), "{panel}");
+
+    // The replay browser predicts each stored scan left out of the model.
+    let files = recording::collect_files(&[d.path().to_path_buf()]).unwrap();
+    app.replay = Some(crate::console::replay::Replay::new(
+        d.path().to_path_buf(),
+        files.clone(),
+    ));
+    jobs.list(&lp, files, app.model.clone(), None);
+    let r = next_result(&jobs);
+    app.on_job(r);
+    let (right, n) = app.replay.as_ref().unwrap().score();
+    assert_eq!(n, 20);
+    assert!(right >= 18, "{right} of {n} right");
+    assert!(
+        app.status
+            .text
+            .starts_with("k = 10 needs at least 10 scans per texture")
+            && app.status.text.contains("of 20 recordings predicted right"),
+        "{}",
+        app.status.text
+    );
+}
+
+#[test]
+fn a_stale_model_is_flagged_where_it_is_shown() {
+    let mut app = fixtures::app(120, 40);
+    // The fixture's model was trained on all 121 recordings: not stale.
+    assert_eq!(app.dataset.stale_model(), None);
+    assert!(dataset_panel(&app).contains("model: k-NN k = 10 on 121 recordings of S1"));
+    app.dataset.counts[0].1 += 1;
+    assert!(
+        dataset_panel(&app).contains(
+            "model: k-NN k = 10 trained on 121 recordings, the dataset has 122 — press T"
+        ),
+        "{}",
+        dataset_panel(&app)
+    );
+    // Incomplete recordings that training skipped do not make it stale.
+    app.dataset.model.as_mut().unwrap().skipped = 1;
+    assert_eq!(app.dataset.stale_model(), None);
+}
+
+#[test]
+fn a_saved_model_with_other_classifier_settings_is_not_used_silently() {
+    let (d, lp) = simulated(3);
+    let (examples, _) =
+        load_examples(d.path(), &mut FeatureExtractor::new(&lp.profile.analysis)).unwrap();
+    let model = Model::train_adapting_k(
+        &lp.profile.name,
+        &lp.profile.analysis,
+        &lp.profile.classifier,
+        examples,
+    )
+    .unwrap();
+    model.save(&d.path().join(MODEL_FILE)).unwrap();
+
+    // Under the profile it was trained with, it is taken up.
+    let mut app = fixtures::app(120, 40);
+    app.model = None;
+    app.dataset.model = None;
+    adopt_saved_model(&mut app, d.path());
+    assert!(app.model.is_some());
+    assert_eq!(app.dataset.model.as_ref().unwrap().examples, 12);
+    assert_eq!(app.dataset.model_note, None);
+
+    // Under a profile with k = 3 it is not, and both places say why.
+    let mut app = fixtures::app(120, 40);
+    app.model = None;
+    app.dataset.model = None;
+    app.profile.profile.classifier.k = 3;
+    adopt_saved_model(&mut app, d.path());
+    assert!(app.model.is_none());
+    assert!(
+        app.status.text.contains(
+            "model.json not used: the model was trained with classifier.k = 10 but the profile \
+             has classifier.k = 3"
+        ),
+        "{}",
+        app.status.text
+    );
+    assert!(
+        app.status.text.ends_with("(T trains a new one)"),
+        "{}",
+        app.status.text
+    );
+    assert_eq!(
+        app.dataset.model_note.as_deref(),
+        Some(app.status.text.as_str())
+    );
+    assert!(dataset_panel(&app).contains("model.json not used"));
+}
