@@ -324,6 +324,8 @@ struct Parser<'a> {
     meta_lines: HashMap<String, usize>,
     /// (N, line) of the trailer once seen.
     trailer: Option<(usize, usize)>,
+    /// The line of the last row read.
+    last_row_line: usize,
 }
 
 impl<'a> Parser<'a> {
@@ -336,6 +338,7 @@ impl<'a> Parser<'a> {
             recording: Recording::default(),
             meta_lines: HashMap::new(),
             trailer: None,
+            last_row_line: 0,
         }
     }
 
@@ -489,10 +492,47 @@ impl<'a> Parser<'a> {
                 }
                 self.row_carefully(line, &mut row)?;
             }
+            self.check_time(row[0])?;
             for (column, &value) in self.recording.data.iter_mut().zip(&row) {
                 column.push(value);
             }
         }
+        if let (Some(&first), Some(&last)) = (
+            self.recording.data[0].first(),
+            self.recording.data[0].last(),
+        ) && self.recording.len() > 1
+            && last <= first
+        {
+            return Err(self.error_at(
+                self.last_row_line,
+                format!(
+                    "t_s never increases: all {} samples are at {last} s",
+                    self.recording.len()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The time of the row just read (on `self.line`): a finite number of
+    /// seconds, never less than the row before's. Equal neighbours pass:
+    /// `t_s` is written to the microsecond, and two ticks of a loop catching
+    /// up can fall in one.
+    fn check_time(&mut self, t: f64) -> Result<(), RecordingError> {
+        if !t.is_finite() {
+            return Err(self.error(format!(
+                "t_s is {t}: the time must be a finite number of seconds"
+            )));
+        }
+        if let Some(&before) = self.recording.data[0].last()
+            && t < before
+        {
+            return Err(self.error(format!(
+                "t_s goes back from {before} s (line {}) to {t} s: the time must never decrease",
+                self.last_row_line
+            )));
+        }
+        self.last_row_line = self.line;
         Ok(())
     }
 
@@ -568,6 +608,13 @@ impl<'a> Parser<'a> {
         let value = table.remove(key).ok_or_else(|| {
             self.error(format!("metadata `{key}`: the line holds no value for it"))
         })?;
+        if key == "label" {
+            let label = value.as_str().ok_or_else(|| {
+                self.error("metadata `label`: must be a string (the texture's name)")
+            })?;
+            check_label(label)
+                .map_err(|reason| self.error(format!("metadata `label`: {reason}")))?;
+        }
         self.meta_lines.insert(key.to_string(), self.line);
         self.recording.meta.push((key.to_string(), value));
         Ok(())

@@ -436,3 +436,99 @@ fn a_holdout_through_the_study_code_takes_the_same_split_as_plain_evaluate() {
     let want: BTreeSet<String> = shuffled.test.iter().map(|e| e.file.clone()).collect();
     assert_eq!(report.test.iter().cloned().collect::<BTreeSet<_>>(), want);
 }
+
+/// Runs the binary in the crate's folder: (exit code, stderr).
+fn hapticlab(args: &[&str]) -> (Option<i32>, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_hapticlab"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn the_cli_refuses_what_is_not_a_recording_naming_file_line_and_key() {
+    for (file, line, key_and_why) in [
+        ("time_nan.csv", 13, "t_s is NaN"),
+        ("time_goes_back.csv", 15, "t_s goes back"),
+        ("time_never_increases.csv", 19, "t_s never increases"),
+        ("label_empty.csv", 2, "metadata `label`: label \"\""),
+        (
+            "label_newline.csv",
+            2,
+            "metadata `label`: label \"S2\\nS3\"",
+        ),
+        ("label_path.csv", 2, "metadata `label`: label \"../../etc\""),
+    ] {
+        let path = format!("tests/data/broken/{file}");
+        let expected = format!("{path}:{line}: {key_and_why}");
+        let (code, stderr) = hapticlab(&["features", &path]);
+        assert_eq!(code, Some(2), "features {file}: {stderr}");
+        assert!(stderr.contains(&expected), "features {file}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "one message: {stderr}");
+        // `inspect` reports a dataset's health: the file is unreadable, on one line.
+        let out = Command::new(env!("CARGO_BIN_EXE_hapticlab"))
+            .args(["inspect", &path])
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            stdout
+                .lines()
+                .any(|l| l.starts_with("unusable: ") && l.contains(&expected)),
+            "inspect {file}: {stdout}"
+        );
+    }
+}
+
+#[test]
+fn the_cli_refuses_bins_that_are_not_a_pair() {
+    let (code, stderr) = hapticlab(&["check", "profiles/invalid/bins-three-numbers.toml"]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(
+        stderr.contains("profiles/invalid/bins-three-numbers.toml:59:8: bins must be [first, last], two numbers; got more"),
+        "{stderr}"
+    );
+    // Two million entries: refused at the key, not read as [1, 1].
+    let dir = tempfile::tempdir().unwrap();
+    let thesis =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/profiles/thesis.toml"))
+            .unwrap();
+    assert!(thesis.contains("\nbins = [1, 49]\n"));
+    let huge = format!("[{}]", vec!["1"; 2_000_000].join(", "));
+    let path = dir.path().join("huge-bins.toml");
+    std::fs::write(
+        &path,
+        thesis.replace("\nbins = [1, 49]\n", &format!("\nbins = {huge}\n")),
+    )
+    .unwrap();
+    let line = thesis.lines().position(|l| l == "bins = [1, 49]").unwrap() + 1;
+    let (code, stderr) = hapticlab(&["check", path.to_str().unwrap()]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(
+        stderr.contains(&format!(
+            "huge-bins.toml:{line}:8: bins must be [first, last], two numbers; got more"
+        )),
+        "{stderr}"
+    );
+    for (bins, why) in [("[1]", "got one"), ("[]", "got none")] {
+        std::fs::write(
+            &path,
+            thesis.replace("\nbins = [1, 49]\n", &format!("\nbins = {bins}\n")),
+        )
+        .unwrap();
+        let (code, stderr) = hapticlab(&["check", path.to_str().unwrap()]);
+        assert_eq!(code, Some(2), "{stderr}");
+        assert!(
+            stderr.contains(&format!(
+                ":{line}:8: bins must be [first, last], two numbers; {why}"
+            )),
+            "{stderr}"
+        );
+    }
+}

@@ -73,7 +73,7 @@ pub struct Analysis {
     pub spectrum: SpectrumKind,
     /// First and last DFT bin kept, inclusive (thesis: 1..49, DC dropped).
     /// Ignored when `band` is set.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "bins_pair")]
     pub bins: [usize; 2],
     /// More signal columns, analysed like `channel` and their features
     /// concatenated after its own, in this order.
@@ -83,7 +83,11 @@ pub struct Analysis {
     pub taper: Taper,
     /// The frequencies kept, [low, high] inclusive, instead of `bins`: in Hz
     /// for a time axis (`t_s`), in cycles/mm for a position axis (`*_m`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "band_pair"
+    )]
     pub band: Option<[f64; 2]>,
     /// Welch only: points per segment (default: a quarter of the window).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -96,6 +100,57 @@ pub struct Analysis {
 /// What `window = "scan-leg"` reads as until [`Profile::resolve_window`]
 /// works out the leg's extent: [0, +inf], which no validation accepts.
 pub(super) const SCAN_LEG: [f64; 2] = [0.0, f64::INFINITY];
+
+/// `[a, b]` and nothing more: serde's arrays stop reading after their
+/// length, so `bins = [1, 49, 3]` would pass as `[1, 49]`. Stops at the third
+/// element, so a huge array costs no more than TOML's own parsing.
+struct Pair<T> {
+    key: &'static str,
+    what: &'static str,
+    marker: std::marker::PhantomData<T>,
+}
+
+impl<'de, T: Deserialize<'de>> serde::de::Visitor<'de> for Pair<T> {
+    type Value = [T; 2];
+    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} = {}", self.key, self.what)
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<[T; 2], A::Error> {
+        let wrong = |n: &str| {
+            serde::de::Error::custom(format!(
+                "{} must be {}, two numbers; got {n}",
+                self.key, self.what
+            ))
+        };
+        let Some(a) = seq.next_element()? else {
+            return Err(wrong("none"));
+        };
+        let Some(b) = seq.next_element()? else {
+            return Err(wrong("one"));
+        };
+        if seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
+            return Err(wrong("more"));
+        }
+        Ok([a, b])
+    }
+}
+
+fn bins_pair<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[usize; 2], D::Error> {
+    d.deserialize_seq(Pair {
+        key: "bins",
+        what: "[first, last]",
+        marker: std::marker::PhantomData,
+    })
+}
+
+fn band_pair<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<[f64; 2]>, D::Error> {
+    d.deserialize_seq(Pair {
+        key: "band",
+        what: "[low, high]",
+        marker: std::marker::PhantomData,
+    })
+    .map(Some)
+}
 
 fn window_or_scan_leg<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
     #[derive(Deserialize)]
