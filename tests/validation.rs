@@ -532,3 +532,98 @@ fn the_cli_refuses_bins_that_are_not_a_pair() {
         );
     }
 }
+
+/// The `hapticlab-simulate-*` folders under `tmp`.
+fn scratch_folders(tmp: &std::path::Path) -> Vec<std::path::PathBuf> {
+    std::fs::read_dir(tmp)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| {
+            p.file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with("hapticlab-simulate-"))
+        })
+        .collect()
+}
+
+/// Whether any file under `dir` ends in `.csv`.
+fn holds_a_scan(dir: &std::path::Path) -> bool {
+    std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .any(|e| {
+            let p = e.path();
+            if p.is_dir() {
+                holds_a_scan(&p)
+            } else {
+                p.extension().is_some_and(|x| x == "csv")
+            }
+        })
+}
+
+/// Polls `cond` until it holds, for at most `limit`.
+fn wait_for(limit: std::time::Duration, mut cond: impl FnMut() -> bool) -> bool {
+    let start = std::time::Instant::now();
+    while start.elapsed() < limit {
+        if cond() {
+            return true;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    cond()
+}
+
+#[test]
+fn ctrl_c_during_evaluate_simulate_removes_its_temporary_folder() {
+    use std::time::Duration;
+    let tmp = tempfile::tempdir().unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_hapticlab"))
+        .args([
+            "evaluate",
+            "--simulate",
+            "--per-class",
+            "400",
+            "--threads",
+            "2",
+        ])
+        .env("TMPDIR", tmp.path())
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Mid-simulation: the folder exists and holds scans.
+    let started = wait_for(Duration::from_secs(60), || {
+        scratch_folders(tmp.path()).iter().any(|d| holds_a_scan(d))
+    });
+    if !started {
+        let _ = child.kill();
+        panic!("no simulated scan appeared in {}", tmp.path().display());
+    }
+    let interrupt = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(interrupt.success());
+    let mut status = None;
+    wait_for(Duration::from_secs(60), || {
+        status = child.try_wait().unwrap();
+        status.is_some()
+    });
+    let Some(status) = status else {
+        let _ = child.kill();
+        panic!("evaluate --simulate still runs 60 s after Ctrl-C");
+    };
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut stderr).unwrap();
+    assert_eq!(status.code(), Some(130), "{stderr}");
+    assert!(
+        stderr.contains("interrupted: removed the temporary folder"),
+        "{stderr}"
+    );
+    assert_eq!(
+        scratch_folders(tmp.path()),
+        Vec::<std::path::PathBuf>::new(),
+        "{stderr}"
+    );
+}
