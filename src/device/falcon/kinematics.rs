@@ -32,7 +32,10 @@
 //! `[falcon] origin_m` (default (0, 0, 0.16): the thesis's waypoints, at
 //! z = −6…−2 cm, land at Falcon z = 0.10…0.14).
 //!
-//! Pure functions and a small solver state: no I/O, no allocation.
+//! The geometry, the inverse kinematics and the frame live in the profile
+//! (`crate::profile::falcon_reach`), which checks waypoints against the
+//! Falcon's reach without depending on the device layer; they are re-exported
+//! here. Pure functions and a small solver state: no I/O, no allocation.
 
 pub use crate::profile::falcon_reach::{
     A, B, C, D, DEFAULT_ENCODER_OFFSET_DEG, DEFAULT_ORIGIN_M, E, F, FALCON_MAX_M, FALCON_MIN_M,
