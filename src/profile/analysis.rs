@@ -97,7 +97,7 @@ pub struct Analysis {
     pub welch_overlap: Option<f64>,
 }
 
-/// What `window = "scan-leg"` reads as until [`Profile::resolve_window`]
+/// What `window = "scan-leg"` reads as until [`super::Profile::resolve_window`]
 /// works out the leg's extent: [0, +inf], which no validation accepts.
 pub(super) const SCAN_LEG: [f64; 2] = [0.0, f64::INFINITY];
 
