@@ -62,7 +62,7 @@ use std::fmt;
 use thiserror::Error;
 
 use crate::profile::Analysis;
-use crate::profile::SpectrumKind;
+use crate::profile::check_options;
 use resample::Resampler;
 use spectrum::Spectrum;
 
@@ -196,63 +196,6 @@ pub fn check_settings(settings: &Analysis) -> Result<(), String> {
         ));
     }
     check_options(settings).map_err(|(key, reason)| format!("{key} {reason}"))
-}
-
-/// Checks the options beyond the thesis's (spectrum kind, Welch segments,
-/// band): `Err((key, reason))`. Assumes the window and spacing are valid.
-pub fn check_options(s: &Analysis) -> Result<(), (String, String)> {
-    let bad = |key: &str, reason: String| Err((format!("analysis.{key}"), reason));
-    let n = s.points();
-    if s.spectrum == SpectrumKind::Welch {
-        let m = s.dft_points();
-        if m < 4 || m > n {
-            return bad(
-                "welch_segment",
-                format!("must be 4 to {n} points (the window's), got {m}"),
-            );
-        }
-        let o = s.overlap();
-        if !(o.is_finite() && (0.0..1.0).contains(&o)) {
-            return bad(
-                "welch_overlap",
-                format!("must be 0 <= overlap < 1, got {o}"),
-            );
-        }
-    } else if s.welch_segment.is_some() {
-        return bad(
-            "welch_segment",
-            "is only used with spectrum = \"welch\"".into(),
-        );
-    } else if s.welch_overlap.is_some() {
-        return bad(
-            "welch_overlap",
-            "is only used with spectrum = \"welch\"".into(),
-        );
-    }
-    if let Some([lo, hi]) = s.band {
-        let nyquist = s.bin_width() * (s.dft_points() / 2) as f64;
-        let unit = s.frequency_unit();
-        if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && hi >= lo) {
-            return bad(
-                "band",
-                format!(
-                    "must be [low, high] in {unit} with 0 <= low <= high, got {:?}",
-                    [lo, hi]
-                ),
-            );
-        }
-        let [a, b] = s.kept_bins();
-        if a > b {
-            return bad(
-                "band",
-                format!(
-                    "holds no DFT bin: bins are {:.4} {unit} apart up to {nyquist:.4} {unit}",
-                    s.bin_width()
-                ),
-            );
-        }
-    }
-    Ok(())
 }
 
 /// Turns one scan's (axis, signal) samples into features, reusing its FFT

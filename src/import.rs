@@ -447,7 +447,7 @@ pub fn check_options(args: &ImportArgs) -> Result<Vec<(String, toml::Value)>, Fa
         )));
     }
     if let Some(l) = &args.label {
-        crate::profile::check_label(l).map_err(|e| bad(format!("--label: {e}")))?;
+        crate::recording::check_label(l).map_err(|e| bad(format!("--label: {e}")))?;
     }
     Ok(extra)
 }
@@ -517,7 +517,7 @@ pub fn run(args: &ImportArgs) -> Result<Vec<PathBuf>, Failure> {
                     ))
                 })?,
         };
-        crate::profile::check_label(&label)
+        crate::recording::check_label(&label)
             .map_err(|e| bad(format!("{origin}: label {label:?}: {e}")))?;
         imp.meta
             .push(("source".to_string(), toml::Value::String(origin.clone())));

@@ -24,6 +24,7 @@ pub mod plot;
 pub mod profile;
 pub mod recorder;
 pub mod recording;
+pub mod scratch;
 pub mod servo;
 pub mod study;
 pub mod terminal;

@@ -35,7 +35,11 @@ pub const ABORTED_KEY: &str = "aborted";
 const QUOTE_CHARS: usize = 24;
 const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
 
+mod label;
+mod number;
 mod writer;
+pub use label::check_label;
+use number::{parse_row_fast, parse_value};
 pub use writer::{RecordingWriter, compress, decimals_for, sync_folder};
 
 #[derive(Debug, thiserror::Error)]
@@ -308,84 +312,6 @@ pub(crate) fn check_columns(names: &[&str]) -> Result<(), String> {
     Ok(())
 }
 
-/// Powers of ten that an f64 holds exactly.
-const POW10: [f64; 23] = [
-    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
-    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
-];
-
-/// Parses a plain decimal (`-0.045000`) at the start of `b`: the value and the
-/// bytes it spans, or `None` when the text needs the general parser.
-///
-/// Exact: with at most 2^53 as the integer of digits and at most 22 decimals,
-/// both operands of the one division are exact f64s, and IEEE division
-/// rounds correctly (Clinger's fast path), so this agrees with `str::parse`.
-#[inline]
-fn parse_plain_decimal(b: &[u8]) -> Option<(f64, usize)> {
-    let (negative, sign) = match b.first() {
-        Some(b'-') => (true, 1),
-        Some(b'+') => (false, 1),
-        _ => (false, 0),
-    };
-    let mut mantissa: u64 = 0;
-    let mut i = accumulate_digits(b, sign, &mut mantissa);
-    let mut digits = i - sign;
-    let mut decimals = 0;
-    if b.get(i) == Some(&b'.') {
-        let first_decimal = i + 1;
-        i = accumulate_digits(b, first_decimal, &mut mantissa);
-        decimals = i - first_decimal;
-        digits += decimals;
-    }
-    if digits == 0 || digits > 19 || mantissa > (1 << 53) || decimals >= POW10.len() {
-        return None;
-    }
-    let magnitude = mantissa as f64 / POW10[decimals];
-    Some((if negative { -magnitude } else { magnitude }, i))
-}
-
-/// Appends the digits from `b[i..]` to `mantissa`; the position after them.
-#[inline(always)]
-fn accumulate_digits(b: &[u8], mut i: usize, mantissa: &mut u64) -> usize {
-    while let Some(d) = b.get(i).map(|c| c.wrapping_sub(b'0')).filter(|&d| d <= 9) {
-        // Wrapping: overflow past 19 digits is caught by the caller's check.
-        *mantissa = mantissa.wrapping_mul(10).wrapping_add(u64::from(d));
-        i += 1;
-    }
-    i
-}
-
-/// Parses one whole value: plain decimals quickly, anything else `str::parse`
-/// accepts (exponents, `nan`, `inf`) the general way.
-fn parse_value(text: &str) -> Option<f64> {
-    match parse_plain_decimal(text.as_bytes()) {
-        Some((v, used)) if used == text.len() => Some(v),
-        _ => text.parse().ok(),
-    }
-}
-
-/// Parses a row of plain decimals starting at `start` into `row`; the
-/// position after its line end, or `None` when the row needs the careful path
-/// (other number syntax, spaces, the wrong count, …).
-#[inline]
-fn parse_row_fast(bytes: &[u8], start: usize, row: &mut [f64]) -> Option<usize> {
-    let mut pos = start;
-    let last = row.len().checked_sub(1)?;
-    for (c, slot) in row.iter_mut().enumerate() {
-        let (value, used) = parse_plain_decimal(bytes.get(pos..)?)?;
-        *slot = value;
-        pos += used;
-        match bytes.get(pos) {
-            Some(b',') if c < last => pos += 1,
-            Some(b'\n') if c == last => return Some(pos + 1),
-            Some(b'\r') if c == last && bytes.get(pos + 1) == Some(&b'\n') => return Some(pos + 2),
-            None if c == last => return Some(pos),
-            _ => return None,
-        }
-    }
-    None
-}
-
 struct Parser<'a> {
     origin: &'a str,
     text: &'a str,
@@ -398,6 +324,8 @@ struct Parser<'a> {
     meta_lines: HashMap<String, usize>,
     /// (N, line) of the trailer once seen.
     trailer: Option<(usize, usize)>,
+    /// The line of the last row read.
+    last_row_line: usize,
 }
 
 impl<'a> Parser<'a> {
@@ -410,6 +338,7 @@ impl<'a> Parser<'a> {
             recording: Recording::default(),
             meta_lines: HashMap::new(),
             trailer: None,
+            last_row_line: 0,
         }
     }
 
@@ -563,10 +492,47 @@ impl<'a> Parser<'a> {
                 }
                 self.row_carefully(line, &mut row)?;
             }
+            self.check_time(row[0])?;
             for (column, &value) in self.recording.data.iter_mut().zip(&row) {
                 column.push(value);
             }
         }
+        if let (Some(&first), Some(&last)) = (
+            self.recording.data[0].first(),
+            self.recording.data[0].last(),
+        ) && self.recording.len() > 1
+            && last <= first
+        {
+            return Err(self.error_at(
+                self.last_row_line,
+                format!(
+                    "t_s never increases: all {} samples are at {last} s",
+                    self.recording.len()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The time of the row just read (on `self.line`): a finite number of
+    /// seconds, never less than the row before's. Equal neighbours pass:
+    /// `t_s` is written to the microsecond, and two ticks of a loop catching
+    /// up can fall in one.
+    fn check_time(&mut self, t: f64) -> Result<(), RecordingError> {
+        if !t.is_finite() {
+            return Err(self.error(format!(
+                "t_s is {t}: the time must be a finite number of seconds"
+            )));
+        }
+        if let Some(&before) = self.recording.data[0].last()
+            && t < before
+        {
+            return Err(self.error(format!(
+                "t_s goes back from {before} s (line {}) to {t} s: the time must never decrease",
+                self.last_row_line
+            )));
+        }
+        self.last_row_line = self.line;
         Ok(())
     }
 
@@ -642,6 +608,13 @@ impl<'a> Parser<'a> {
         let value = table.remove(key).ok_or_else(|| {
             self.error(format!("metadata `{key}`: the line holds no value for it"))
         })?;
+        if key == "label" {
+            let label = value.as_str().ok_or_else(|| {
+                self.error("metadata `label`: must be a string (the texture's name)")
+            })?;
+            check_label(label)
+                .map_err(|reason| self.error(format!("metadata `label`: {reason}")))?;
+        }
         self.meta_lines.insert(key.to_string(), self.line);
         self.recording.meta.push((key.to_string(), value));
         Ok(())
@@ -725,7 +698,6 @@ mod tests {
             1 << 20
         );
     }
-    use proptest::prelude::*;
 
     const EXAMPLE: &str = "# hapticlab recording v1\n# label = \"S2\"\n# profile = \"thesis\"\n\
         # rate_hz = 1000.0   # a TOML comment\n# a note, not metadata\n\
@@ -838,49 +810,5 @@ mod tests {
         assert!(matches!(classify_comment("# note: x = 3"), Comment::Other));
         assert!(matches!(classify_comment("# = 3"), Comment::Other));
         assert!(matches!(classify_comment("# just words"), Comment::Other));
-    }
-
-    #[test]
-    fn the_fast_decimal_path_handles_edges() {
-        assert_eq!(parse_plain_decimal(b"1."), Some((1.0, 2)));
-        assert_eq!(parse_plain_decimal(b".5,"), Some((0.5, 2)));
-        assert_eq!(parse_plain_decimal(b"+3"), Some((3.0, 2)));
-        assert_eq!(parse_plain_decimal(b"1e5"), Some((1.0, 1)));
-        for refused in [
-            &b""[..],
-            b"-",
-            b".",
-            b"-.",
-            b"nan",
-            b"12345678901234567890",
-            b"9007199254740993",
-        ] {
-            assert_eq!(parse_plain_decimal(refused), None, "{refused:?}");
-        }
-        assert_eq!(parse_value("9007199254740993"), Some(9007199254740992.0));
-        assert_eq!(parse_value("1e5"), Some(1e5));
-        assert_eq!(parse_value("1.5 "), None);
-    }
-
-    proptest! {
-        #[test]
-        fn the_fast_decimal_path_agrees_with_std(v in -1e9f64..1e9, decimals in 0usize..12) {
-            let text = format!("{v:.decimals$}");
-            let expected: f64 = text.parse().unwrap();
-            // Up to 15 digits always fit the exact fast path; longer may fall back.
-            match parse_plain_decimal(text.as_bytes()) {
-                Some((fast, used)) => {
-                    prop_assert_eq!(used, text.len());
-                    prop_assert_eq!(fast.to_bits(), expected.to_bits(), "{}", text);
-                }
-                None => prop_assert!(text.bytes().filter(u8::is_ascii_digit).count() > 15, "{}", text),
-            }
-            prop_assert_eq!(parse_value(&text).map(f64::to_bits), Some(expected.to_bits()));
-        }
-
-        #[test]
-        fn any_digit_string_agrees_with_std(text in "[-+]?[0-9]{0,20}(\\.[0-9]{0,25})?") {
-            prop_assert_eq!(parse_value(&text).map(f64::to_bits), text.parse::<f64>().ok().map(f64::to_bits));
-        }
     }
 }

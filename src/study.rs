@@ -656,14 +656,12 @@ pub fn simulated_dataset(
     analysis: &Analysis,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Dataset, Failure> {
-    let dir = tempfile::Builder::new()
-        .prefix("hapticlab-simulate-")
-        .tempdir()
-        .map_err(|e| {
-            Failure::Runtime(format!(
-                "cannot make a temporary folder for the simulated scans: {e}"
-            ))
-        })?;
+    // Removed on drop, and on Ctrl-C (which would otherwise skip the drop).
+    let dir = crate::scratch::ScratchFolder::new("hapticlab-simulate-").map_err(|e| {
+        Failure::Runtime(format!(
+            "cannot make a temporary folder for the simulated scans: {e}"
+        ))
+    })?;
     let opts = crate::acquire::SimulateOptions {
         out: dir.path().to_path_buf(),
         per_class: sim.per_class,
@@ -672,8 +670,10 @@ pub fn simulated_dataset(
         gzip: false,
         overwrite: false,
     };
-    crate::acquire::simulate_dataset(lp, &opts, progress)?;
+    crate::acquire::simulate_dataset(lp, &opts, &dir.watch(opts.threads, progress))?;
+    dir.exit_if_interrupted();
     let mut data = Dataset::load(&[dir.path().to_path_buf()], analysis, sim.threads)?;
+    dir.exit_if_interrupted();
     let relative = |f: &str| {
         std::path::Path::new(f)
             .strip_prefix(dir.path())

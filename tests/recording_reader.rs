@@ -154,6 +154,36 @@ fn broken_files_name_the_file_the_line_and_why() {
             "invalid UTF-8 (byte 0xff at column 20)",
         ),
         ("truncated.csv.gz", None, "truncated gzip stream"),
+        (
+            "time_nan.csv",
+            Some(13),
+            "t_s is NaN: the time must be a finite number of seconds",
+        ),
+        (
+            "time_goes_back.csv",
+            Some(15),
+            "t_s goes back from 0.006 s (line 14) to 0.004 s",
+        ),
+        (
+            "time_never_increases.csv",
+            Some(19),
+            "t_s never increases: all 12 samples are at 0 s",
+        ),
+        (
+            "label_empty.csv",
+            Some(2),
+            "metadata `label`: label \"\" must have 1 to 64 characters",
+        ),
+        (
+            "label_newline.csv",
+            Some(2),
+            "metadata `label`: label \"S2\\nS3\" may hold only",
+        ),
+        (
+            "label_path.csv",
+            Some(2),
+            "metadata `label`: label \"../../etc\" must not start with '.'",
+        ),
     ];
     for (name, line, why) in cases {
         let message = error_for(name, *line);
@@ -432,4 +462,36 @@ fn a_row_cut_short_at_the_end_is_left_out_and_the_scan_reads_as_incomplete() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("after the trailer"), "{err}");
+}
+
+#[test]
+fn equal_neighbouring_times_read_but_infinite_ones_and_a_label_that_is_no_string_do_not() {
+    let head = "# hapticlab recording v1\n# label = \"S2\"\nt_s,pac\n";
+    // Two samples in one microsecond (a loop catching up): kept.
+    let r = recording::parse(
+        format!("{head}0.001,1\n0.001,2\n0.002,3\n").as_bytes(),
+        "x.csv",
+    )
+    .unwrap();
+    assert_eq!(r.len(), 3);
+    // One sample: nothing to increase.
+    assert_eq!(
+        recording::parse(format!("{head}0,1\n").as_bytes(), "x.csv")
+            .unwrap()
+            .len(),
+        1
+    );
+    let err = recording::parse(format!("{head}0,1\ninf,2\n").as_bytes(), "x.csv").unwrap_err();
+    assert!(err.is_bad_input());
+    assert!(err.to_string().starts_with("x.csv:5: t_s is inf"), "{err}");
+    let err = recording::parse(
+        b"# hapticlab recording v1\n# label = 3\nt_s,pac\n0,1\n",
+        "x.csv",
+    )
+    .unwrap_err();
+    assert!(
+        err.to_string()
+            .starts_with("x.csv:2: metadata `label`: must be a string"),
+        "{err}"
+    );
 }

@@ -436,3 +436,194 @@ fn a_holdout_through_the_study_code_takes_the_same_split_as_plain_evaluate() {
     let want: BTreeSet<String> = shuffled.test.iter().map(|e| e.file.clone()).collect();
     assert_eq!(report.test.iter().cloned().collect::<BTreeSet<_>>(), want);
 }
+
+/// Runs the binary in the crate's folder: (exit code, stderr).
+fn hapticlab(args: &[&str]) -> (Option<i32>, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_hapticlab"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .unwrap();
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn the_cli_refuses_what_is_not_a_recording_naming_file_line_and_key() {
+    for (file, line, key_and_why) in [
+        ("time_nan.csv", 13, "t_s is NaN"),
+        ("time_goes_back.csv", 15, "t_s goes back"),
+        ("time_never_increases.csv", 19, "t_s never increases"),
+        ("label_empty.csv", 2, "metadata `label`: label \"\""),
+        (
+            "label_newline.csv",
+            2,
+            "metadata `label`: label \"S2\\nS3\"",
+        ),
+        ("label_path.csv", 2, "metadata `label`: label \"../../etc\""),
+    ] {
+        let path = format!("tests/data/broken/{file}");
+        let expected = format!("{path}:{line}: {key_and_why}");
+        let (code, stderr) = hapticlab(&["features", &path]);
+        assert_eq!(code, Some(2), "features {file}: {stderr}");
+        assert!(stderr.contains(&expected), "features {file}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "one message: {stderr}");
+        // `inspect` reports a dataset's health: the file is unreadable, on one line.
+        let out = Command::new(env!("CARGO_BIN_EXE_hapticlab"))
+            .args(["inspect", &path])
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            stdout
+                .lines()
+                .any(|l| l.starts_with("unusable: ") && l.contains(&expected)),
+            "inspect {file}: {stdout}"
+        );
+    }
+}
+
+#[test]
+fn the_cli_refuses_bins_that_are_not_a_pair() {
+    let (code, stderr) = hapticlab(&["check", "profiles/invalid/bins-three-numbers.toml"]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(
+        stderr.contains("profiles/invalid/bins-three-numbers.toml:59:8: bins must be [first, last], two numbers; got more"),
+        "{stderr}"
+    );
+    // Two million entries: refused at the key, not read as [1, 1].
+    let dir = tempfile::tempdir().unwrap();
+    let thesis =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/profiles/thesis.toml"))
+            .unwrap();
+    assert!(thesis.contains("\nbins = [1, 49]\n"));
+    let huge = format!("[{}]", vec!["1"; 2_000_000].join(", "));
+    let path = dir.path().join("huge-bins.toml");
+    std::fs::write(
+        &path,
+        thesis.replace("\nbins = [1, 49]\n", &format!("\nbins = {huge}\n")),
+    )
+    .unwrap();
+    let line = thesis.lines().position(|l| l == "bins = [1, 49]").unwrap() + 1;
+    let (code, stderr) = hapticlab(&["check", path.to_str().unwrap()]);
+    assert_eq!(code, Some(2), "{stderr}");
+    assert!(
+        stderr.contains(&format!(
+            "huge-bins.toml:{line}:8: bins must be [first, last], two numbers; got more"
+        )),
+        "{stderr}"
+    );
+    for (bins, why) in [("[1]", "got one"), ("[]", "got none")] {
+        std::fs::write(
+            &path,
+            thesis.replace("\nbins = [1, 49]\n", &format!("\nbins = {bins}\n")),
+        )
+        .unwrap();
+        let (code, stderr) = hapticlab(&["check", path.to_str().unwrap()]);
+        assert_eq!(code, Some(2), "{stderr}");
+        assert!(
+            stderr.contains(&format!(
+                ":{line}:8: bins must be [first, last], two numbers; {why}"
+            )),
+            "{stderr}"
+        );
+    }
+}
+
+/// The `hapticlab-simulate-*` folders under `tmp`.
+fn scratch_folders(tmp: &std::path::Path) -> Vec<std::path::PathBuf> {
+    std::fs::read_dir(tmp)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| {
+            p.file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with("hapticlab-simulate-"))
+        })
+        .collect()
+}
+
+/// Whether any file under `dir` ends in `.csv`.
+fn holds_a_scan(dir: &std::path::Path) -> bool {
+    std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .any(|e| {
+            let p = e.path();
+            if p.is_dir() {
+                holds_a_scan(&p)
+            } else {
+                p.extension().is_some_and(|x| x == "csv")
+            }
+        })
+}
+
+/// Polls `cond` until it holds, for at most `limit`.
+fn wait_for(limit: std::time::Duration, mut cond: impl FnMut() -> bool) -> bool {
+    let start = std::time::Instant::now();
+    while start.elapsed() < limit {
+        if cond() {
+            return true;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    cond()
+}
+
+#[test]
+fn ctrl_c_during_evaluate_simulate_removes_its_temporary_folder() {
+    use std::time::Duration;
+    let tmp = tempfile::tempdir().unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_hapticlab"))
+        .args([
+            "evaluate",
+            "--simulate",
+            "--per-class",
+            "400",
+            "--threads",
+            "2",
+        ])
+        .env("TMPDIR", tmp.path())
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Mid-simulation: the folder exists and holds scans.
+    let started = wait_for(Duration::from_secs(60), || {
+        scratch_folders(tmp.path()).iter().any(|d| holds_a_scan(d))
+    });
+    if !started {
+        let _ = child.kill();
+        panic!("no simulated scan appeared in {}", tmp.path().display());
+    }
+    let interrupt = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(interrupt.success());
+    let mut status = None;
+    wait_for(Duration::from_secs(60), || {
+        status = child.try_wait().unwrap();
+        status.is_some()
+    });
+    let Some(status) = status else {
+        let _ = child.kill();
+        panic!("evaluate --simulate still runs 60 s after Ctrl-C");
+    };
+    let mut stderr = String::new();
+    std::io::Read::read_to_string(&mut child.stderr.take().unwrap(), &mut stderr).unwrap();
+    assert_eq!(status.code(), Some(130), "{stderr}");
+    assert!(
+        stderr.contains("interrupted: removed the temporary folder"),
+        "{stderr}"
+    );
+    assert_eq!(
+        scratch_folders(tmp.path()),
+        Vec::<std::path::PathBuf>::new(),
+        "{stderr}"
+    );
+}

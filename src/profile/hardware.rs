@@ -7,8 +7,8 @@ use std::path::PathBuf;
 
 use serde::{Deserialize, Serialize};
 
+use super::falcon_reach::{self, DEFAULT_ENCODER_OFFSET_DEG, DEFAULT_ORIGIN_M};
 use super::{DeviceKind, Invalid, Profile};
-use crate::device::falcon::kinematics::{self, DEFAULT_ENCODER_OFFSET_DEG, DEFAULT_ORIGIN_M};
 
 /// How to drive a Falcon.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
@@ -397,12 +397,12 @@ pub fn validate(p: &Profile) -> Result<(), Invalid> {
         }
     }
     if falcon_kind {
-        let frame = kinematics::Frame {
+        let frame = falcon_reach::Frame {
             origin_m: p.falcon.as_ref().map_or(DEFAULT_ORIGIN_M, |f| f.origin_m),
         };
         for (i, w) in p.path.waypoints_m.iter().enumerate() {
             let q = frame.to_falcon(*w);
-            if !kinematics::in_workspace(q) {
+            if !falcon_reach::in_workspace(q) {
                 return bad(
                     format!("path.waypoints_m[{i}]"),
                     format!(

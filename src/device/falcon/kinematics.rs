@@ -32,115 +32,29 @@
 //! `[falcon] origin_m` (default (0, 0, 0.16): the thesis's waypoints, at
 //! z = −6…−2 cm, land at Falcon z = 0.10…0.14).
 //!
-//! Pure functions and a small solver state: no I/O, no allocation.
+//! The geometry, the inverse kinematics and the frame live in the profile
+//! (`crate::profile::falcon_reach`), which checks waypoints against the
+//! Falcon's reach without depending on the device layer; they are re-exported
+//! here. Pure functions and a small solver state: no I/O, no allocation.
 
-use std::f64::consts::PI;
-
-/// Stamper's constants for the Falcon, metres.
-pub const A: f64 = 0.060;
-pub const B: f64 = 0.1025;
-pub const C: f64 = 0.01443;
-pub const D: f64 = 0.01125;
-pub const E: f64 = 0.01125;
-pub const F: f64 = -0.025;
-pub const R: f64 = 0.040;
-pub const S: f64 = -0.02309;
-/// The legs' angles about z, degrees.
-pub const LEG_ANGLES_DEG: [f64; 3] = [105.0, -15.0, -135.0];
+pub use crate::profile::falcon_reach::{
+    A, B, C, D, DEFAULT_ENCODER_OFFSET_DEG, DEFAULT_ORIGIN_M, E, F, FALCON_MAX_M, FALCON_MIN_M,
+    Frame, KinematicsError, LEG_ANGLES_DEG, LegAngles, R, S, Vec3, in_workspace, inverse, leg_trig,
+    to_leg, wrap,
+};
 
 /// Encoder: 320 slots × 4 edges per motor turn, through the 0.110/0.01425 capstan drive.
 pub const COUNTS_PER_MOTOR_TURN: f64 = 1280.0;
 pub const DRIVE_RATIO: f64 = 0.110 / 0.01425;
-/// The arm angle of encoder count 0 after homing, degrees (approximate; the
-/// profile's `falcon.encoder_offset_deg` can calibrate it).
-pub const DEFAULT_ENCODER_OFFSET_DEG: f64 = 35.0;
 /// Motor command units per newton-metre of joint torque, and the largest
 /// command sent (Novint's own SDK never exceeds it; the 16-bit field would wrap).
 pub const COMMAND_PER_NM: f64 = 10_000.0;
 pub const MAX_COMMAND: i16 = 4095;
 
-/// The Falcon's workspace in its own frame, metres: the 4-inch cube Novint
-/// specifies, centred on z = 0.125. Positions must also be reachable by the
-/// legs ([`inverse`] succeeds).
-pub const FALCON_MIN_M: [f64; 3] = [-0.05, -0.05, 0.075];
-pub const FALCON_MAX_M: [f64; 3] = [0.05, 0.05, 0.175];
-/// Where the profile's origin lies in the Falcon's frame unless the profile says.
-pub const DEFAULT_ORIGIN_M: [f64; 3] = [0.0, 0.0, 0.16];
 /// The forward solver's first guess (and fallback), Falcon frame.
 pub const START_GUESS_M: [f64; 3] = [0.0, 0.0, 0.12];
 
-pub type Vec3 = [f64; 3];
 pub type Mat3 = [[f64; 3]; 3];
-
-/// All three legs' angles, radians.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct LegAngles {
-    /// Motor (upper arm) angles.
-    pub theta1: Vec3,
-    pub theta2: Vec3,
-    pub theta3: Vec3,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]
-pub enum KinematicsError {
-    #[error("({:.4}, {:.4}, {:.4}) m is out of reach of leg {leg}", .p[0], .p[1], .p[2])]
-    Unreachable { p: Vec3, leg: usize },
-    #[error("the forward kinematics did not converge (joint error {residual_rad:.2e} rad)")]
-    NoConvergence { residual_rad: f64 },
-    #[error("the Jacobian is singular here")]
-    Singular,
-}
-
-/// Leg `i`'s sine and cosine of φ.
-fn leg_trig(i: usize) -> (f64, f64) {
-    LEG_ANGLES_DEG[i].to_radians().sin_cos()
-}
-
-/// A point in leg `i`'s coordinates (u, v, w).
-fn to_leg(i: usize, p: Vec3) -> Vec3 {
-    let (s, c) = leg_trig(i);
-    [c * p[0] + s * p[1] - R, -s * p[0] + c * p[1] - S, p[2]]
-}
-
-/// Inverse kinematics, closed form: the legs' angles at `p` (Falcon frame).
-pub fn inverse(p: Vec3) -> Result<LegAngles, KinematicsError> {
-    let mut out = LegAngles::default();
-    for i in 0..3 {
-        let [u, v, w] = to_leg(i, p);
-        let cos3 = (v + F) / B;
-        if !(-1.0..=1.0).contains(&cos3) {
-            return Err(KinematicsError::Unreachable { p, leg: i });
-        }
-        let t3 = cos3.acos();
-        let l = D + E + B * t3.sin();
-        // The constraint as a·(P cos θ1 + w sin θ1) = k/2: a phase-shifted cosine.
-        let pu = u + C;
-        let k = pu * pu + w * w + A * A - l * l;
-        let rho = pu.hypot(w);
-        let cos_shift = k / (2.0 * A * rho);
-        if !(rho > 0.0 && (-1.0..=1.0).contains(&cos_shift)) {
-            return Err(KinematicsError::Unreachable { p, leg: i });
-        }
-        // Of the two elbow solutions, the Falcon's arms take the lower one.
-        let t1 = w.atan2(pu) - cos_shift.acos();
-        let t2 = (w - A * t1.sin()).atan2(pu - A * t1.cos());
-        out.theta1[i] = wrap(t1);
-        out.theta2[i] = t2;
-        out.theta3[i] = t3;
-    }
-    Ok(out)
-}
-
-fn wrap(a: f64) -> f64 {
-    let mut a = a;
-    while a > PI {
-        a -= 2.0 * PI;
-    }
-    while a <= -PI {
-        a += 2.0 * PI;
-    }
-    a
-}
 
 /// ∂θ1/∂p: row i is how leg i's motor angle changes with the position
 /// (rad/m), from the constraint by implicit differentiation.
@@ -250,43 +164,7 @@ pub fn count_of_angle(theta: f64, offset_deg: f64) -> i16 {
     c.clamp(f64::from(i16::MIN), f64::from(i16::MAX)) as i16
 }
 
-/// Whether `p` (Falcon frame) lies in the workspace box and in reach.
-pub fn in_workspace(p: Vec3) -> bool {
-    (0..3).all(|a| p[a] >= FALCON_MIN_M[a] && p[a] <= FALCON_MAX_M[a]) && inverse(p).is_ok()
-}
-
-/// The profile frame ↔ the Falcon's: same axes, shifted origin.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Frame {
-    /// Where the profile's origin lies in the Falcon's frame, metres.
-    pub origin_m: Vec3,
-}
-
-impl Default for Frame {
-    fn default() -> Self {
-        Frame {
-            origin_m: DEFAULT_ORIGIN_M,
-        }
-    }
-}
-
-impl Frame {
-    pub fn to_falcon(&self, p: Vec3) -> Vec3 {
-        [
-            p[0] + self.origin_m[0],
-            p[1] + self.origin_m[1],
-            p[2] + self.origin_m[2],
-        ]
-    }
-    pub fn to_profile(&self, p: Vec3) -> Vec3 {
-        [
-            p[0] - self.origin_m[0],
-            p[1] - self.origin_m[1],
-            p[2] - self.origin_m[2],
-        ]
-    }
-}
-
+/// steps reach a nanometre.
 /// Newton's method on the inverse kinematics: p ← p + J(p)·(θ − IK(p)).
 /// Warm-started from the last solution, so at stroke speeds one or two
 /// steps reach a nanometre.

@@ -1,0 +1,417 @@
+//! `[analysis]`: how a recording becomes a feature vector — the channel(s),
+//! the axis, the window (or `"scan-leg"`), the spacing, the detrending, the
+//! spectrum, the taper, and the bins or band kept — and the pure arithmetic
+//! on those settings (points, DFT bins, bin width) that the analysis engine
+//! and the checks share. Schema and checks only: the signal processing lives
+//! in `crate::analysis`, which depends on this module, never the reverse.
+
+use serde::{Deserialize, Serialize};
+
+use super::path::PathSpec;
+use super::{Invalid, bad, dist, finite_pos, is_default};
+
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum Detrend {
+    None,
+    #[default]
+    Mean,
+    Linear,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum SpectrumKind {
+    /// |DFT| as Matlab's fft gives it (unnormalised): the thesis's feature.
+    #[default]
+    Magnitude,
+    /// The one-sided periodogram `|X_k|² / n` (the bins in between doubled,
+    /// so the bins sum to `Σ x² `, Parseval).
+    Power,
+    /// `log10` of the power, with a floor of 1e-300.
+    LogPower,
+    /// Welch's averaged periodogram: segments of `welch_segment` points
+    /// overlapping by `welch_overlap`, each tapered by `taper`.
+    Welch,
+}
+
+/// The taper applied to the window (or to each Welch segment) before the DFT.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum Taper {
+    /// Rectangular: no taper (the thesis).
+    #[default]
+    None,
+    /// Periodic Hann, `0.5 − 0.5 cos(2π j / n)`.
+    Hann,
+}
+
+/// How a recording becomes a feature vector.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Analysis {
+    /// The signal column (thesis: `y_m`, the probe's height).
+    pub channel: String,
+    /// The resampling axis: a position column (distance from the scan's
+    /// first sample) or `t_s` (time since the scan's first sample).
+    pub axis: String,
+    /// [start, end] of the window along the axis, from the scan's start, in
+    /// the axis's unit; `"scan-leg"` in a profile: the whole scan leg,
+    /// `[0, the leg's extent along the axis]` (for `t_s`, its duration with
+    /// the dwell), worked out from `[path]` when the profile is loaded.
+    #[serde(deserialize_with = "window_or_scan_leg")]
+    pub window: [f64; 2],
+    /// Set when the profile said `window = "scan-leg"`: the window follows
+    /// the path (a sweep of the path's speed moves its end).
+    #[serde(skip)]
+    pub window_is_scan_leg: bool,
+    /// Resampling spacing, in the axis's unit (thesis: 0.3 mm).
+    pub spacing: f64,
+    #[serde(default)]
+    pub detrend: Detrend,
+    #[serde(default)]
+    pub spectrum: SpectrumKind,
+    /// First and last DFT bin kept, inclusive (thesis: 1..49, DC dropped).
+    /// Ignored when `band` is set.
+    #[serde(default, deserialize_with = "bins_pair")]
+    pub bins: [usize; 2],
+    /// More signal columns, analysed like `channel` and their features
+    /// concatenated after its own, in this order.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub channels: Vec<String>,
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub taper: Taper,
+    /// The frequencies kept, [low, high] inclusive, instead of `bins`: in Hz
+    /// for a time axis (`t_s`), in cycles/mm for a position axis (`*_m`).
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "band_pair"
+    )]
+    pub band: Option<[f64; 2]>,
+    /// Welch only: points per segment (default: a quarter of the window).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub welch_segment: Option<usize>,
+    /// Welch only: overlap of consecutive segments, 0 <= overlap < 1 (default 0.5).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub welch_overlap: Option<f64>,
+}
+
+/// What `window = "scan-leg"` reads as until [`super::Profile::resolve_window`]
+/// works out the leg's extent: [0, +inf], which no validation accepts.
+pub(super) const SCAN_LEG: [f64; 2] = [0.0, f64::INFINITY];
+
+/// `[a, b]` and nothing more: serde's arrays stop reading after their
+/// length, so `bins = [1, 49, 3]` would pass as `[1, 49]`. Stops at the third
+/// element, so a huge array costs no more than TOML's own parsing.
+struct Pair<T> {
+    key: &'static str,
+    what: &'static str,
+    marker: std::marker::PhantomData<T>,
+}
+
+impl<'de, T: Deserialize<'de>> serde::de::Visitor<'de> for Pair<T> {
+    type Value = [T; 2];
+    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} = {}", self.key, self.what)
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut seq: A) -> Result<[T; 2], A::Error> {
+        let wrong = |n: &str| {
+            serde::de::Error::custom(format!(
+                "{} must be {}, two numbers; got {n}",
+                self.key, self.what
+            ))
+        };
+        let Some(a) = seq.next_element()? else {
+            return Err(wrong("none"));
+        };
+        let Some(b) = seq.next_element()? else {
+            return Err(wrong("one"));
+        };
+        if seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
+            return Err(wrong("more"));
+        }
+        Ok([a, b])
+    }
+}
+
+fn bins_pair<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[usize; 2], D::Error> {
+    d.deserialize_seq(Pair {
+        key: "bins",
+        what: "[first, last]",
+        marker: std::marker::PhantomData,
+    })
+}
+
+fn band_pair<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Option<[f64; 2]>, D::Error> {
+    d.deserialize_seq(Pair {
+        key: "band",
+        what: "[low, high]",
+        marker: std::marker::PhantomData,
+    })
+    .map(Some)
+}
+
+fn window_or_scan_leg<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum W {
+        Range([f64; 2]),
+        Word(String),
+    }
+    match W::deserialize(d) {
+        Ok(W::Range(r)) => Ok(r),
+        Ok(W::Word(w)) if w == "scan-leg" => Ok(SCAN_LEG),
+        Ok(W::Word(w)) => Err(serde::de::Error::custom(format!(
+            "window must be [start, end] or \"scan-leg\", got {w:?}"
+        ))),
+        Err(_) => Err(serde::de::Error::custom(
+            "window must be [start, end] (two numbers) or \"scan-leg\"",
+        )),
+    }
+}
+
+impl Default for Analysis {
+    /// The thesis's analysis.
+    fn default() -> Self {
+        Analysis {
+            channel: "y_m".into(),
+            axis: "x_m".into(),
+            window: [0.060, 0.0897],
+            window_is_scan_leg: false,
+            spacing: 0.0003,
+            detrend: Detrend::Mean,
+            spectrum: SpectrumKind::Magnitude,
+            bins: [1, 49],
+            channels: Vec::new(),
+            taper: Taper::None,
+            band: None,
+            welch_segment: None,
+            welch_overlap: None,
+        }
+    }
+}
+
+impl Analysis {
+    /// Number of resampled points in the window: both ends included.
+    pub fn points(&self) -> usize {
+        ((self.window[1] - self.window[0]) / self.spacing + 1e-6).floor() as usize + 1
+    }
+    /// Every signal column analysed: `channel`, then `channels`.
+    pub fn all_channels(&self) -> impl Iterator<Item = &str> {
+        std::iter::once(self.channel.as_str()).chain(self.channels.iter().map(String::as_str))
+    }
+    /// Points of one DFT: the window's, or a Welch segment's.
+    pub fn dft_points(&self) -> usize {
+        let n = self.points();
+        match self.spectrum {
+            SpectrumKind::Welch => self.welch_segment.unwrap_or((n / 4).max(4)),
+            _ => n,
+        }
+    }
+    /// Welch overlap as a fraction (default one half).
+    pub fn overlap(&self) -> f64 {
+        self.welch_overlap.unwrap_or(0.5)
+    }
+    /// How a DFT bin's index turns into the unit `band` is written in: bin
+    /// `k` lies at `k · bin_width()` (Hz, or cycles/mm for a position axis).
+    pub fn bin_width(&self) -> f64 {
+        let per_axis_unit = 1.0 / (self.dft_points() as f64 * self.spacing);
+        if self.axis.ends_with("_m") {
+            per_axis_unit / 1000.0
+        } else {
+            per_axis_unit
+        }
+    }
+    /// The unit of `band` and of [`Self::bin_width`].
+    pub fn frequency_unit(&self) -> &'static str {
+        if self.axis.ends_with("_m") {
+            "cycles/mm"
+        } else if self.axis.ends_with("_s") {
+            "Hz"
+        } else {
+            "cycles per axis unit"
+        }
+    }
+    /// The first and last bin kept (inclusive), from `band` or `bins`; the
+    /// first is past the last when the band holds no bin.
+    pub fn kept_bins(&self) -> [usize; 2] {
+        match self.band {
+            None => self.bins,
+            Some([lo, hi]) => {
+                let w = self.bin_width();
+                let half = self.dft_points() / 2;
+                let first = ((lo / w) - 1e-9).ceil().max(0.0) as usize;
+                let last = (((hi / w) + 1e-9).floor().max(0.0) as usize).min(half);
+                [first, last]
+            }
+        }
+    }
+    /// Features per channel.
+    pub fn features_per_channel(&self) -> usize {
+        let [a, b] = self.kept_bins();
+        (b + 1).saturating_sub(a)
+    }
+    pub fn feature_count(&self) -> usize {
+        self.features_per_channel() * (1 + self.channels.len())
+    }
+}
+
+/// Checks the options beyond the thesis's (spectrum kind, Welch segments,
+/// band): `Err((key, reason))`. Assumes the window and spacing are valid.
+pub fn check_options(s: &Analysis) -> Result<(), (String, String)> {
+    let bad = |key: &str, reason: String| Err((format!("analysis.{key}"), reason));
+    let n = s.points();
+    if s.spectrum == SpectrumKind::Welch {
+        let m = s.dft_points();
+        if m < 4 || m > n {
+            return bad(
+                "welch_segment",
+                format!("must be 4 to {n} points (the window's), got {m}"),
+            );
+        }
+        let o = s.overlap();
+        if !(o.is_finite() && (0.0..1.0).contains(&o)) {
+            return bad(
+                "welch_overlap",
+                format!("must be 0 <= overlap < 1, got {o}"),
+            );
+        }
+    } else if s.welch_segment.is_some() {
+        return bad(
+            "welch_segment",
+            "is only used with spectrum = \"welch\"".into(),
+        );
+    } else if s.welch_overlap.is_some() {
+        return bad(
+            "welch_overlap",
+            "is only used with spectrum = \"welch\"".into(),
+        );
+    }
+    if let Some([lo, hi]) = s.band {
+        let nyquist = s.bin_width() * (s.dft_points() / 2) as f64;
+        let unit = s.frequency_unit();
+        if !(lo.is_finite() && hi.is_finite() && lo >= 0.0 && hi >= lo) {
+            return bad(
+                "band",
+                format!(
+                    "must be [low, high] in {unit} with 0 <= low <= high, got {:?}",
+                    [lo, hi]
+                ),
+            );
+        }
+        let [a, b] = s.kept_bins();
+        if a > b {
+            return bad(
+                "band",
+                format!(
+                    "holds no DFT bin: bins are {:.4} {unit} apart up to {nyquist:.4} {unit}",
+                    s.bin_width()
+                ),
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Check `[analysis]` against the path (validated before it).
+pub(super) fn validate(an: &Analysis, p: &PathSpec) -> Result<(), Invalid> {
+    let a0 = p.waypoints_m[p.scan_leg - 1];
+    let a1 = p.waypoints_m[p.scan_leg];
+    let leg_len = dist(a0, a1);
+    let axis_index = match an.axis.as_str() {
+        "x_m" => Some(0),
+        "y_m" => Some(1),
+        "z_m" => Some(2),
+        "t_s" => None,
+        other => {
+            return bad(
+                "analysis.axis",
+                format!("must be one of x_m, y_m, z_m, t_s, got {other:?}"),
+            );
+        }
+    };
+    if an.channel.is_empty() || an.channel == an.axis {
+        return bad(
+            "analysis.channel",
+            "must name a signal column other than the axis",
+        );
+    }
+    finite_pos("analysis.spacing", an.spacing)?;
+    if an.window == SCAN_LEG {
+        return bad(
+            "analysis.window",
+            "\"scan-leg\" needs a scan leg that moves along the axis",
+        );
+    }
+    if !(an.window[0].is_finite()
+        && an.window[1].is_finite()
+        && an.window[0] >= 0.0
+        && an.window[1] > an.window[0])
+    {
+        return bad(
+            "analysis.window",
+            format!(
+                "must be [start, end] with 0 <= start < end, got {:?}",
+                an.window
+            ),
+        );
+    }
+    let leg_extent = match axis_index {
+        Some(ax) => (a1[ax] - a0[ax]).abs(),
+        None => leg_len / p.speed_m_per_s + p.dwell_s,
+    };
+    if axis_index.is_some() && leg_extent <= 0.0 {
+        return bad(
+            "analysis.axis",
+            "the scan leg does not move along this axis",
+        );
+    }
+    if an.window[1] > leg_extent + 1e-9 {
+        return bad(
+            "analysis.window",
+            format!(
+                "ends at {} but the scan leg spans only {:.6} along {} (window = \"scan-leg\" takes all of it)",
+                an.window[1], leg_extent, an.axis
+            ),
+        );
+    }
+    let n = an.points();
+    if n < 4 {
+        return bad(
+            "analysis.spacing",
+            format!("leaves only {n} points in the window (need 4)"),
+        );
+    }
+    if n > 1 << 20 {
+        return bad(
+            "analysis.spacing",
+            format!("leaves {n} points in the window (at most 1048576)"),
+        );
+    }
+    let m = an.dft_points();
+    if an.band.is_none() && (an.bins[0] > an.bins[1] || an.bins[1] > m / 2) {
+        return bad(
+            "analysis.bins",
+            format!(
+                "must be [first, last] with first <= last <= {} (half the {} {} points), got {:?}",
+                m / 2,
+                m,
+                if m == n { "window" } else { "Welch segment" },
+                an.bins
+            ),
+        );
+    }
+    for (i, c) in an.channels.iter().enumerate() {
+        if c.is_empty() || *c == an.axis || an.all_channels().filter(|x| x == c).count() > 1 {
+            return bad(
+                format!("analysis.channels[{i}]"),
+                "must name a signal column other than the axis, once",
+            );
+        }
+    }
+    if let Err((key, reason)) = check_options(an) {
+        return bad(key, reason);
+    }
+    Ok(())
+}

@@ -1,0 +1,88 @@
+//! `[evaluation]`: how `evaluate` splits the recordings (holdout, k-fold,
+//! leave-one-out, grouped by a metadata key). Schema and checks only; the
+//! splitting is `crate::evaluate`.
+
+use serde::{Deserialize, Serialize};
+
+use super::classifier::Classifier;
+use super::{Invalid, bad, is_default};
+
+/// How `evaluate` splits the recordings.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum SplitMethod {
+    /// One split: `train_per_class` then `test_per_class` of each class (the thesis).
+    #[default]
+    Holdout,
+    /// `folds`-fold cross-validation, stratified by class (or by group with `group_by`).
+    KFold,
+    /// Each recording (or each group, with `group_by`) tested once against all the others.
+    LeaveOneOut,
+}
+
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Evaluation {
+    pub train_per_class: usize,
+    pub test_per_class: usize,
+    /// When set, each class's recordings are shuffled with this seed before
+    /// the split; otherwise they are taken in file-name order.
+    #[serde(default)]
+    pub shuffle_seed: Option<u64>,
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub method: SplitMethod,
+    /// Folds of `k-fold` (default 10).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub folds: Option<usize>,
+    /// A metadata key (`session`, `trial`, …): recordings sharing its value
+    /// are always on the same side of a split.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub group_by: Option<String>,
+}
+
+impl Default for Evaluation {
+    fn default() -> Self {
+        Evaluation {
+            train_per_class: 20,
+            test_per_class: 10,
+            shuffle_seed: None,
+            method: SplitMethod::Holdout,
+            folds: None,
+            group_by: None,
+        }
+    }
+}
+
+/// Check `[evaluation]`, and the classifier's `k` against the training set
+/// it gives (`textures` classes of `train_per_class` each).
+pub(super) fn validate(
+    e: &Evaluation,
+    classifier: &Classifier,
+    textures: usize,
+) -> Result<(), Invalid> {
+    match (e.method, e.folds) {
+        (SplitMethod::KFold, Some(f)) if f < 2 => {
+            return bad("evaluation.folds", "must be at least 2");
+        }
+        (SplitMethod::Holdout | SplitMethod::LeaveOneOut, Some(_)) => {
+            return bad("evaluation.folds", "is only used with method = \"k-fold\"");
+        }
+        _ => {}
+    }
+    if e.group_by.as_deref() == Some("") {
+        return bad("evaluation.group_by", "must name a metadata key");
+    }
+    if e.train_per_class == 0 {
+        return bad("evaluation.train_per_class", "must be at least 1");
+    }
+    if !classifier.k_is_auto() && classifier.k > e.train_per_class * textures.max(1) {
+        return bad(
+            "classifier.k",
+            format!(
+                "k = {} exceeds the training set ({} per class)",
+                classifier.k, e.train_per_class
+            ),
+        );
+    }
+    Ok(())
+}
