@@ -177,7 +177,7 @@ fn broken_files_name_the_file_the_line_and_why() {
         (
             "label_newline.csv",
             Some(2),
-            "metadata `label`: label \"S2\\nS3\" may hold only",
+            "metadata `label`: label \"S2\\nS3\" must not hold a control character",
         ),
         (
             "label_path.csv",

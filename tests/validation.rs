@@ -480,7 +480,7 @@ fn the_cli_refuses_what_is_not_a_recording_naming_file_line_and_key() {
         assert!(
             stdout
                 .lines()
-                .any(|l| l.starts_with("unusable: ") && l.contains(&expected)),
+                .any(|l| l.starts_with("unreadable: ") && l.contains(&expected)),
             "inspect {file}: {stdout}"
         );
     }

@@ -508,7 +508,7 @@ impl App {
                             names.join(", ")
                         )
                     } else {
-                        "letters, digits, - _ .".into()
+                        "any name without / or \\, not starting with .".into()
                     };
                     Form::text(FormKind::Label, "label", &self.label, hint)
                 } else {

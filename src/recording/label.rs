@@ -3,22 +3,24 @@
 //! profile's textures, `import --label`, the console's label entry and the
 //! reader of every recording check it here.
 
-/// A label is used as a folder name: 1 to 64 letters, digits, `-`, `_` and
-/// `.`, not starting with `.`. So it is never empty, holds no control
-/// character, no path separator and no `..`.
+/// A label names a folder: 1 to 64 characters, none of them a control
+/// character or a path separator (`/`, `\`), not starting with `.` (so
+/// never `.`, `..` or a hidden folder). Spaces and letters of any script are
+/// fine ("cork board", "Cartón").
 pub fn check_label(label: &str) -> Result<(), String> {
-    if label.is_empty() || label.len() > 64 {
+    let chars = label.chars().count();
+    if chars == 0 || chars > 64 {
         return Err(format!("label {label:?} must have 1 to 64 characters"));
     }
     if label.starts_with('.') {
         return Err(format!("label {label:?} must not start with '.'"));
     }
-    if !label
-        .chars()
-        .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_' || c == '.')
-    {
+    if label.chars().any(char::is_control) {
+        return Err(format!("label {label:?} must not hold a control character"));
+    }
+    if label.contains(['/', '\\']) {
         return Err(format!(
-            "label {label:?} may hold only letters, digits, '-', '_' and '.' (it names a folder)"
+            "label {label:?} must not hold a path separator ('/' or '\\'): it names a folder"
         ));
     }
     Ok(())
@@ -39,5 +41,10 @@ mod tests {
         assert!(check_label(".hidden").is_err());
         assert!(check_label("S\n2").is_err());
         assert!(check_label("S\t2").is_err());
+        assert!(check_label("S\u{7f}2").is_err());
+        assert!(check_label("cork board").is_ok());
+        assert!(check_label("Cartón").is_ok());
+        assert!(check_label(&"x".repeat(64)).is_ok());
+        assert!(check_label(&"x".repeat(65)).is_err());
     }
 }
