@@ -27,6 +27,8 @@ pub mod live;
 pub mod panels;
 pub mod replay;
 pub mod scan;
+#[cfg(test)]
+mod session_tests;
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
