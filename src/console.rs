@@ -27,6 +27,8 @@ pub mod live;
 pub mod panels;
 pub mod replay;
 pub mod scan;
+#[cfg(test)]
+mod session_tests;
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -41,9 +43,9 @@ use crate::recording;
 use crate::servo::Command;
 use app::{Action, App, Source};
 use dataset::Jobs;
-use event::{Event, Signals};
+use event::{Event, EventSource, Signals};
 use keymap::KeyMap;
-use live::Lab;
+use live::{Lab, LabPort};
 
 /// Frames per second at most.
 pub const FRAME_RATE: u32 = 30;
@@ -136,7 +138,17 @@ pub fn run(lp: LoadedProfile, dataset: Option<PathBuf>) -> Result<(), Failure> {
     dataset::adopt_saved_model(&mut app, &dataset);
     let jobs = Jobs::default();
     let mut screen = open_terminal()?;
-    let ending = run_loop(&mut screen, &mut app, Some(&mut lab), &jobs, &signals);
+    let ending = match event::Input::start() {
+        Ok(mut input) => run_loop(
+            &mut screen,
+            &mut app,
+            Some(&mut lab),
+            &mut input,
+            &jobs,
+            &signals,
+        ),
+        Err(e) => Ending::TerminalLost(format!("terminal input: {e}")),
+    };
     // The motion first, whatever ended the session: the loop halts, forces
     // zero, any scan is kept as aborted with the reason.
     let saved = lab.shutdown(&ending.stop_reason());
@@ -223,7 +235,10 @@ pub fn replay(lp: LoadedProfile, path: &Path, dataset: Option<PathBuf>) -> Resul
     let jobs = Jobs::default();
     open_replay(&mut app, &jobs, path.to_path_buf(), files, train_dir);
     let mut screen = open_terminal()?;
-    let ending = run_loop(&mut screen, &mut app, None, &jobs, &signals);
+    let ending = match event::Input::start() {
+        Ok(mut input) => run_loop(&mut screen, &mut app, None, &mut input, &jobs, &signals),
+        Err(e) => Ending::TerminalLost(format!("terminal input: {e}")),
+    };
     drop(screen);
     ending.result("the replay was closed")
 }
@@ -283,20 +298,22 @@ fn open_recording(app: &mut App, i: usize) {
 /// Draw, drain, and handle keys until the app quits, a signal arrives or
 /// the terminal goes. Returns at once (within a frame) on a lost terminal:
 /// the caller stops the motion before it touches the terminal again.
+///
+/// Everything outside the app comes in as a parameter — the terminal (any
+/// ratatui backend), its events, the lab (none for a replay), the signals —
+/// so a whole session runs in a test against `TestBackend` with scripted
+/// keys (see `console::session_tests`).
 pub fn run_loop<B: Backend>(
     terminal: &mut Terminal<B>,
     app: &mut App,
-    mut lab: Option<&mut Lab>,
+    mut lab: Option<&mut dyn LabPort>,
+    input: &mut dyn EventSource,
     jobs: &Jobs,
     signals: &Signals,
 ) -> Ending
 where
     B::Error: std::fmt::Display,
 {
-    let input = match event::Input::start() {
-        Ok(i) => i,
-        Err(e) => return Ending::TerminalLost(format!("terminal input: {e}")),
-    };
     let mut last_key = Instant::now();
     if let Ok(size) = terminal.size() {
         app.resize(size.width, size.height);
@@ -306,7 +323,7 @@ where
         if signals.hung_up() {
             return Ending::TerminalLost("SIGHUP".into());
         }
-        if event::terminal_hung_up() {
+        if input.hung_up() {
             return Ending::TerminalLost("hang-up".into());
         }
         if signals.raised() {
@@ -314,14 +331,14 @@ where
         }
         let started = Instant::now();
         // The world, once per frame.
-        let mut actions = match lab.as_deref_mut() {
+        let mut actions = match reborrow(&mut lab) {
             Some(l) => l.drain(app),
             None => vec![],
         };
         for r in jobs.poll() {
             actions.extend(app.on_job(r));
         }
-        run_actions(actions, app, lab.as_deref_mut(), jobs);
+        run_actions(actions, app, reborrow(&mut lab), jobs);
         app.advance(started.duration_since(last).as_secs_f64());
         last = started;
         if let Err(e) = terminal.draw(|f| f.render_widget(&*app, f.area())) {
@@ -343,7 +360,7 @@ where
                 Ok(Some(Event::Key(k))) => {
                     last_key = Instant::now();
                     let actions = app.handle_key(k);
-                    run_actions(actions, app, lab.as_deref_mut(), jobs);
+                    run_actions(actions, app, reborrow(&mut lab), jobs);
                 }
                 Ok(Some(Event::Resize(w, h))) => app.resize(w, h),
                 Ok(None) => {}
@@ -354,19 +371,29 @@ where
     Ending::Quit
 }
 
-fn run_actions(mut actions: Vec<Action>, app: &mut App, mut lab: Option<&mut Lab>, jobs: &Jobs) {
+fn run_actions(
+    mut actions: Vec<Action>,
+    app: &mut App,
+    mut lab: Option<&mut dyn LabPort>,
+    jobs: &Jobs,
+) {
     // Actions may lead to more (a store after a queued scan, a prediction after training).
     while !actions.is_empty() {
         let mut next = Vec::new();
         for a in actions {
-            next.extend(execute(a, app, lab.as_deref_mut(), jobs));
+            next.extend(execute(a, app, reborrow(&mut lab), jobs));
         }
         actions = next;
     }
 }
 
 /// Carry out one action.
-pub fn execute(a: Action, app: &mut App, lab: Option<&mut Lab>, jobs: &Jobs) -> Vec<Action> {
+pub fn execute(
+    a: Action,
+    app: &mut App,
+    lab: Option<&mut dyn LabPort>,
+    jobs: &Jobs,
+) -> Vec<Action> {
     let dir = app.dataset.dir.clone();
     match a {
         Action::Quit => {}
@@ -394,7 +421,7 @@ pub fn execute(a: Action, app: &mut App, lab: Option<&mut Lab>, jobs: &Jobs) -> 
             if let Some(l) = lab {
                 match l.mount(&t, app) {
                     Ok(()) => {
-                        app.mounted = l.texture.clone();
+                        app.mounted = l.texture();
                         app.live.clear();
                     }
                     Err(e) => app.error(format!("cannot mount {t}: {e}")),
@@ -440,7 +467,15 @@ pub fn execute(a: Action, app: &mut App, lab: Option<&mut Lab>, jobs: &Jobs) -> 
     vec![]
 }
 
-fn send(lab: Option<&mut Lab>, c: Command) {
+/// The lab for one call (`as_deref_mut` cannot shorten the trait object's lifetime).
+fn reborrow<'a>(lab: &'a mut Option<&mut dyn LabPort>) -> Option<&'a mut dyn LabPort> {
+    match lab {
+        Some(l) => Some(&mut **l),
+        None => None,
+    }
+}
+
+fn send(lab: Option<&mut dyn LabPort>, c: Command) {
     if let Some(l) = lab {
         l.send(c);
     }

@@ -24,6 +24,19 @@ pub enum Event {
     Resize(u16, u16),
 }
 
+/// Where the console's loop gets its terminal events: the real terminal
+/// ([`Input`]), or a script in tests.
+pub trait EventSource {
+    /// The next terminal event, waiting at most `timeout`; an error means
+    /// the terminal is lost.
+    fn next(&mut self, timeout: Duration) -> io::Result<Option<Event>>;
+
+    /// Whether the terminal has gone (hung up), checked once a frame.
+    fn hung_up(&self) -> bool {
+        false
+    }
+}
+
 /// Terminal events from the reader thread.
 pub struct Input {
     rx: Receiver<io::Result<Event>>,
@@ -52,9 +65,10 @@ impl Input {
             })?;
         Ok(Input { rx })
     }
+}
 
-    /// The next terminal event, waiting at most `timeout`.
-    pub fn next(&self, timeout: Duration) -> io::Result<Option<Event>> {
+impl EventSource for Input {
+    fn next(&mut self, timeout: Duration) -> io::Result<Option<Event>> {
         match self.rx.recv_timeout(timeout) {
             Ok(Ok(e)) => Ok(Some(e)),
             Ok(Err(e)) => Err(e),
@@ -64,6 +78,10 @@ impl Input {
                 "the terminal input closed",
             )),
         }
+    }
+
+    fn hung_up(&self) -> bool {
+        terminal_hung_up()
     }
 }
 
@@ -90,6 +108,14 @@ impl Signals {
         }
         signal_hook::flag::register(signal_hook::consts::SIGHUP, hangup.clone())?;
         Ok(Signals { stop, hangup })
+    }
+
+    /// Flags no signal raises: for a session run in a test.
+    pub fn unraised() -> Signals {
+        Signals {
+            stop: Arc::new(AtomicBool::new(false)),
+            hangup: Arc::new(AtomicBool::new(false)),
+        }
     }
 
     /// SIGINT, SIGTERM or SIGHUP arrived.

@@ -22,6 +22,42 @@ use super::app::{Action, App};
 use super::dataset::UNSAVED_DIR;
 use super::scan;
 
+/// What the console's loop asks of the lab: the world drained into the app
+/// once a frame, commands to the servo, scans, textures. [`Lab`] is the live
+/// one (the servo on the profile's device); the loop takes any, so whole
+/// sessions run in tests.
+pub trait LabPort {
+    /// Once per frame: telemetry, events and saved scans into the app (and
+    /// the heartbeat that keeps the servo's watchdog quiet); the actions a
+    /// saved scan leads to.
+    fn drain(&mut self, app: &mut App) -> Vec<Action>;
+    fn send(&self, c: Command);
+    /// Run the path, recording the scan leg under `label`; the file it goes to.
+    fn start_scan(&mut self, label: &str) -> PathBuf;
+    /// Put another texture under the probe (a simulated device only).
+    fn mount(&mut self, texture: &str, app: &mut App) -> Result<(), String>;
+    /// The texture under the probe, when the device is simulated.
+    fn texture(&self) -> Option<String>;
+}
+
+impl LabPort for Lab {
+    fn drain(&mut self, app: &mut App) -> Vec<Action> {
+        Lab::drain(self, app)
+    }
+    fn send(&self, c: Command) {
+        Lab::send(self, c);
+    }
+    fn start_scan(&mut self, label: &str) -> PathBuf {
+        Lab::start_scan(self, label)
+    }
+    fn mount(&mut self, texture: &str, app: &mut App) -> Result<(), String> {
+        Lab::mount(self, texture, app)
+    }
+    fn texture(&self) -> Option<String> {
+        self.texture.clone()
+    }
+}
+
 pub struct Lab {
     lp: LoadedProfile,
     handle: Option<ServoHandle>,
