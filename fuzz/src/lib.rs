@@ -3,7 +3,7 @@
 //! returns `Ok` or the library's message. A panic, or a broken invariant
 //! (checked with `assert!`), is a finding.
 //!
-//! Shared with `tests/fuzz_regressions.rs`, which feeds the kept crashers
+//! Shared with `tests/engine/fuzz_regressions.rs`, which feeds the kept crashers
 //! and the seeds to these same functions on the stable toolchain.
 
 use std::io::Write;

@@ -1,7 +1,9 @@
-//! A counting global allocator for the no-allocation tests: it counts the
-//! allocations made on a thread while that thread has opted in (through
-//! [`allocations_during`]), so other threads and the test harness are not
-//! counted. Include with `#[path = "common/counting_alloc.rs"] mod counting_alloc;`.
+//! A counting global allocator for the no-allocation tests (`tests/alloc`).
+//! It counts per thread, so other threads and the test harness are not
+//! counted: [`allocations`] is every allocation this thread has made, and
+//! [`allocations_during`] those made while a closure runs (opted in, so not
+//! counted in the other). Declare it once per test binary:
+//! `#[path = "../common/counting_alloc.rs"] mod counting_alloc;`.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
@@ -11,10 +13,12 @@ struct Counting;
 thread_local! {
     static COUNTING: Cell<bool> = const { Cell::new(false) };
     static ALLOCATIONS: Cell<usize> = const { Cell::new(0) };
+    static ALL: Cell<usize> = const { Cell::new(0) };
 }
 
 fn count_one() {
     // `try_with`: allocations during thread teardown must not panic.
+    let _ = ALL.try_with(|n| n.set(n.get() + 1));
     let _ = COUNTING.try_with(|on| {
         if on.get() {
             let _ = ALLOCATIONS.try_with(|n| n.set(n.get() + 1));
@@ -42,6 +46,12 @@ unsafe impl GlobalAlloc for Counting {
 
 #[global_allocator]
 static GLOBAL: Counting = Counting;
+
+/// Allocations this thread has made so far (allocations, zeroed
+/// allocations and reallocations): compare two readings.
+pub fn allocations() -> usize {
+    ALL.with(Cell::get)
+}
 
 /// Allocations made on this thread while `f` runs.
 pub fn allocations_during<R>(f: impl FnOnce() -> R) -> (usize, R) {

@@ -1,14 +1,8 @@
 //! Figures are written as PNG and SVG, with the bundled font, from the
 //! shipped dataset and from `evaluate --json` output.
 
-use std::process::Command;
-
 fn hapticlab(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_hapticlab"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap()
+    crate::common::hapticlab().args(args).output().unwrap()
 }
 
 #[test]

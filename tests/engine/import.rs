@@ -8,15 +8,11 @@ use hapticlab::import::{ImportArgs, run};
 use hapticlab::recording;
 use proptest::prelude::*;
 
-#[path = "common/mutation.rs"]
-mod mutation;
-use mutation::{mutate, mutation};
+use crate::common::mutation::{mutate, mutation};
 
-/// The fuzz targets' entry points (`fuzz/src/lib.rs`): `import_csv` (the
-/// mapping as options on the first line, then the file) and `import_wav`.
-#[path = "../fuzz/src/lib.rs"]
-#[allow(dead_code)]
-mod entries;
+// The fuzz targets' entry points (`fuzz/src/lib.rs`): `import_csv` (the
+// mapping as options on the first line, then the file) and `import_wav`.
+use crate::entries;
 
 fn args(files: &[&Path], out: &Path) -> ImportArgs {
     ImportArgs {

@@ -4,9 +4,7 @@
 
 use std::path::Path;
 
-#[path = "common/counting_alloc.rs"]
-mod counting_alloc;
-use counting_alloc::allocations_during;
+use crate::counting_alloc::allocations_during;
 
 use hapticlab::device::HapticDevice;
 use hapticlab::device::falcon::emulator::{EmulatedFalcon, EmulatorConfig};

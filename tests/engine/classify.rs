@@ -1,35 +1,15 @@
 //! k-NN votes, tie-breaking, neighbour order, model files and their errors.
 
 use hapticlab::classify::{ClassifyError, MODEL_FORMAT, Model, TrainingExample};
-use hapticlab::profile::{Analysis, Classifier, Detrend, Metric, SpectrumKind};
+use hapticlab::profile::{Classifier, Detrend, Metric};
 
-/// Settings that give `features` features (bins 1..=features of a 300-point window).
-fn analysis(features: usize) -> Analysis {
-    Analysis {
-        channel: "y_m".into(),
-        axis: "x_m".into(),
-        window: [0.0, 0.0897],
-        spacing: 0.0003,
-        detrend: Detrend::Mean,
-        spectrum: SpectrumKind::Magnitude,
-        bins: [1, features],
-        ..Analysis::default()
-    }
-}
+use crate::common::{analysis, ex};
 
 fn knn(k: usize) -> Classifier {
     Classifier {
         k,
         metric: Metric::Euclidean,
         ..Classifier::default()
-    }
-}
-
-fn ex(file: &str, label: &str, features: &[f64]) -> TrainingExample {
-    TrainingExample {
-        file: file.into(),
-        label: label.into(),
-        features: features.to_vec(),
     }
 }
 

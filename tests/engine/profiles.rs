@@ -7,15 +7,11 @@ use std::path::Path;
 use hapticlab::profile::LoadedProfile;
 use proptest::prelude::*;
 
-#[path = "common/mutation.rs"]
-mod mutation;
-use mutation::{mutate, mutation};
+use crate::common::mutation::{mutate, mutation};
 
-/// The fuzz targets' entry points (`fuzz/src/lib.rs`): `profile` loads the
-/// text and checks the promises a loaded profile keeps.
-#[path = "../fuzz/src/lib.rs"]
-#[allow(dead_code)]
-mod entries;
+// The fuzz targets' entry points (`fuzz/src/lib.rs`): `profile` loads the
+// text and checks the promises a loaded profile keeps.
+use crate::entries;
 
 #[test]
 fn every_invalid_profile_is_refused_with_file_line_key_and_reason() {
@@ -87,9 +83,9 @@ fn the_falcon_profiles_ask_for_the_thesis_real_time_setup() {
 }
 
 const SHIPPED: [&str; 3] = [
-    include_str!("../profiles/thesis.toml"),
-    include_str!("../profiles/thesis-emulator.toml"),
-    include_str!("../profiles/thesis-falcon.toml"),
+    include_str!("../../profiles/thesis.toml"),
+    include_str!("../../profiles/thesis-emulator.toml"),
+    include_str!("../../profiles/thesis-falcon.toml"),
 ];
 
 proptest! {

@@ -24,8 +24,9 @@ use hapticlab::servo::clock::VirtualClock;
 use hapticlab::servo::stats::LoopStats;
 use hapticlab::servo::{Command as Servo, Links, ServoEvent, ServoLoop};
 
-const BIN: &str = env!("CARGO_BIN_EXE_hapticlab");
-const REPO: &str = env!("CARGO_MANIFEST_DIR");
+use crate::common::run::Run;
+use crate::common::{REPO, hapticlab, p};
+
 const QUICK_SIM: &str = "tests/data/profiles/quick-scan.toml";
 const QUICK_EMU: &str = "tests/data/profiles/quick-emulator.toml";
 
@@ -329,39 +330,8 @@ fn emulator_stall_streak_aborts() {
 
 // ---------------------------------------------------------------- `hapticlab scan`
 
-struct Run {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-}
-
-impl std::fmt::Debug for Run {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "exit {:?}\n--- stdout\n{}--- stderr\n{}",
-            self.code, self.stdout, self.stderr
-        )
-    }
-}
-
 fn output(cmd: &mut Command) -> Run {
-    let o = cmd.output().expect("run hapticlab");
-    Run {
-        code: o.status.code(),
-        stdout: String::from_utf8_lossy(&o.stdout).into_owned(),
-        stderr: String::from_utf8_lossy(&o.stderr).into_owned(),
-    }
-}
-
-fn hapticlab() -> Command {
-    let mut c = Command::new(BIN);
-    c.current_dir(REPO);
-    c
-}
-
-fn p(path: &Path) -> &str {
-    path.to_str().unwrap()
+    cmd.output().expect("run hapticlab").into()
 }
 
 /// The error line `hapticlab` ends with.

@@ -2,28 +2,9 @@
 
 use hapticlab::classify::{Model, TrainingExample};
 use hapticlab::evaluate::{EvaluateError, evaluate, split};
-use hapticlab::profile::{Analysis, Classifier, Detrend, Evaluation, Metric, SpectrumKind};
+use hapticlab::profile::{Classifier, Evaluation, Metric};
 
-fn analysis(features: usize) -> Analysis {
-    Analysis {
-        channel: "y_m".into(),
-        axis: "x_m".into(),
-        window: [0.0, 0.0897],
-        spacing: 0.0003,
-        detrend: Detrend::Mean,
-        spectrum: SpectrumKind::Magnitude,
-        bins: [1, features],
-        ..Analysis::default()
-    }
-}
-
-fn ex(file: &str, label: &str, features: &[f64]) -> TrainingExample {
-    TrainingExample {
-        file: file.into(),
-        label: label.into(),
-        features: features.to_vec(),
-    }
-}
+use crate::common::{analysis, ex};
 
 /// `per_class` examples of each label, interleaved, files named `<label>/<i>.csv`.
 fn recordings(labels: &[&str], per_class: usize) -> Vec<TrainingExample> {

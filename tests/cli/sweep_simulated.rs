@@ -10,11 +10,7 @@ use hapticlab::study::{
 };
 
 fn hapticlab(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_hapticlab"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap()
+    crate::common::hapticlab().args(args).output().unwrap()
 }
 
 #[test]

@@ -7,9 +7,7 @@ use std::path::{Path, PathBuf};
 use hapticlab::recording::{self, FORMAT_LINE, Recording, RecordingError, RecordingWriter};
 use proptest::prelude::*;
 
-#[path = "common/mutation.rs"]
-mod mutation;
-use mutation::{mutate, mutation};
+use crate::common::mutation::{mutate, mutation};
 
 const COLUMNS: [&str; 7] = ["t_s", "x_m", "y_m", "z_m", "fx_n", "fy_n", "fz_n"];
 

@@ -2,23 +2,9 @@
 //! standardisation fitted on the training part, `k = "auto"`.
 
 use hapticlab::classify::{Model, TrainingExample};
-use hapticlab::profile::{Analysis, Classifier, K_AUTO, Metric, Weights};
+use hapticlab::profile::{Classifier, K_AUTO, Metric, Weights};
 
-fn analysis(features: usize) -> Analysis {
-    Analysis {
-        window: [0.0, 0.0897],
-        bins: [1, features],
-        ..Analysis::default()
-    }
-}
-
-fn ex(file: &str, label: &str, features: &[f64]) -> TrainingExample {
-    TrainingExample {
-        file: file.into(),
-        label: label.into(),
-        features: features.to_vec(),
-    }
-}
+use crate::common::{analysis, ex};
 
 fn knn(k: usize, metric: Metric) -> Classifier {
     Classifier {

@@ -4,7 +4,6 @@
 //! whose cable is pulled mid-stroke, `devices`, and the exit codes.
 
 use std::path::Path;
-use std::process::Command;
 
 use hapticlab::acquire::{SimulateOptions, simulate_dataset, simulate_one};
 use hapticlab::analysis::FeatureExtractor;
@@ -15,9 +14,6 @@ use hapticlab::evaluate::{evaluate, split};
 use hapticlab::profile::Evaluation;
 use hapticlab::profile::LoadedProfile;
 use hapticlab::recording;
-
-const BIN: &str = env!("CARGO_BIN_EXE_hapticlab");
-const REPO: &str = env!("CARGO_MANIFEST_DIR");
 
 fn quick() -> LoadedProfile {
     LoadedProfile::load(Path::new("tests/data/profiles/quick-emulator.toml")).unwrap()
@@ -150,11 +146,7 @@ fn a_missing_or_wrong_firmware_file_is_bad_input_naming_the_path() {
 }
 
 fn hapticlab(args: &[&str]) -> (Option<i32>, String, String) {
-    let o = Command::new(BIN)
-        .current_dir(REPO)
-        .args(args)
-        .output()
-        .unwrap();
+    let o = crate::common::hapticlab().args(args).output().unwrap();
     (
         o.status.code(),
         String::from_utf8_lossy(&o.stdout).into_owned(),

@@ -6,28 +6,13 @@
 
 use std::fs;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use hapticlab::classify::{Model, TrainingExample};
 use hapticlab::evaluate::cv::{cross_validate, make_folds};
-use hapticlab::profile::{Analysis, Classifier, Detrend, Metric, SpectrumKind, SplitMethod};
+use hapticlab::profile::{Classifier, Metric, SplitMethod};
 use serde_json::Value;
 
-const BIN: &str = env!("CARGO_BIN_EXE_hapticlab");
-const REPO: &str = env!("CARGO_MANIFEST_DIR");
-
-fn analysis(features: usize) -> Analysis {
-    Analysis {
-        channel: "y_m".into(),
-        axis: "x_m".into(),
-        window: [0.0, 0.0897],
-        spacing: 0.0003,
-        detrend: Detrend::Mean,
-        spectrum: SpectrumKind::Magnitude,
-        bins: [1, features],
-        ..Analysis::default()
-    }
-}
+use crate::common::{REPO, analysis, p};
 
 fn knn(k: usize) -> Classifier {
     Classifier {
@@ -144,8 +129,7 @@ fn a_chosen_k_survives_the_model_file_and_is_checked_against_the_profile() {
 }
 
 fn hapticlab(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(BIN)
-        .current_dir(REPO)
+    let out = crate::common::hapticlab()
         .args(args)
         .output()
         .expect("run hapticlab");
@@ -154,10 +138,6 @@ fn hapticlab(args: &[&str]) -> (i32, String, String) {
         String::from_utf8_lossy(&out.stdout).into_owned(),
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
-}
-
-fn p(path: &Path) -> &str {
-    path.to_str().expect("a UTF-8 temporary path")
 }
 
 fn simulate(out: &Path, per_class: usize, seed: u64) {

@@ -9,38 +9,16 @@
 
 use std::fs;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
+use std::process::Stdio;
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
 use tempfile::TempDir;
 
-const BIN: &str = env!("CARGO_BIN_EXE_hapticlab");
-const REPO: &str = env!("CARGO_MANIFEST_DIR");
+use crate::common::run::Run;
+use crate::common::{REPO, hapticlab, p, run};
+
 const QUICK_SCAN: &str = "tests/data/profiles/quick-scan.toml";
-
-/// The binary, run from the repository (so `profiles/…` paths resolve).
-fn hapticlab() -> Command {
-    let mut c = Command::new(BIN);
-    c.current_dir(REPO).env_remove("RUST_BACKTRACE");
-    c
-}
-
-#[path = "common/run.rs"]
-mod run;
-use run::Run;
-
-fn run<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Run {
-    hapticlab()
-        .args(args)
-        .output()
-        .expect("run hapticlab")
-        .into()
-}
-
-fn p(path: &Path) -> &str {
-    path.to_str().expect("a UTF-8 temporary path")
-}
 
 fn assert_ok(r: &Run) {
     assert_eq!(r.code, Some(0), "{r:?}");

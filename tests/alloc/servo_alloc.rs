@@ -1,13 +1,11 @@
 //! The servo loop allocates nothing per tick while it records a scan: a
-//! counting allocator (its own test binary) counts the allocations made on
+//! counting allocator (`tests/common/counting_alloc.rs`) counts the allocations made on
 //! the thread that ticks the loop, and only while that thread has opted in,
 //! so the recorder's writer thread and the test harness are not counted.
 
 use std::path::Path;
 
-#[path = "common/counting_alloc.rs"]
-mod counting_alloc;
-use counting_alloc::allocations_during;
+use crate::counting_alloc::allocations_during;
 
 use hapticlab::device::sim::SimDevice;
 use hapticlab::profile::LoadedProfile;

@@ -4,11 +4,10 @@
 //! `cargo fuzz run <target>` (`fuzz/src/lib.rs`), which must return `Ok` or
 //! `Err`, never panic nor break an invariant it checks.
 
-#[path = "../fuzz/src/lib.rs"]
-mod entries;
-
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
+
+use crate::entries;
 
 type Entry = fn(&[u8]) -> entries::Outcome;
 

@@ -1,4 +1,4 @@
-//! `hapticlab doctor`, the real binary on this machine (as tests/cli.rs runs
+//! `hapticlab doctor`, the real binary on this machine (as tests/cli/cli.rs runs
 //! it): the text and JSON reports, exit codes (0 nothing failed, 1 a check
 //! failed, 2 a bad profile), a dataset path that cannot be a folder, the
 //! firmware file through a falcon profile, and the terminal size read in a
@@ -14,13 +14,10 @@ use portable_pty::{CommandBuilder, PtySize, native_pty_system};
 use serde_json::Value;
 use tempfile::TempDir;
 
-const BIN: &str = env!("CARGO_BIN_EXE_hapticlab");
-const REPO: &str = env!("CARGO_MANIFEST_DIR");
 const WORDS: [&str; 4] = ["ok", "warn", "FAIL", "note"];
 
-#[path = "common/run.rs"]
-mod run;
-use run::Run;
+use crate::common::run::Run;
+use crate::common::{BIN, REPO, p};
 
 /// `hapticlab doctor ARGS` from the repository, with a known terminal type.
 fn doctor(args: &[&str]) -> Run {
@@ -35,10 +32,6 @@ fn doctor(args: &[&str]) -> Run {
         .output()
         .expect("run hapticlab")
         .into()
-}
-
-fn p(path: &Path) -> &str {
-    path.to_str().expect("a UTF-8 temporary path")
 }
 
 fn json(r: &Run) -> Value {

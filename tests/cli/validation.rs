@@ -6,24 +6,10 @@ use std::process::Command;
 
 use hapticlab::classify::TrainingExample;
 use hapticlab::evaluate::cv::{cross_validate, f1_scores, make_folds};
-use hapticlab::profile::{Analysis, Classifier, LoadedProfile, SplitMethod};
+use hapticlab::profile::{Classifier, LoadedProfile, SplitMethod};
 use hapticlab::study::{parse_sweep, with_key};
 
-fn ex(file: String, label: &str, features: Vec<f64>) -> TrainingExample {
-    TrainingExample {
-        file,
-        label: label.into(),
-        features,
-    }
-}
-
-fn analysis(features: usize) -> Analysis {
-    Analysis {
-        window: [0.0, 0.0897],
-        bins: [1, features],
-        ..Analysis::default()
-    }
-}
+use crate::common::{analysis, ex};
 
 /// 12 sessions of 5 scans; every scan of a session is nearly the same point,
 /// and the session's label is arbitrary: only leakage can classify it.
@@ -33,9 +19,9 @@ fn sessions() -> (Vec<TrainingExample>, Vec<String>) {
         let label = ["A", "B", "C"][(s * 7 + s / 3) % 3];
         for i in 0..5 {
             ex_.push(ex(
-                format!("s{s}/{i}.csv"),
+                &format!("s{s}/{i}.csv"),
                 label,
-                vec![s as f64 * 10.0 + i as f64 * 0.01],
+                &[s as f64 * 10.0 + i as f64 * 0.01],
             ));
             groups.push(format!("session-{s}"));
         }
@@ -116,7 +102,7 @@ fn a_seeded_evaluation_gives_the_same_numbers_twice() {
         .map(|i| {
             let l = ["A", "B", "C"][i % 3];
             let x = (i % 3) as f64 + ((i * 37 % 11) as f64 - 5.0) * 0.15;
-            ex(format!("{i}.csv"), l, vec![x, (i * 13 % 7) as f64 * 0.1])
+            ex(&format!("{i}.csv"), l, &[x, (i * 13 % 7) as f64 * 0.1])
         })
         .collect();
     let labels: Vec<&str> = examples.iter().map(|e| e.label.as_str()).collect();
@@ -398,9 +384,9 @@ fn a_holdout_through_the_study_code_takes_the_same_split_as_plain_evaluate() {
         .map(|i| {
             let label = if i % 2 == 0 { "A" } else { "B" };
             ex(
-                format!("{label}/{label}_{i:03}.csv"),
+                &format!("{label}/{label}_{i:03}.csv"),
                 label,
-                vec![i as f64, 1.0],
+                &[i as f64, 1.0],
             )
         })
         .collect();
@@ -439,11 +425,7 @@ fn a_holdout_through_the_study_code_takes_the_same_split_as_plain_evaluate() {
 
 /// Runs the binary in the crate's folder: (exit code, stderr).
 fn hapticlab(args: &[&str]) -> (Option<i32>, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_hapticlab"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap();
+    let out = crate::common::hapticlab().args(args).output().unwrap();
     (
         out.status.code(),
         String::from_utf8_lossy(&out.stderr).into_owned(),

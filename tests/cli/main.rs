@@ -1,0 +1,15 @@
+//! The real `hapticlab` binary, end to end, and the engine tests that run
+//! beside it: one test binary, so the crate is linked once for all of them.
+//! Each file below is one subject (`cargo test --test cli doctor::` runs one).
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod cli;
+mod doctor;
+mod falcon_emulator;
+mod faults;
+mod first_session;
+mod plot;
+mod sweep_simulated;
+mod validation;

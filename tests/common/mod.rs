@@ -1,0 +1,70 @@
+//! Helpers shared by the integration test binaries (`tests/cli`,
+//! `tests/engine`, `tests/console`), declared once in each binary's
+//! `main.rs` as `#[path = "../common/mod.rs"] mod common;`. The counting
+//! allocator (`counting_alloc.rs`) is not here: it installs a global
+//! allocator, so only `tests/alloc` declares it.
+
+// Each binary uses a part of these.
+#![allow(dead_code)]
+
+pub mod mutation;
+pub mod run;
+
+use std::path::Path;
+use std::process::Command;
+
+use hapticlab::classify::TrainingExample;
+use hapticlab::profile::{Analysis, Detrend, SpectrumKind};
+
+use run::Run;
+
+/// The binary under test.
+pub const BIN: &str = env!("CARGO_BIN_EXE_hapticlab");
+/// The repository: the binary runs from here, so `profiles/…` and
+/// `tests/data/…` paths resolve.
+pub const REPO: &str = env!("CARGO_MANIFEST_DIR");
+
+/// The binary, run from the repository (so `profiles/…` paths resolve).
+pub fn hapticlab() -> Command {
+    let mut c = Command::new(BIN);
+    c.current_dir(REPO).env_remove("RUST_BACKTRACE");
+    c
+}
+
+/// `hapticlab ARGS` from the repository, run to the end.
+pub fn run<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Run {
+    hapticlab()
+        .args(args)
+        .output()
+        .expect("run hapticlab")
+        .into()
+}
+
+/// A temporary path as a command-line argument.
+pub fn p(path: &Path) -> &str {
+    path.to_str().expect("a UTF-8 temporary path")
+}
+
+/// The thesis's analysis with a window from 0 that gives `features`
+/// features (bins 1..=features of a 300-point window).
+pub fn analysis(features: usize) -> Analysis {
+    Analysis {
+        channel: "y_m".into(),
+        axis: "x_m".into(),
+        window: [0.0, 0.0897],
+        spacing: 0.0003,
+        detrend: Detrend::Mean,
+        spectrum: SpectrumKind::Magnitude,
+        bins: [1, features],
+        ..Analysis::default()
+    }
+}
+
+/// A labelled feature vector, as if read from `file`.
+pub fn ex(file: &str, label: &str, features: &[f64]) -> TrainingExample {
+    TrainingExample {
+        file: file.into(),
+        label: label.into(),
+        features: features.to_vec(),
+    }
+}
