@@ -2,12 +2,10 @@
 //! prints the result for people (or JSON for scripts). Errors come back as
 //! [`Failure`], which `main` maps to an exit code.
 
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::acquire::{self, SimulateOptions};
 use crate::analysis::FeatureExtractor;
@@ -18,65 +16,11 @@ use crate::evaluate;
 use crate::profile::LoadedProfile;
 use crate::recording;
 
-/// A command that failed: bad input (exit 2) or a runtime failure (exit 1).
-#[derive(Debug)]
-pub enum Failure {
-    BadInput(String),
-    Runtime(String),
-}
+pub mod support;
 
-impl Failure {
-    pub fn exit_code(&self) -> i32 {
-        match self {
-            Failure::BadInput(_) => 2,
-            Failure::Runtime(_) => 1,
-        }
-    }
-    pub fn message(&self) -> &str {
-        match self {
-            Failure::BadInput(m) | Failure::Runtime(m) => m,
-        }
-    }
-}
-
-impl From<acquire::AcquireError> for Failure {
-    fn from(e: acquire::AcquireError) -> Failure {
-        if e.is_bad_input() { bad(e) } else { runtime(e) }
-    }
-}
-
-impl From<crate::dataset::DatasetError> for Failure {
-    fn from(e: crate::dataset::DatasetError) -> Failure {
-        if e.is_bad_input() { bad(e) } else { runtime(e) }
-    }
-}
-
-fn bad(m: impl std::fmt::Display) -> Failure {
-    Failure::BadInput(m.to_string())
-}
-
-fn runtime(m: impl std::fmt::Display) -> Failure {
-    Failure::Runtime(m.to_string())
-}
-
-pub fn load_profile(arg: &ProfileArg) -> Result<LoadedProfile, Failure> {
-    LoadedProfile::load(&arg.profile).map_err(bad)
-}
-
-/// A progress bar on a terminal; nothing when standard error is piped.
-pub(crate) fn progress_bar(total: u64, what: &str) -> ProgressBar {
-    if !std::io::stderr().is_terminal() {
-        return ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden());
-    }
-    let pb = ProgressBar::new(total);
-    pb.set_style(
-        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} ({elapsed}, ETA {eta})")
-            .expect("a valid template")
-            .progress_chars("=> "),
-    );
-    pb.set_message(what.to_string());
-    pb
-}
+pub(crate) use support::progress_bar;
+pub use support::{Failure, load_profile};
+use support::{bad, runtime};
 
 pub fn run(cmd: Command) -> Result<(), Failure> {
     match cmd {
