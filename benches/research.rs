@@ -62,7 +62,13 @@ fn evaluate_10_fold(c: &mut Criterion) {
         "10-fold CV, 2000 recordings x 10000 samples, parsing included",
         |b| {
             b.iter(|| {
-                let data = Dataset::load(&paths, &analysis, threads).unwrap();
+                let data = Dataset::load(
+                    &paths,
+                    &analysis,
+                    hapticlab::dataset::Keep::Features,
+                    threads,
+                )
+                .unwrap();
                 let examples = data.examples(&analysis).unwrap();
                 let labels: Vec<&str> = examples.iter().map(|e| e.label.as_str()).collect();
                 let folds = make_folds(&labels, None, SplitMethod::KFold, 10, 1).unwrap();

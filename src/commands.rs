@@ -2,80 +2,25 @@
 //! prints the result for people (or JSON for scripts). Errors come back as
 //! [`Failure`], which `main` maps to an exit code.
 
-use std::io::{IsTerminal, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::acquire::{self, SimulateOptions};
 use crate::analysis::FeatureExtractor;
 use crate::classify::{Model, TrainingExample, plural};
 use crate::cli::{Command, ProfileArg};
+use crate::dataset::{self, DatasetError};
 use crate::evaluate;
 use crate::profile::LoadedProfile;
-use crate::recording::{self, Recording};
+use crate::recording;
 
-/// A command that failed: bad input (exit 2) or a runtime failure (exit 1).
-#[derive(Debug)]
-pub enum Failure {
-    BadInput(String),
-    Runtime(String),
-}
+pub mod support;
 
-impl Failure {
-    pub fn exit_code(&self) -> i32 {
-        match self {
-            Failure::BadInput(_) => 2,
-            Failure::Runtime(_) => 1,
-        }
-    }
-    pub fn message(&self) -> &str {
-        match self {
-            Failure::BadInput(m) | Failure::Runtime(m) => m,
-        }
-    }
-}
-
-impl From<acquire::AcquireError> for Failure {
-    fn from(e: acquire::AcquireError) -> Failure {
-        if e.is_bad_input() { bad(e) } else { runtime(e) }
-    }
-}
-
-impl From<crate::dataset::DatasetError> for Failure {
-    fn from(e: crate::dataset::DatasetError) -> Failure {
-        if e.is_bad_input() { bad(e) } else { runtime(e) }
-    }
-}
-
-fn bad(m: impl std::fmt::Display) -> Failure {
-    Failure::BadInput(m.to_string())
-}
-
-fn runtime(m: impl std::fmt::Display) -> Failure {
-    Failure::Runtime(m.to_string())
-}
-
-pub fn load_profile(arg: &ProfileArg) -> Result<LoadedProfile, Failure> {
-    LoadedProfile::load(&arg.profile).map_err(bad)
-}
-
-/// A progress bar on a terminal; nothing when standard error is piped.
-pub(crate) fn progress_bar(total: u64, what: &str) -> ProgressBar {
-    if !std::io::stderr().is_terminal() {
-        return ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden());
-    }
-    let pb = ProgressBar::new(total);
-    pb.set_style(
-        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} ({elapsed}, ETA {eta})")
-            .expect("a valid template")
-            .progress_chars("=> "),
-    );
-    pb.set_message(what.to_string());
-    pb
-}
+pub(crate) use support::progress_bar;
+pub use support::{Failure, load_profile};
+use support::{bad, runtime};
 
 pub fn run(cmd: Command) -> Result<(), Failure> {
     match cmd {
@@ -144,7 +89,8 @@ pub fn run(cmd: Command) -> Result<(), Failure> {
             if validation.is_active() || method != crate::profile::SplitMethod::Holdout {
                 crate::study::run_evaluate(&profile, &paths, shuffle_seed, json, &validation)
             } else {
-                evaluate_cmd(&profile, &paths, shuffle_seed, json)
+                let threads = validation.threads.unwrap_or_else(dataset::cores);
+                evaluate_cmd(&profile, &paths, shuffle_seed, json, threads)
             }
         }
         Command::Check { profiles } => check(&profiles),
@@ -454,114 +400,53 @@ fn start_triggers(lp: &LoadedProfile) -> Option<crate::triggers::TriggerWatcher>
     (connected > 0).then_some(w)
 }
 
-/// The recordings under `paths` (files as given, folders walked), sorted;
-/// finding none is bad input.
-pub fn recording_files(paths: &[PathBuf]) -> Result<Vec<PathBuf>, Failure> {
-    let files = recording::collect_files(paths).map_err(bad)?;
-    if files.is_empty() {
-        return Err(bad(format!(
-            "no recordings (*.csv, *.csv.gz) found in {}",
-            paths
-                .iter()
-                .map(|p| p.display().to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        )));
-    }
-    Ok(files)
-}
-
-/// Recordings under `paths`, read and turned into feature vectors. Incomplete
-/// recordings are skipped with a warning; a malformed one is an error.
+/// Recordings under `paths`, read on every core and turned into feature
+/// vectors under `analysis` ([`crate::dataset::load`]). Each recording left
+/// out (incomplete) is named in one warning on standard error; a malformed
+/// one is an error.
 pub fn load_examples(
     paths: &[PathBuf],
-    extractor: &mut FeatureExtractor,
+    analysis: &crate::profile::Analysis,
 ) -> Result<Vec<TrainingExample>, Failure> {
-    let files = recording_files(paths)?;
+    load_examples_on(paths, analysis, dataset::cores())
+}
+
+/// [`load_examples`] on `threads` reader threads.
+pub fn load_examples_on(
+    paths: &[PathBuf],
+    analysis: &crate::profile::Analysis,
+    threads: usize,
+) -> Result<Vec<TrainingExample>, Failure> {
+    let files = find_recordings(paths)?;
     let pb = progress_bar(files.len() as u64, "reading");
-    let mut out = Vec::with_capacity(files.len());
-    for f in &files {
-        pb.inc(1);
-        let rec = recording::read(f).map_err(bad)?;
-        if !rec.is_complete() {
-            pb.suspend(|| {
-                eprintln!(
-                    "warning: {}: incomplete scan (no `# end samples` trailer{}), skipped",
-                    f.display(),
-                    if rec.torn_last_row {
-                        "; its last row was cut short and left out"
-                    } else {
-                        ""
-                    }
-                )
-            });
-            continue;
-        }
-        out.push(example_of(&rec, f, extractor)?);
-    }
-    pb.finish_and_clear();
-    Ok(out)
-}
-
-/// The label of a recording: its `label` metadata, else its folder's name.
-pub fn label_of(rec: &Recording, file: &Path) -> Result<String, Failure> {
-    if let Some(l) = rec.label() {
-        return Ok(l.to_string());
-    }
-    file.parent()
-        .and_then(|p| p.file_name())
-        .map(|n| n.to_string_lossy().into_owned())
-        .ok_or_else(|| {
-            bad(format!(
-                "{}: no `label` in the metadata and no folder to name it",
-                file.display()
-            ))
-        })
-}
-
-pub fn example_of(
-    rec: &Recording,
-    file: &Path,
-    ex: &mut FeatureExtractor,
-) -> Result<TrainingExample, Failure> {
-    let features = features_of(rec, file, ex)?;
-    Ok(TrainingExample {
-        file: file.display().to_string(),
-        label: label_of(rec, file)?,
-        features,
-    })
-}
-
-/// The feature vector of one recording under the extractor's settings.
-pub fn features_of(
-    rec: &Recording,
-    file: &Path,
-    ex: &mut FeatureExtractor,
-) -> Result<Vec<f64>, Failure> {
-    let s = ex.settings();
-    let axis_name = s.axis.clone();
-    let channel_names: Vec<String> = s.all_channels().map(str::to_string).collect();
-    let missing = |c: &str| {
-        bad(format!(
-            "{}: no column `{c}` (the recording has {})",
-            file.display(),
-            rec.columns.join(", ")
-        ))
+    let options = dataset::Options {
+        threads,
+        ..dataset::Options::default()
     };
-    let axis = rec.column(&axis_name).ok_or_else(|| missing(&axis_name))?;
-    let signals = channel_names
-        .iter()
-        .map(|c| rec.column(c).ok_or_else(|| missing(c)))
-        .collect::<Result<Vec<_>, _>>()?;
-    ex.features_of_channels(axis, &signals)
-        .map(|f| f.to_vec())
-        .map_err(|e| bad(format!("{}: {e}", file.display())))
+    let loaded = dataset::load(&files, analysis, options, &|| pb.inc(1));
+    pb.finish_and_clear();
+    let loaded = loaded?;
+    warn_skipped(&loaded.skipped);
+    Ok(loaded.into_examples())
+}
+
+/// The recordings under `paths` ([`dataset::find`]); a path that cannot be
+/// walked, or none found, is the user's to fix (exit code 2).
+pub fn find_recordings(paths: &[PathBuf]) -> Result<Vec<PathBuf>, Failure> {
+    dataset::find(paths).map_err(bad)
+}
+
+/// One warning line on standard error per recording left out; never panics
+/// on a terminal that has gone.
+pub fn warn_skipped(skipped: &[dataset::Skipped]) {
+    for s in skipped {
+        let _ = writeln!(std::io::stderr(), "warning: {s}");
+    }
 }
 
 fn features(profile: &ProfileArg, paths: &[PathBuf], out: Option<&Path>) -> Result<(), Failure> {
     let lp = load_profile(profile)?;
-    let mut ex = FeatureExtractor::new(&lp.profile.analysis);
-    let examples = load_examples(paths, &mut ex)?;
+    let examples = load_examples(paths, &lp.profile.analysis)?;
     let n = lp.profile.analysis.feature_count();
     let mut text = String::from("file,label");
     for i in 1..=n {
@@ -628,8 +513,7 @@ pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), Failure> {
 
 fn train(profile: &ProfileArg, paths: &[PathBuf], out: &Path) -> Result<(), Failure> {
     let lp = load_profile(profile)?;
-    let mut ex = FeatureExtractor::new(&lp.profile.analysis);
-    let examples = load_examples(paths, &mut ex)?;
+    let examples = load_examples(paths, &lp.profile.analysis)?;
     let n = examples.len();
     let model = Model::train_adapting_k(
         &lp.profile.name,
@@ -677,17 +561,18 @@ fn classify(
         eprintln!("note: {}: {note}", model_path.display());
     }
     let mut ex = FeatureExtractor::new(&model.analysis);
-    let files = recording::collect_files(files).map_err(bad)?;
+    let files = find_recordings(files)?;
     let mut rows = Vec::new();
     for f in &files {
-        let rec = recording::read(f).map_err(bad)?;
+        let rec = recording::read(f).map_err(DatasetError::from)?;
         if !rec.is_complete() {
-            eprintln!(
+            let _ = writeln!(
+                std::io::stderr(),
                 "warning: {}: incomplete scan, classified anyway",
                 f.display()
             );
         }
-        let feats = features_of(&rec, f, &mut ex)?;
+        let feats = dataset::features_of(&rec, f, &mut ex)?;
         let p = model.classify(&feats).map_err(bad)?;
         if !json {
             let votes: Vec<String> = p.votes.iter().map(|(l, v)| format!("{l}:{v}")).collect();
@@ -725,10 +610,10 @@ fn evaluate_cmd(
     paths: &[PathBuf],
     shuffle_seed: Option<u64>,
     json: bool,
+    threads: usize,
 ) -> Result<(), Failure> {
     let lp = load_profile(profile)?;
-    let mut ex = FeatureExtractor::new(&lp.profile.analysis);
-    let examples = load_examples(paths, &mut ex)?;
+    let examples = load_examples_on(paths, &lp.profile.analysis, threads)?;
     let mut eval = lp.profile.evaluation.clone();
     if shuffle_seed.is_some() {
         eval.shuffle_seed = shuffle_seed;

@@ -2,10 +2,12 @@
 //! and parameter sweeps (`--sweep KEY=VALUES`): the thesis's section 4.3
 //! parameter selection as one command.
 //!
-//! The recordings are read once into a [`Dataset`] holding only the columns
-//! the analysis needs (and the metadata), so a sweep over analysis keys
-//! re-extracts features without re-reading files. A sweep sets a key of the
-//! profile's `[analysis]`, `[classifier]` or `[evaluation]` table through
+//! The recordings are read once ([`crate::dataset::load`], on every core)
+//! into a [`Dataset`] holding each one's feature vector and metadata, or,
+//! for a sweep over an `[analysis]` key, the columns the analysis reads, so
+//! features are extracted again per value without re-reading files. A
+//! sweep sets a key of the profile's `[analysis]`, `[classifier]` or
+//! `[evaluation]` table through
 //! TOML, so every key those tables accept can be swept and is validated as
 //! in a profile file. Keys that change the recordings themselves (the
 //! path's speed, the controller's stiffness, any `[controller]`, `[path]`,
@@ -22,11 +24,11 @@ use serde::Serialize;
 use crate::analysis::FeatureExtractor;
 use crate::classify::TrainingExample;
 use crate::cli::ProfileArg;
-use crate::commands::{Failure, label_of, load_profile};
+use crate::commands::{Failure, load_profile};
+use crate::dataset::{self, Entry, Keep, Options, Skipped, Unusable};
 use crate::evaluate::cv::{self, CvReport};
 use crate::evaluate::{self as ev};
 use crate::profile::{Analysis, Profile, SplitMethod};
-use crate::recording;
 
 /// The options `evaluate` gains for cross-validation and sweeps.
 #[derive(Debug, Args, Clone, Default)]
@@ -73,22 +75,18 @@ fn bad(m: impl std::fmt::Display) -> Failure {
     Failure::BadInput(m.to_string())
 }
 
-/// One recording as the analysis needs it.
+/// The recordings of one evaluation, loaded once ([`dataset::load`]): their
+/// feature vectors under the profile's analysis ([`Keep::Features`]), or,
+/// for a sweep over an `[analysis]` key, the columns the analysis reads
+/// ([`Keep::Samples`]) so features are extracted again per value.
 #[derive(Debug, Clone)]
-pub struct Scan {
-    pub file: String,
-    pub label: String,
-    pub meta: Vec<(String, toml::Value)>,
-    pub axis: Vec<f64>,
-    /// `channel`, then `channels`, as the analysis names them.
-    pub signals: Vec<Vec<f64>>,
-}
-
-#[derive(Debug, Clone, Default)]
 pub struct Dataset {
-    pub scans: Vec<Scan>,
-    /// Files skipped as incomplete.
-    pub incomplete: Vec<String>,
+    pub scans: Vec<Entry>,
+    /// Recordings left out (incomplete), in file-name order.
+    pub skipped: Vec<Skipped>,
+    /// The analysis the features were made under ([`Keep::Features`]).
+    analysis: Analysis,
+    keep: Keep,
 }
 
 /// A metadata value as a group key: strings as they are, others in TOML.
@@ -100,89 +98,65 @@ pub fn meta_text(v: &toml::Value) -> String {
 }
 
 impl Dataset {
-    /// Read every recording under `paths` (in parallel), keeping the columns
-    /// `analysis` needs. Incomplete recordings are listed, not kept.
+    /// Read every recording under `paths` on `threads` threads, keeping
+    /// what `keep` says. Incomplete recordings are listed, not kept; a
+    /// malformed one is an error.
     pub fn load(
         paths: &[PathBuf],
         analysis: &Analysis,
+        keep: Keep,
         threads: usize,
     ) -> Result<Dataset, Failure> {
-        let files = crate::commands::recording_files(paths)?;
-        let names: Vec<String> = std::iter::once(analysis.axis.clone())
-            .chain(analysis.all_channels().map(str::to_string))
-            .collect();
-        let read_one = |f: &PathBuf| -> Result<Result<Scan, String>, Failure> {
-            let rec = recording::read(f).map_err(bad)?;
-            if !rec.is_complete() {
-                return Ok(Err(f.display().to_string()));
-            }
-            let mut cols = Vec::with_capacity(names.len());
-            for n in &names {
-                let c = rec.column(n).ok_or_else(|| {
-                    bad(format!(
-                        "{}: no column `{n}` (the recording has {})",
-                        f.display(),
-                        rec.columns.join(", ")
-                    ))
-                })?;
-                cols.push(c.to_vec());
-            }
-            let label = label_of(&rec, f)?;
-            let axis = cols.remove(0);
-            Ok(Ok(Scan {
-                file: f.display().to_string(),
-                label,
-                meta: rec.meta,
-                axis,
-                signals: cols,
-            }))
+        let options = Options {
+            keep,
+            unusable: Unusable::Fail,
+            threads,
         };
-        let threads = threads.clamp(1, files.len());
-        let per = files.len().div_ceil(threads);
-        let results: Vec<Result<Vec<Result<Scan, String>>, Failure>> = std::thread::scope(|s| {
-            let handles: Vec<_> = files
-                .chunks(per)
-                .map(|chunk| {
-                    let read_one = &read_one;
-                    s.spawn(move || chunk.iter().map(read_one).collect::<Result<Vec<_>, _>>())
-                })
-                .collect();
-            handles
-                .into_iter()
-                .map(|h| {
-                    h.join()
-                        .unwrap_or_else(|_| Err(bad("a reader thread panicked")))
-                })
-                .collect()
-        });
-        let mut out = Dataset::default();
-        for r in results {
-            for s in r? {
-                match s {
-                    Ok(scan) => out.scans.push(scan),
-                    Err(file) => out.incomplete.push(file),
-                }
-            }
-        }
-        Ok(out)
+        Dataset::load_files(
+            &crate::commands::find_recordings(paths)?,
+            analysis,
+            options,
+            &|| {},
+        )
     }
 
-    /// The feature vectors under `analysis` (whose channels must be the
-    /// ones the dataset was loaded with).
+    /// The recordings in `files`, loaded as `options` say; `progress`
+    /// hears each file.
+    pub fn load_files(
+        files: &[PathBuf],
+        analysis: &Analysis,
+        options: Options,
+        progress: &(dyn Fn() + Sync),
+    ) -> Result<Dataset, Failure> {
+        let loaded = dataset::load(files, analysis, options, progress)?;
+        Ok(Dataset {
+            scans: loaded.entries,
+            skipped: loaded.skipped,
+            analysis: analysis.clone(),
+            keep: options.keep,
+        })
+    }
+
+    /// The feature vectors under `analysis`: the kept ones when it is the
+    /// analysis they were made under, else extracted again from the kept
+    /// columns (whose channels must be `analysis`'s).
     pub fn examples(&self, analysis: &Analysis) -> Result<Vec<TrainingExample>, Failure> {
+        if self.keep == Keep::Features {
+            if *analysis != self.analysis {
+                return Err(Failure::Runtime(
+                    "the recordings were loaded for other analysis settings (features only)".into(),
+                ));
+            }
+            return Ok(self.scans.iter().map(Entry::example).collect());
+        }
         let mut fx = FeatureExtractor::try_new(analysis).map_err(bad)?;
         self.scans
             .iter()
             .map(|s| {
-                let signals: Vec<&[f64]> = s.signals.iter().map(Vec::as_slice).collect();
-                let features = fx
-                    .features_of_channels(&s.axis, &signals)
-                    .map_err(|e| bad(format!("{}: {e}", s.file)))?
-                    .to_vec();
                 Ok(TrainingExample {
                     file: s.file.clone(),
                     label: s.label.clone(),
-                    features,
+                    features: s.features_with(&mut fx)?,
                 })
             })
             .collect()
@@ -193,16 +167,12 @@ impl Dataset {
         self.scans
             .iter()
             .map(|s| {
-                s.meta
-                    .iter()
-                    .find(|(k, _)| k == key)
-                    .map(|(_, v)| meta_text(v))
-                    .ok_or_else(|| {
-                        bad(format!(
-                            "{}: no metadata key `{key}` to group by (--group-by)",
-                            s.file
-                        ))
-                    })
+                s.meta_text(key).ok_or_else(|| {
+                    bad(format!(
+                        "{}: no metadata key `{key}` to group by (--group-by)",
+                        s.file
+                    ))
+                })
             })
             .collect()
     }
@@ -648,12 +618,14 @@ pub struct SimPlan {
 /// A dataset simulated from `lp` in virtual time (`per_class` scans of
 /// every texture, seeded with the profile's `simulator.seed`), written to a
 /// temporary folder that is removed before this returns, and loaded for
-/// `analysis`. File names are relative (`S2/S2_001.csv`). `progress` hears
-/// (done, total) scans.
+/// `analysis` as `options` say (its `threads` are `sim.threads`). File
+/// names are relative (`S2/S2_001.csv`), in the reasons for skipping too.
+/// `progress` hears (done, total) scans.
 pub fn simulated_dataset(
     lp: &crate::profile::LoadedProfile,
     sim: SimPlan,
     analysis: &Analysis,
+    options: Options,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Dataset, Failure> {
     // Removed on drop, and on Ctrl-C (which would otherwise skip the drop).
@@ -672,21 +644,33 @@ pub fn simulated_dataset(
     };
     crate::acquire::simulate_dataset(lp, &opts, &dir.watch(opts.threads, progress))?;
     dir.exit_if_interrupted();
-    let mut data = Dataset::load(&[dir.path().to_path_buf()], analysis, sim.threads)?;
+    let files = dataset::find(&[dir.path().to_path_buf()])?;
+    let options = Options {
+        threads: sim.threads,
+        ..options
+    };
+    let mut data = Dataset::load_files(&files, analysis, options, &|| {})?;
     dir.exit_if_interrupted();
     let relative = |f: &str| {
         std::path::Path::new(f)
             .strip_prefix(dir.path())
             .map_or_else(|_| f.to_string(), |r| r.display().to_string())
     };
+    let prefix = format!("{}/", dir.path().display());
     for s in &mut data.scans {
         s.file = relative(&s.file);
     }
-    for f in &mut data.incomplete {
-        *f = relative(f);
+    for s in &mut data.skipped {
+        match s {
+            Skipped::Incomplete { file, .. } => *file = relative(file),
+            Skipped::Unusable { file, reason, .. } => {
+                *file = relative(file);
+                *reason = reason.replace(&prefix, "");
+            }
+        }
     }
     data.scans.sort_by(|a, b| a.file.cmp(&b.file));
-    data.incomplete.sort();
+    data.skipped.sort_by(|a, b| a.file().cmp(b.file()));
     Ok(data)
 }
 
@@ -700,7 +684,7 @@ fn point(value: &toml::Value, r: &CvReport, data: &Dataset) -> SweepPoint {
         k: r.folds.iter().map(|f| f.k).collect(),
         k_notice: r.k_notice(),
         recordings: data.scans.len(),
-        incomplete: data.incomplete.len(),
+        incomplete: data.skipped.len(),
         error: None,
     }
 }
@@ -787,16 +771,32 @@ pub fn sweep_simulated(
             profile: p,
             ..lp.clone()
         };
-        let data = simulated_dataset(&lp_v, sim, &lp_v.profile.analysis, &|done, total| {
-            progress(i, done, total)
-        })?;
         // Recordings the analysis cannot use (a path so fast the window
         // has gaps) are this value's result: say so and go on. Anything
-        // else (k larger than the training part, …) stops the sweep.
-        let examples = if data.scans.is_empty() {
-            Err(bad("no simulated scan finished"))
-        } else {
-            data.examples(&lp_v.profile.analysis)
+        // else (an unreadable file, k larger than the training part, …)
+        // stops the sweep.
+        let options = Options {
+            unusable: Unusable::Skip,
+            ..Options::default()
+        };
+        let data = simulated_dataset(
+            &lp_v,
+            sim,
+            &lp_v.profile.analysis,
+            options,
+            &|done, total| progress(i, done, total),
+        )?;
+        let mut unusable = data.skipped.iter().filter_map(|s| match s {
+            Skipped::Unusable {
+                reason, unreadable, ..
+            } => Some((reason, *unreadable)),
+            Skipped::Incomplete { .. } => None,
+        });
+        let examples = match unusable.next() {
+            Some((reason, true)) => return Err(bad(reason)),
+            Some((reason, false)) => Err(bad(reason)),
+            None if data.scans.is_empty() => Err(bad("no simulated scan finished")),
+            None => data.examples(&lp_v.profile.analysis),
         };
         let examples = match examples {
             Ok(e) => e,
@@ -810,7 +810,11 @@ pub fn sweep_simulated(
                     k: Vec::new(),
                     k_notice: None,
                     recordings: data.scans.len(),
-                    incomplete: data.incomplete.len(),
+                    incomplete: data
+                        .skipped
+                        .iter()
+                        .filter(|s| matches!(s, Skipped::Incomplete { .. }))
+                        .count(),
                     error: Some(f.message().to_string()),
                 });
                 continue;
@@ -1002,19 +1006,32 @@ pub fn run_evaluate(
         }
         return Ok(());
     }
+    // Samples are kept only when a sweep extracts features again per value;
+    // otherwise memory holds one feature vector per recording.
+    let keep = match &sweep_spec {
+        Some((_, _, k, _)) if k.table == "analysis" => Keep::Samples,
+        _ => Keep::Features,
+    };
+    let options = Options {
+        keep,
+        unusable: Unusable::Fail,
+        threads: plan.threads,
+    };
     let data = if args.simulate {
         let pb = crate::commands::progress_bar((sim.per_class * n_textures) as u64, "simulating");
-        let d = simulated_dataset(&lp, sim, &lp.profile.analysis, &|done, _| {
+        let d = simulated_dataset(&lp, sim, &lp.profile.analysis, options, &|done, _| {
             pb.set_position(done as u64)
-        })?;
+        });
         pb.finish_and_clear();
-        d
+        d?
     } else {
-        Dataset::load(paths, &lp.profile.analysis, plan.threads)?
+        let files = crate::commands::find_recordings(paths)?;
+        let pb = crate::commands::progress_bar(files.len() as u64, "reading");
+        let d = Dataset::load_files(&files, &lp.profile.analysis, options, &|| pb.inc(1));
+        pb.finish_and_clear();
+        d?
     };
-    for f in &data.incomplete {
-        eprintln!("warning: {f}: incomplete scan (no `# end samples` trailer), skipped");
-    }
+    crate::commands::warn_skipped(&data.skipped);
     let source = if args.simulate {
         format!(
             "{} simulated recordings (seed {})",

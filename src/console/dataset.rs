@@ -15,8 +15,9 @@ use super::app::App;
 use super::keymap::Key;
 use crate::analysis::FeatureExtractor;
 use crate::classify::{Model, TrainingExample};
+use crate::dataset;
 use crate::evaluate::Report;
-use crate::profile::{LoadedProfile, SplitMethod};
+use crate::profile::{Analysis, LoadedProfile, SplitMethod};
 use crate::recording;
 use crate::study::{self, Dataset, Plan, ValidationArgs};
 
@@ -121,23 +122,18 @@ pub fn count(dir: &Path) -> (Vec<(String, usize)>, usize) {
     (counts, count_files(&dir.join(UNSAVED_DIR)))
 }
 
-/// Complete recordings under `dir` as training examples, quietly; the
-/// number of incomplete ones skipped.
+/// Complete recordings under `dir` as training examples, read on every
+/// core and quietly ([`crate::dataset::load`]); the number of incomplete
+/// ones skipped.
 pub fn load_examples(
     dir: &Path,
-    ex: &mut FeatureExtractor,
+    analysis: &Analysis,
 ) -> Result<(Vec<TrainingExample>, usize), String> {
-    let files = recording::collect_files(&[dir.to_path_buf()]).map_err(|e| e.to_string())?;
-    let mut out = Vec::with_capacity(files.len());
-    let mut skipped = 0;
-    for f in &files {
-        let rec = recording::read(f).map_err(|e| e.to_string())?;
-        if !rec.is_complete() {
-            skipped += 1;
-            continue;
-        }
-        out.push(crate::commands::example_of(&rec, f, ex).map_err(|e| e.message().to_string())?);
-    }
+    let files = dataset::find(&[dir.to_path_buf()]).map_err(|e| e.to_string())?;
+    let loaded = dataset::load(&files, analysis, dataset::Options::default(), &|| {})
+        .map_err(|e| e.to_string())?;
+    let skipped = loaded.skipped.len();
+    let out = loaded.into_examples();
     if out.is_empty() {
         return Err(format!(
             "no complete recordings in {} to train on",
@@ -291,7 +287,7 @@ impl Jobs {
                     let rec = recording::read(&path).ok();
                     let label = rec.as_ref().and_then(|r| r.label().map(str::to_string));
                     let predicted = match (&rec, &model) {
-                        (Some(r), Some(m)) => crate::commands::features_of(r, &path, &mut ex)
+                        (Some(r), Some(m)) => dataset::features_of(r, &path, &mut ex)
                             .ok()
                             .and_then(|f| super::scan::predict(m, &f, &path).ok())
                             .map(|p| p.prediction.label),
@@ -374,8 +370,8 @@ pub fn evaluate_dataset(
 ) -> Result<(Report, String, String), String> {
     let an = &lp.profile.analysis;
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let data =
-        Dataset::load(&[dir.to_path_buf()], an, threads).map_err(|f| f.message().to_string())?;
+    let data = Dataset::load(&[dir.to_path_buf()], an, dataset::Keep::Features, threads)
+        .map_err(|f| f.message().to_string())?;
     if data.scans.is_empty() {
         return Err(format!(
             "no complete recordings in {} to evaluate",
@@ -404,8 +400,7 @@ pub fn evaluate_dataset(
 }
 
 fn train(lp: &LoadedProfile, dir: &Path) -> Result<(Model, usize), String> {
-    let mut ex = FeatureExtractor::new(&lp.profile.analysis);
-    let (examples, skipped) = load_examples(dir, &mut ex)?;
+    let (examples, skipped) = load_examples(dir, &lp.profile.analysis)?;
     let model = Model::train_adapting_k(
         &lp.profile.name,
         &lp.profile.analysis,

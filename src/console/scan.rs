@@ -61,7 +61,9 @@ pub fn unit_of(column: &str) -> (f64, &'static str) {
     }
 }
 
-/// Analyse a recording under the extractor's settings.
+/// Analyse a recording under the extractor's settings: the trace shows the
+/// first channel, the features are of all of them, as `classify` makes
+/// them ([`crate::dataset::features_of`]).
 pub fn analyse(rec: &Recording, path: &Path, ex: &mut FeatureExtractor) -> ScanView {
     let s = ex.settings().clone();
     let (ascale, _) = unit_of(&s.axis);
@@ -79,16 +81,9 @@ pub fn analyse(rec: &Recording, path: &Path, ex: &mut FeatureExtractor) -> ScanV
         .step_by(step)
         .map(|j| (dir * (axis[j] - axis[0]) * ascale, signal[j] * sscale))
         .collect();
-    let features = if axis.is_empty() || signal.is_empty() {
-        Err(format!(
-            "the recording has no {} or {} column",
-            s.axis, s.channel
-        ))
-    } else {
-        ex.features(axis, signal)
-            .map(<[f64]>::to_vec)
-            .map_err(|e| e.to_string())
-    };
+    // The features `train` and `classify` make: every channel the
+    // analysis reads, through the one loader's `features_of`.
+    let features = crate::dataset::features_of(rec, path, ex).map_err(|e| e.to_string());
     let t = rec.column("t_s").unwrap_or(&[]);
     ScanView {
         path: path.to_path_buf(),

@@ -499,6 +499,106 @@ fn features_writes_one_csv_row_per_recording() {
 
 // ---------------------------------------------------------------- train, classify
 
+/// Under a profile that reads two channels (`y_m` and `fy_n`), the
+/// console's Predict (`console::scan::analyse`, then `predict`) sees the
+/// features `train` and `classify` make: 98 per scan, and the same
+/// prediction, votes and neighbour distances as `classify --json`.
+#[test]
+fn the_consoles_predict_and_classify_see_the_same_features_under_two_channels() {
+    use hapticlab::analysis::FeatureExtractor;
+    use hapticlab::classify::Model;
+    use hapticlab::profile::LoadedProfile;
+    let dir = TempDir::new().unwrap();
+    let thesis = fs::read_to_string(Path::new(REPO).join("profiles/thesis.toml")).unwrap();
+    let two = thesis.replacen(
+        "channel = \"y_m\"\n",
+        "channel = \"y_m\"\nchannels = [\"fy_n\"]\n",
+        1,
+    );
+    assert_ne!(two, thesis, "the thesis profile names its channel");
+    let profile = dir.path().join("two-channels.toml");
+    fs::write(&profile, two).unwrap();
+    // Three scans of each texture to train on, the fourth of S3 held out.
+    let shipped = Path::new(REPO).join("recordings/thesis-sim");
+    let data = dir.path().join("D");
+    for label in ["S1", "S2", "S3", "S4"] {
+        fs::create_dir_all(data.join(label)).unwrap();
+        for i in 1..=3 {
+            let name = format!("{label}_00{i}.csv.gz");
+            fs::copy(
+                shipped.join(label).join(&name),
+                data.join(label).join(&name),
+            )
+            .unwrap();
+        }
+    }
+    let held = shipped.join("S3").join("S3_004.csv.gz");
+    let model_path = dir.path().join("M.json");
+    let r = run(&[
+        "train",
+        "--profile",
+        p(&profile),
+        p(&data),
+        "--out",
+        p(&model_path),
+    ]);
+    assert_ok(&r);
+    let r = run(&[
+        "classify",
+        "--profile",
+        p(&profile),
+        "--model",
+        p(&model_path),
+        "--json",
+        p(&held),
+    ]);
+    assert_ok(&r);
+    let v: Value = serde_json::from_str(&r.stdout).unwrap_or_else(|e| panic!("{e}: {r:?}"));
+    let row = &v.as_array().unwrap()[0];
+
+    let lp = LoadedProfile::load(&profile).unwrap();
+    let model = Model::load(&model_path).unwrap();
+    assert_eq!(lp.profile.analysis.feature_count(), 98);
+    assert!(model.examples.iter().all(|e| e.features.len() == 98));
+    let rec = hapticlab::recording::read(&held).unwrap();
+    let mut ex = FeatureExtractor::new(&lp.profile.analysis);
+    let view = hapticlab::console::scan::analyse(&rec, &held, &mut ex);
+    let features = view.features.clone().unwrap();
+    assert_eq!(features.len(), 98);
+    // The same vector `classify` computes for this file.
+    let mut ex = FeatureExtractor::new(&model.analysis);
+    assert_eq!(
+        hapticlab::dataset::features_of(&rec, &held, &mut ex).unwrap(),
+        features
+    );
+    // And the same prediction, votes and neighbours as `classify --json`.
+    let predicted = hapticlab::console::scan::predict(&model, &features, &held).unwrap();
+    assert!(!predicted.left_out);
+    let pr = &predicted.prediction;
+    assert_eq!(row["predicted"].as_str(), Some(pr.label.as_str()), "{row}");
+    assert_eq!(
+        row["votes"],
+        serde_json::to_value(&pr.votes).unwrap(),
+        "{row}"
+    );
+    assert_eq!(
+        row["neighbours"],
+        serde_json::to_value(&pr.neighbours).unwrap(),
+        "{row}"
+    );
+    // A training scan opened in the console gives the features `train`
+    // stored for it.
+    let first = data.join("S1").join("S1_001.csv.gz");
+    let rec = hapticlab::recording::read(&first).unwrap();
+    let view = hapticlab::console::scan::analyse(&rec, &first, &mut ex);
+    let stored = model
+        .examples
+        .iter()
+        .find(|e| e.file == first.display().to_string())
+        .unwrap();
+    assert_eq!(view.features.unwrap(), stored.features);
+}
+
 #[test]
 fn train_then_classify_held_out_scans() {
     let dir = TempDir::new().unwrap();

@@ -6,7 +6,6 @@
 use std::path::Path;
 
 use hapticlab::acquire::{SimulateOptions, simulate_dataset, simulate_one};
-use hapticlab::analysis::FeatureExtractor;
 use hapticlab::classify::Model;
 use hapticlab::commands::load_examples;
 use hapticlab::device::falcon::{self, OpenError};
@@ -67,8 +66,7 @@ fn the_thesis_result_holds_through_the_emulated_falcon() {
     let saved = simulate_dataset(&lp, &opts, &|_, _| {}).unwrap();
     assert!(saved.iter().all(|s| s.complete), "{saved:?}");
     let p = &lp.profile;
-    let mut ex = FeatureExtractor::new(&p.analysis);
-    let examples = load_examples(&[dir.path().to_path_buf()], &mut ex).unwrap();
+    let examples = load_examples(&[dir.path().to_path_buf()], &p.analysis).unwrap();
     let eval = Evaluation {
         train_per_class: 8,
         test_per_class: 4,

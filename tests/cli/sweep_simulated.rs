@@ -75,7 +75,11 @@ fn each_value_simulates_its_own_recordings() {
             profile: p,
             ..lp.clone()
         };
-        let d = simulated_dataset(&lp, sim, &lp.profile.analysis, &|_, _| {}).unwrap();
+        let samples = hapticlab::dataset::Options {
+            keep: hapticlab::dataset::Keep::Samples,
+            ..Default::default()
+        };
+        let d = simulated_dataset(&lp, sim, &lp.profile.analysis, samples, &|_, _| {}).unwrap();
         assert_eq!(d.scans.len(), 8);
         for s in &d.scans {
             assert!(!s.file.starts_with('/'), "relative names: {}", s.file);

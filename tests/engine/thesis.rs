@@ -4,7 +4,6 @@
 //! 8/4 split with k-NN.
 
 use hapticlab::acquire::{SimulateOptions, simulate_dataset};
-use hapticlab::analysis::FeatureExtractor;
 use hapticlab::classify::Model;
 use hapticlab::commands::load_examples;
 use hapticlab::evaluate::{evaluate, split};
@@ -39,8 +38,7 @@ fn dominant_bins_and_accuracy_match_the_thesis() {
     assert_eq!(saved.len(), 4 * PER_CLASS);
     assert!(saved.iter().all(|s| s.complete && s.error.is_none()));
 
-    let mut extractor = FeatureExtractor::new(&p.analysis);
-    let examples = load_examples(&[dir.path().to_path_buf()], &mut extractor).unwrap();
+    let examples = load_examples(&[dir.path().to_path_buf()], &p.analysis).unwrap();
     assert_eq!(examples.len(), 4 * PER_CLASS);
     assert_eq!(p.analysis.bins, [1, 49]);
 

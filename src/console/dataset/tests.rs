@@ -231,8 +231,7 @@ fn a_stale_model_is_flagged_where_it_is_shown() {
 #[test]
 fn a_saved_model_with_other_classifier_settings_is_not_used_silently() {
     let (d, lp) = simulated(3);
-    let (examples, _) =
-        load_examples(d.path(), &mut FeatureExtractor::new(&lp.profile.analysis)).unwrap();
+    let (examples, _) = load_examples(d.path(), &lp.profile.analysis).unwrap();
     let model = Model::train_adapting_k(
         &lp.profile.name,
         &lp.profile.analysis,
