@@ -1,10 +1,15 @@
 //! Throughput of the recording reader on a typical scan: 9000 rows of 7
-//! columns written by `RecordingWriter`, parsed from memory (plain and gzip).
+//! columns written by `RecordingWriter`, parsed from memory (plain and gzip)
+//! on one core; then a dataset of 240 such scans read from the page cache
+//! into feature vectors by `dataset::load` (the thesis profile's analysis),
+//! on one thread and on one per core.
 
 use std::hint::black_box;
 use std::io::Write as _;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use hapticlab::dataset::{self, Keep, Options, Unusable};
+use hapticlab::profile::LoadedProfile;
 use hapticlab::recording::{self, RecordingWriter};
 
 const ROWS: usize = 9000;
@@ -76,11 +81,51 @@ fn read_recordings(c: &mut Criterion) {
     group.finish();
 }
 
+/// Scans in the dataset case: 60 per texture folder, about 125 MB of CSV.
+const SCANS: usize = 240;
+
+fn load_dataset(c: &mut Criterion) {
+    let text = typical_recording();
+    let dir = tempfile::tempdir().expect("temp dir");
+    let mut files = Vec::with_capacity(SCANS);
+    for i in 0..SCANS {
+        let folder = dir.path().join(format!("S{}", i % 4 + 1));
+        std::fs::create_dir_all(&folder).expect("folder");
+        let file = folder.join(format!("{i:03}.csv"));
+        std::fs::write(&file, &text).expect("write");
+        files.push(file);
+    }
+    files.sort();
+    let analysis = LoadedProfile::thesis().profile.analysis;
+    let mut group = c.benchmark_group("read_recordings");
+    group.sample_size(10);
+    group.throughput(Throughput::Bytes((text.len() * SCANS) as u64));
+    for (name, threads) in [
+        ("dataset_load_240_one_thread", 1),
+        ("dataset_load_240_every_core", dataset::cores()),
+    ] {
+        let options = Options {
+            keep: Keep::Features,
+            unusable: Unusable::Fail,
+            threads,
+        };
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                let loaded =
+                    dataset::load(black_box(&files), &analysis, options, &|| {}).expect("load");
+                assert_eq!(loaded.entries.len(), SCANS);
+                loaded
+            })
+        });
+    }
+    group.finish();
+}
+
 // No plots: the crate's plotters has only the ab_glyph font backend
 // (no system fonts), and criterion's plots would find no font.
 criterion_group! {
     name = benches;
     config = Criterion::default().without_plots();
-    targets = read_recordings
+    targets = read_recordings, load_dataset
 }
 criterion_main!(benches);

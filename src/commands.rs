@@ -104,9 +104,9 @@ pub fn run(cmd: Command) -> Result<(), Failure> {
         Command::Import(args) => {
             let written = crate::import::run(&args)?;
             for p in &written {
-                println!("{}", p.display());
+                crate::outln!("{}", p.display());
             }
-            eprintln!("imported {} recording(s)", written.len());
+            crate::errln!("imported {} recording(s)", written.len());
             Ok(())
         }
         Command::Inspect {
@@ -465,7 +465,7 @@ fn features(profile: &ProfileArg, paths: &[PathBuf], out: Option<&Path>) -> Resu
     match out {
         Some(p) => {
             write_atomically(p, text.as_bytes())?;
-            eprintln!(
+            crate::errln!(
                 "wrote {} feature rows ({} features each) to {}",
                 examples.len(),
                 n,
@@ -523,10 +523,10 @@ fn train(profile: &ProfileArg, paths: &[PathBuf], out: &Path) -> Result<(), Fail
     )
     .map_err(bad)?;
     if let Some(note) = model.k_notice() {
-        eprintln!("note: {note}");
+        crate::errln!("note: {note}");
     }
     model.save(out).map_err(runtime)?;
-    println!(
+    crate::outln!(
         "trained k-NN (k = {}) on {} of {} ({}); model saved to {}",
         model.classifier.k,
         plural(n, "recording", "recordings"),
@@ -552,13 +552,13 @@ fn classify(
         .map_err(|e| bad(format!("{}: {e}", model_path.display())))?;
     // Other classifier settings still classify, but never silently.
     if let Err(e) = model.check_classifier(&lp.profile.classifier) {
-        eprintln!(
+        crate::errln!(
             "warning: {}: {e}; classifying with the model's settings",
             model_path.display()
         );
     }
     if let Some(note) = model.k_notice() {
-        eprintln!("note: {}: {note}", model_path.display());
+        crate::errln!("note: {}: {note}", model_path.display());
     }
     let mut ex = FeatureExtractor::new(&model.analysis);
     let files = find_recordings(files)?;
@@ -582,7 +582,7 @@ fn classify(
                     if l == p.label { ", right" } else { ", WRONG" }
                 )
             });
-            println!(
+            crate::outln!(
                 "{}: {}{} — votes {}, nearest {:.3e}",
                 f.display(),
                 p.label,
@@ -600,7 +600,7 @@ fn classify(
         }));
     }
     if json {
-        println!("{}", serde_json::Value::Array(rows));
+        crate::outln!("{}", serde_json::Value::Array(rows));
     }
     Ok(())
 }
@@ -632,13 +632,13 @@ fn evaluate_cmd(
     )
     .map_err(bad)?;
     if let Some(note) = model.k_notice() {
-        eprintln!("note: {note}");
+        crate::errln!("note: {note}");
     }
     let report = evaluate::evaluate(&model, &split.test).map_err(bad)?;
     if json {
-        println!("{}", serde_json::to_string(&report).map_err(runtime)?);
+        crate::outln!("{}", serde_json::to_string(&report).map_err(runtime)?);
     } else {
-        println!(
+        crate::outln!(
             "profile {}: k-NN k = {}, {} training and {} test recordings per class{}",
             lp.profile.name,
             lp.profile.classifier.k_text(),
@@ -649,7 +649,7 @@ fn evaluate_cmd(
                     " (shuffled, seed {s})"
                 ))
         );
-        print!("{}", report.table());
+        crate::outp!("{}", report.table());
     }
     Ok(())
 }
@@ -658,7 +658,7 @@ fn check(profiles: &[PathBuf]) -> Result<(), Failure> {
     let mut errors = Vec::new();
     for p in profiles {
         match LoadedProfile::load(p) {
-            Ok(lp) => println!(
+            Ok(lp) => crate::outln!(
                 "{}: ok — profile {:?}, device {}, {} waypoints, {} textures, {} features, k = {}{}",
                 p.display(),
                 lp.profile.name,
@@ -679,7 +679,7 @@ fn check(profiles: &[PathBuf]) -> Result<(), Failure> {
         None => Ok(()),
         Some((last, rest)) => {
             for e in rest {
-                eprintln!("hapticlab: error: {e}");
+                crate::errln!("hapticlab: error: {e}");
             }
             Err(bad(last))
         }

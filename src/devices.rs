@@ -93,7 +93,7 @@ pub fn run(profile: &ProfileArg) -> Result<(), Failure> {
         &lp.profile.name,
         &lp.profile.triggers,
     ) {
-        println!("{line}");
+        crate::outln!("{line}");
     }
     Ok(())
 }

@@ -218,15 +218,15 @@ pub fn run(profile: &ProfileArg, dataset: Option<PathBuf>, json: bool) -> Result
     let facts = Facts::gather(&needs, &dataset);
     let checks = checks(&needs, &facts);
     if json {
-        println!("{}", render_json(&checks));
+        crate::outln!("{}", render_json(&checks));
     } else {
-        println!(
+        crate::outln!(
             "hapticlab doctor: profile {} (device {}), dataset {}",
             needs.profile,
             needs.kind.name(),
             dataset.display()
         );
-        print!("{}", render_text(&checks));
+        crate::outp!("{}", render_text(&checks));
     }
     let failed: Vec<&str> = checks
         .iter()

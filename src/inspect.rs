@@ -275,12 +275,12 @@ pub fn run(
         threshold_factor: threshold,
     };
     if json {
-        println!(
+        crate::outln!(
             "{}",
             serde_json::to_string(&report).map_err(|e| Failure::Runtime(e.to_string()))?
         );
     } else {
-        print!("{}", report.text());
+        crate::outp!("{}", report.text());
     }
     Ok(())
 }

@@ -148,7 +148,7 @@ pub fn run(args: &PlotArgs) -> Result<(), Failure> {
             )));
         }
     }
-    eprintln!("wrote {}", out.display());
+    crate::errln!("wrote {}", out.display());
     Ok(())
 }
 

@@ -139,11 +139,11 @@ impl ScratchFolder {
     fn remove_and_exit(&self) -> ! {
         let path = self.dir.path();
         match std::fs::remove_dir_all(path) {
-            Ok(()) => eprintln!(
+            Ok(()) => crate::errln!(
                 "interrupted: removed the temporary folder {}",
                 path.display()
             ),
-            Err(e) => eprintln!(
+            Err(e) => crate::errln!(
                 "interrupted: could not remove the temporary folder {}: {e}",
                 path.display()
             ),

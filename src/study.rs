@@ -991,9 +991,9 @@ pub fn run_evaluate(
         })?;
         pb.finish_and_clear();
         if json {
-            println!("{}", serde_json::to_string(&s).map_err(bad)?);
+            crate::outln!("{}", serde_json::to_string(&s).map_err(bad)?);
         } else {
-            println!(
+            crate::outln!(
                 "profile {}: sweeping {} over {} values, each on {} simulated scans per texture (seed {}), {}",
                 lp.profile.name,
                 s.key,
@@ -1002,7 +1002,7 @@ pub fn run_evaluate(
                 lp.profile.simulator.seed,
                 plan.describe(),
             );
-            print!("{}", s.table());
+            crate::outp!("{}", s.table());
         }
         return Ok(());
     }
@@ -1044,16 +1044,16 @@ pub fn run_evaluate(
     if let Some((_, key, _, values)) = &sweep_spec {
         let s = sweep(&lp.profile, &data, key, values, &plan, &|_| {})?;
         if json {
-            println!("{}", serde_json::to_string(&s).map_err(bad)?);
+            crate::outln!("{}", serde_json::to_string(&s).map_err(bad)?);
         } else {
-            println!(
+            crate::outln!(
                 "profile {}: sweeping {} over {} values, {}, {source}",
                 lp.profile.name,
                 s.key,
                 values.len(),
                 plan.describe(),
             );
-            print!("{}", s.table());
+            crate::outp!("{}", s.table());
         }
         return Ok(());
     }
@@ -1064,12 +1064,12 @@ pub fn run_evaluate(
     let examples = data.examples(&lp.profile.analysis)?;
     let report = validate(&lp.profile, examples, groups.as_deref(), &plan)?;
     if let Some(n) = report.k_notice() {
-        eprintln!("note: {n}");
+        crate::errln!("note: {n}");
     }
     if json {
-        println!("{}", serde_json::to_string(&report).map_err(bad)?);
+        crate::outln!("{}", serde_json::to_string(&report).map_err(bad)?);
     } else {
-        println!(
+        crate::outln!(
             "profile {}: k-NN k = {} ({:?}, {:?} votes{}), {}, {source}",
             lp.profile.name,
             lp.profile.classifier.k_text(),
@@ -1082,7 +1082,7 @@ pub fn run_evaluate(
             },
             plan.describe(),
         );
-        print!("{}", report.table());
+        crate::outp!("{}", report.table());
     }
     Ok(())
 }

@@ -109,6 +109,39 @@ pub fn out(args: fmt::Arguments<'_>) -> bool {
     writeln!(o, "{args}").and_then(|()| o.flush()).is_ok()
 }
 
+/// Write text to standard output as it is (no line end added); `false` when
+/// it could not be written. Never panics.
+pub fn out_text(args: fmt::Arguments<'_>) -> bool {
+    let mut o = io::stdout().lock();
+    write!(o, "{args}").and_then(|()| o.flush()).is_ok()
+}
+
+/// `println!` that never panics: a line to standard output, dropped when the
+/// terminal or pipe has gone.
+#[macro_export]
+macro_rules! outln {
+    ($($t:tt)*) => {{
+        let _ = $crate::terminal::out(format_args!($($t)*));
+    }};
+}
+
+/// `print!` that never panics.
+#[macro_export]
+macro_rules! outp {
+    ($($t:tt)*) => {{
+        let _ = $crate::terminal::out_text(format_args!($($t)*));
+    }};
+}
+
+/// `eprintln!` that never panics: a line to standard error, dropped when it
+/// cannot be written.
+#[macro_export]
+macro_rules! errln {
+    ($($t:tt)*) => {{
+        let _ = $crate::terminal::err(format_args!($($t)*));
+    }};
+}
+
 /// Write a line to standard error; `false` when it could not be written.
 /// Never panics.
 pub fn err(args: fmt::Arguments<'_>) -> bool {
