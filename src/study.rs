@@ -1063,16 +1063,22 @@ pub fn run_evaluate(
     };
     let examples = data.examples(&lp.profile.analysis)?;
     let report = validate(&lp.profile, examples, groups.as_deref(), &plan)?;
-    if let Some(n) = report.k_notice() {
+    let notice = report.k_notice();
+    if let Some(n) = &notice {
         crate::errln!("note: {n}");
     }
     if json {
         crate::outln!("{}", serde_json::to_string(&report).map_err(bad)?);
     } else {
         crate::outln!(
-            "profile {}: k-NN k = {} ({:?}, {:?} votes{}), {}, {source}",
+            "profile {}: k-NN k = {}{} ({:?}, {:?} votes{}), {}, {source}",
             lp.profile.name,
             lp.profile.classifier.k_text(),
+            if notice.is_some() {
+                ", chosen by CV in folds with too few scans of a texture (see the note)"
+            } else {
+                ""
+            },
             lp.profile.classifier.metric,
             lp.profile.classifier.weights,
             if lp.profile.classifier.standardize {

@@ -118,7 +118,13 @@ pub fn hints(app: &App) -> Vec<(String, &'static str)> {
             (k(Key::Predict), "predict last"),
         ];
     }
-    let mut v = vec![(k(Key::Help), "help"), (k(Key::Start), "start")];
+    // Help and quit first: keys that do not fit are dropped from the end,
+    // and these two must always show.
+    let mut v = vec![
+        (k(Key::Help), "help"),
+        (k(Key::Quit), "quit"),
+        (k(Key::Start), "start"),
+    ];
     if app.mode() != Mode::Manual {
         v.push((k(Key::Abort), "stop"));
     }
@@ -132,7 +138,6 @@ pub fn hints(app: &App) -> Vec<(String, &'static str)> {
         (k(Key::Train), "train"),
         (k(Key::Evaluate), "evaluate"),
         (k(Key::Replay), "replay"),
-        (k(Key::Quit), "quit"),
     ]);
     v
 }
