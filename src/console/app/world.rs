@@ -245,8 +245,9 @@ impl App {
                 method,
                 note,
             } => {
+                // The result first: a narrow status line cuts the end.
                 let text = format!(
-                    "evaluation by {method}: {}/{} right ({:.1} %)",
+                    "evaluated: {}/{} right ({:.1} %) by {method}",
                     report.correct(),
                     report.tested(),
                     report.accuracy * 100.0
@@ -254,7 +255,7 @@ impl App {
                 if note.is_empty() {
                     self.info(text);
                 } else {
-                    self.warn(format!("{note}; {text}"));
+                    self.warn(format!("{text}; {note}"));
                 }
                 self.dataset.report = Some(*report);
                 self.dataset.report_method = Some(method);

@@ -151,18 +151,21 @@ fn a_first_session_of_five_scans_per_texture_trains_and_evaluates_a_sound_model(
     );
     app.on_job(r);
     assert!(
-        app.status.text.starts_with("the holdout split needs 30"),
+        app.status.text.starts_with("evaluated: 20/20 right (100.0 %) by 5-fold cross-validation, seed 0; the holdout split needs 30"),
         "{}",
         app.status.text
     );
     assert!(
         app.status
             .text
-            .contains("evaluation by 5-fold cross-validation, seed 0: "),
+            .contains("by 5-fold cross-validation, seed 0; "),
         "{}",
         app.status.text
     );
-    assert!(dataset_panel(&app).contains("evaluation by 5-fold cross-validation"));
+    assert!(
+        dataset_panel(&app)
+            .contains("evaluation: 20/20 right (100.0 %) by 5-fold cross-validation")
+    );
 
     // T: k = 10 cannot be met by 5 per texture; the status line says so.
     jobs.train(&lp, d.path(), false);

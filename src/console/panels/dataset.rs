@@ -76,14 +76,15 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
         None => v.push(Line::raw("no evaluation yet")),
         Some(r) => {
             v.push(Line::styled(
+                // The accuracy first: a narrow panel cuts the end of the line.
                 format!(
-                    "evaluation{}: {}/{} right ({:.1} %); rows true, columns classified as",
+                    "evaluation: {}/{} right ({:.1} %){}; rows true, columns classified as",
+                    r.correct(),
+                    r.tested(),
+                    r.accuracy * 100.0,
                     d.report_method
                         .as_ref()
                         .map_or(String::new(), |m| format!(" by {m}")),
-                    r.correct(),
-                    r.tested(),
-                    r.accuracy * 100.0
                 ),
                 Style::new().add_modifier(Modifier::DIM),
             ));
