@@ -190,12 +190,15 @@ fn help(app: &App, area: Rect, buf: &mut Buffer) {
             "replay: pause, single step, restart; ↑/↓ recording",
         ),
         (
-            format!("{} 1-4", k(Key::NextPage)),
+            match app.page_count() {
+                1 => k(Key::NextPage),
+                n => format!("{} 1-{n}", k(Key::NextPage)),
+            },
             "next page / page N (small terminals)",
         ),
         (
             k(Key::Quit),
-            "quit (asks during a scan or if one is not stored); Ctrl-C: now",
+            "quit (asks during a scan or queue, or if unsaved); Ctrl-C: now",
         ),
     ];
     let h = rows.len() as u16 + 5;
