@@ -183,6 +183,25 @@ pub fn cores() -> usize {
     std::thread::available_parallelism().map_or(1, usize::from)
 }
 
+/// A metadata value as text: strings as they are, others in TOML (a group
+/// key, a sweep value).
+pub fn meta_text(v: &toml::Value) -> String {
+    match v {
+        toml::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }
+}
+
+/// `file: reason`, or the reason alone when it already starts with the
+/// file's name (a reader's error names its file and line).
+pub fn named_once(file: &str, reason: &str) -> String {
+    if reason.starts_with(file) {
+        reason.to_string()
+    } else {
+        format!("{file}: {reason}")
+    }
+}
+
 /// One usable recording.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Entry {
@@ -211,10 +230,7 @@ impl Entry {
         self.meta
             .iter()
             .find(|(k, _)| k == key)
-            .map(|(_, v)| match v {
-                toml::Value::String(s) => s.clone(),
-                other => other.to_string(),
-            })
+            .map(|(_, v)| meta_text(v))
     }
 
     /// The feature vector of a kept scan ([`Keep::Samples`]) under other
@@ -267,11 +283,7 @@ impl std::fmt::Display for Skipped {
                 }
             ),
             Skipped::Unusable { file, reason, .. } => {
-                if reason.starts_with(file.as_str()) {
-                    write!(f, "{reason}, skipped")
-                } else {
-                    write!(f, "{file}: {reason}, skipped")
-                }
+                write!(f, "{}, skipped", named_once(file, reason))
             }
         }
     }

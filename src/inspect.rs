@@ -20,7 +20,7 @@ use serde::Serialize;
 use crate::classify::{Scaling, TrainingExample};
 use crate::cli::ProfileArg;
 use crate::commands::{Failure, load_profile};
-use crate::dataset::{self, Skipped, Unusable};
+use crate::dataset::{self, Skipped, Unusable, named_once};
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Outlier {
@@ -193,19 +193,11 @@ impl Inspection {
         for f in &self.incomplete {
             s.push_str(&format!("incomplete: {f} (no `# end samples` trailer)\n"));
         }
-        // Errors usually name their file already: name it once.
-        let named = |f: &str, e: &str| {
-            if e.starts_with(f) {
-                e.to_string()
-            } else {
-                format!("{f}: {e}")
-            }
-        };
         for (f, e) in &self.unreadable {
-            s.push_str(&format!("unreadable: {}\n", named(f, e)));
+            s.push_str(&format!("unreadable: {}\n", named_once(f, e)));
         }
         for (f, e) in &self.unusable {
-            s.push_str(&format!("unusable: {}\n", named(f, e)));
+            s.push_str(&format!("unusable: {}\n", named_once(f, e)));
         }
         if self.outliers.is_empty() {
             s.push_str(&format!(

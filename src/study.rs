@@ -89,13 +89,7 @@ pub struct Dataset {
     keep: Keep,
 }
 
-/// A metadata value as a group key: strings as they are, others in TOML.
-pub fn meta_text(v: &toml::Value) -> String {
-    match v {
-        toml::Value::String(s) => s.clone(),
-        other => other.to_string(),
-    }
-}
+pub use crate::dataset::meta_text;
 
 impl Dataset {
     /// Read every recording under `paths` on `threads` threads, keeping
