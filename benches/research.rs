@@ -12,9 +12,9 @@ use std::time::Duration;
 use criterion::{Criterion, criterion_group, criterion_main};
 use hapticlab::classify::{Model, TrainingExample};
 use hapticlab::evaluate::cv::{cross_validate, make_folds};
+use hapticlab::evaluate::plan::Dataset;
 use hapticlab::profile::{Analysis, Classifier, SplitMethod};
 use hapticlab::recording::RecordingWriter;
-use hapticlab::study::Dataset;
 
 const RECORDINGS: usize = 2000;
 const SAMPLES: usize = 10_000;

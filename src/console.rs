@@ -37,10 +37,10 @@ use ratatui::Terminal;
 use ratatui::backend::Backend;
 
 use crate::analysis::FeatureExtractor;
-use crate::commands::Failure;
 use crate::profile::LoadedProfile;
 use crate::recording;
 use crate::servo::Command;
+use crate::support::Failure;
 use app::{Action, App, Source};
 use dataset::Jobs;
 use event::{Event, EventSource, Signals};

@@ -20,11 +20,10 @@ use std::path::PathBuf;
 
 use serde::Serialize;
 
-use crate::cli::ProfileArg;
-use crate::commands::{Failure, load_profile};
 use crate::profile::{DeviceKind, LoadedProfile, Realtime};
 use crate::recorder::COLUMNS;
 use crate::recording::decimals_for;
+use crate::support::{Failure, ProfileArg, load_profile};
 
 pub use dataset::dataset_checks;
 pub use facts::{DatasetFacts, DirState, Facts, Limit, SystemFacts, TerminalFacts};

@@ -1,11 +1,19 @@
-//! Evaluation: the per-class train/test split, the confusion matrix, the
-//! success and error rates (section 4.5, Table 4.1) and their reports as
-//! JSON (`evaluate --json`) and as plain text.
+//! Evaluation, the engine behind `hapticlab evaluate` (whose arguments and
+//! printing are in `commands/evaluate.rs`): here the per-class train/test
+//! split, the confusion matrix, the success and error rates (section 4.5,
+//! Table 4.1) and their report as JSON (`evaluate --json`) and as plain
+//! text; `evaluate/cv.rs` the folds (k-fold, leave-one-out, grouped) and
+//! the pooled [`cv::CvReport`]; `evaluate/plan.rs` the recordings loaded
+//! once and the validation asked for ([`plan::validate`]); `evaluate/sweep.rs`
+//! the parameter sweeps, over recordings or simulated datasets.
 //!
-//! This module classifies with a [`Model`] and counts; it never reads
-//! recordings or extracts features, and never prints.
+//! This module classifies with a [`Model`] and counts; reading recordings
+//! goes through [`crate::dataset`]. It never prints and knows no front end:
+//! errors are [`EvaluateError`], which the command maps to exit codes.
 
 pub mod cv;
+pub mod plan;
+pub mod sweep;
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -16,7 +24,9 @@ use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 use thiserror::Error;
 
+use crate::acquire::AcquireError;
 use crate::classify::{ClassifyError, Model, TrainingExample};
+use crate::dataset::DatasetError;
 use crate::profile::Evaluation;
 
 #[derive(Debug, Clone, PartialEq)]
@@ -46,6 +56,30 @@ pub enum EvaluateError {
     Folds(String),
     #[error(transparent)]
     Classify(#[from] ClassifyError),
+    /// Bad input met while planning or sweeping: a sweep's key or values,
+    /// a missing group key, no recordings found.
+    #[error("{0}")]
+    Input(String),
+    #[error("cannot make a temporary folder for the simulated scans: {0}")]
+    Scratch(String),
+    #[error("the recordings were loaded for other analysis settings (features only)")]
+    FeaturesOnly,
+    #[error(transparent)]
+    Dataset(#[from] DatasetError),
+    #[error(transparent)]
+    Acquire(#[from] AcquireError),
+}
+
+impl EvaluateError {
+    /// Whether the user can fix it (exit code 2) rather than a runtime failure.
+    pub fn is_bad_input(&self) -> bool {
+        match self {
+            EvaluateError::Scratch(_) | EvaluateError::FeaturesOnly => false,
+            EvaluateError::Dataset(e) => e.is_bad_input(),
+            EvaluateError::Acquire(e) => e.is_bad_input(),
+            _ => true,
+        }
+    }
 }
 
 /// The seed of one class's shuffle: the evaluation seed mixed with the

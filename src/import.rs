@@ -18,8 +18,8 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 
-use crate::commands::Failure;
 use crate::recording::RecordingWriter;
+use crate::support::Failure;
 
 #[derive(Debug, Args, Clone, Default)]
 pub struct ImportArgs {

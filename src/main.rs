@@ -21,12 +21,9 @@ fn main() {
         libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
     }
     // The console on the built-in thesis profile is the default.
-    let command = cli.command.unwrap_or(hapticlab::cli::Command::Console {
-        profile: hapticlab::cli::ProfileArg {
-            profile: "thesis".into(),
-        },
-        dataset: None,
-    });
+    let command = cli
+        .command
+        .unwrap_or(hapticlab::cli::Command::Console(Default::default()));
     if let Err(f) = hapticlab::commands::run(command) {
         // Fallibly: the terminal may be the reason for the failure.
         hapticlab::terminal::err(format_args!("hapticlab: error: {}", f.message()));

@@ -1,14 +1,40 @@
-//! What every command shares, below the commands themselves: [`Failure`]
-//! (bad input, exit code 2, or a runtime failure, exit code 1), loading the
-//! profile named by `--profile`, and progress bars on standard error.
+//! The front ends' shared floor, below every front end (`commands/`,
+//! `console/`, `doctor/`, `plot`, `import`) and above the engine:
+//! [`Failure`] (bad input, exit code 2, or a runtime failure, exit code 1)
+//! and the engine errors it maps, `--profile` ([`ProfileArg`]) and loading
+//! it, progress bars on standard error, finding recordings and warning
+//! about the ones left out, loading feature vectors through
+//! [`crate::dataset`], and writing a file atomically.
+//!
+//! It must never import a front end (`commands`, `cli`, `console`, …):
+//! they all stand on it.
 
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
 
+use clap::Args;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::acquire;
-use crate::cli::ProfileArg;
+use crate::classify::TrainingExample;
+use crate::dataset;
 use crate::profile::LoadedProfile;
+
+#[derive(Debug, Args, Clone)]
+pub struct ProfileArg {
+    /// Experiment profile (TOML); `thesis` names the built-in thesis profile.
+    #[arg(long, short = 'p', default_value = "thesis", value_name = "PROFILE")]
+    pub profile: PathBuf,
+}
+
+impl Default for ProfileArg {
+    /// The built-in thesis profile, as `--profile` defaults to.
+    fn default() -> ProfileArg {
+        ProfileArg {
+            profile: "thesis".into(),
+        }
+    }
+}
 
 /// A command that failed: bad input (exit 2) or a runtime failure (exit 1).
 #[derive(Debug)]
@@ -37,17 +63,23 @@ impl From<acquire::AcquireError> for Failure {
     }
 }
 
+impl From<crate::evaluate::EvaluateError> for Failure {
+    fn from(e: crate::evaluate::EvaluateError) -> Failure {
+        if e.is_bad_input() { bad(e) } else { runtime(e) }
+    }
+}
+
 impl From<crate::dataset::DatasetError> for Failure {
     fn from(e: crate::dataset::DatasetError) -> Failure {
         if e.is_bad_input() { bad(e) } else { runtime(e) }
     }
 }
 
-pub(crate) fn bad(m: impl std::fmt::Display) -> Failure {
+pub fn bad(m: impl std::fmt::Display) -> Failure {
     Failure::BadInput(m.to_string())
 }
 
-pub(crate) fn runtime(m: impl std::fmt::Display) -> Failure {
+pub fn runtime(m: impl std::fmt::Display) -> Failure {
     Failure::Runtime(m.to_string())
 }
 
@@ -56,7 +88,7 @@ pub fn load_profile(arg: &ProfileArg) -> Result<LoadedProfile, Failure> {
 }
 
 /// A progress bar on a terminal; nothing when standard error is piped.
-pub(crate) fn progress_bar(total: u64, what: &str) -> ProgressBar {
+pub fn progress_bar(total: u64, what: &str) -> ProgressBar {
     if !std::io::stderr().is_terminal() {
         return ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden());
     }
@@ -68,4 +100,72 @@ pub(crate) fn progress_bar(total: u64, what: &str) -> ProgressBar {
     );
     pb.set_message(what.to_string());
     pb
+}
+
+/// Recordings under `paths`, read on every core and turned into feature
+/// vectors under `analysis` ([`crate::dataset::load`]). Each recording left
+/// out (incomplete) is named in one warning on standard error; a malformed
+/// one is an error.
+pub fn load_examples(
+    paths: &[PathBuf],
+    analysis: &crate::profile::Analysis,
+) -> Result<Vec<TrainingExample>, Failure> {
+    load_examples_on(paths, analysis, dataset::cores())
+}
+
+/// [`load_examples`] on `threads` reader threads.
+pub fn load_examples_on(
+    paths: &[PathBuf],
+    analysis: &crate::profile::Analysis,
+    threads: usize,
+) -> Result<Vec<TrainingExample>, Failure> {
+    let files = find_recordings(paths)?;
+    let pb = progress_bar(files.len() as u64, "reading");
+    let options = dataset::Options {
+        threads,
+        ..dataset::Options::default()
+    };
+    let loaded = dataset::load(&files, analysis, options, &|| pb.inc(1));
+    pb.finish_and_clear();
+    let loaded = loaded?;
+    warn_skipped(&loaded.skipped);
+    Ok(loaded.into_examples())
+}
+
+/// The recordings under `paths` ([`dataset::find`]); a path that cannot be
+/// walked, or none found, is the user's to fix (exit code 2).
+pub fn find_recordings(paths: &[PathBuf]) -> Result<Vec<PathBuf>, Failure> {
+    dataset::find(paths).map_err(bad)
+}
+
+/// One warning line on standard error per recording left out; never panics
+/// on a terminal that has gone.
+pub fn warn_skipped(skipped: &[dataset::Skipped]) {
+    for s in skipped {
+        let _ = writeln!(std::io::stderr(), "warning: {s}");
+    }
+}
+
+/// Write to a temporary file beside `path`, then rename: never a half-written file.
+pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), Failure> {
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(dir).map_err(|e| runtime(format!("{}: {e}", dir.display())))?;
+    let tmp = dir.join(format!(
+        ".{}.tmp",
+        path.file_name()
+            .map_or("out".into(), |n| n.to_string_lossy().into_owned())
+    ));
+    let write = || -> std::io::Result<()> {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    };
+    write().map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        runtime(format!("{}: cannot write: {e}", path.display()))
+    })
 }

@@ -187,7 +187,7 @@ fn imported(args: &ImportArgs, bytes: Vec<u8>, ext: &str) -> Outcome {
     let result = import::check_options(args).and_then(|_| {
         let imp = import::parse_file(bytes, &origin, ext, args)?;
         if let (None, Some(label)) = (&args.label, &imp.label) {
-            profile::check_label(label).map_err(hapticlab::commands::Failure::BadInput)?;
+            profile::check_label(label).map_err(hapticlab::support::Failure::BadInput)?;
         }
         Ok(imp)
     });

@@ -1,9 +1,10 @@
 //! `hapticlab devices`: the Falcons and HID triggers attached, whether each
 //! can be opened, and what to do when one cannot.
 
-use crate::cli::ProfileArg;
-use crate::commands::{Failure, load_profile};
+use clap::Args;
+
 use crate::device::falcon::usb::{self, UsbError};
+use crate::support::{Failure, ProfileArg, load_profile};
 use crate::triggers::hid;
 
 /// The report as lines, from what was found (pure, for tests).
@@ -83,8 +84,14 @@ pub fn report(
     out
 }
 
-pub fn run(profile: &ProfileArg) -> Result<(), Failure> {
-    let lp = load_profile(profile)?;
+#[derive(Debug, Args)]
+pub struct DevicesArgs {
+    #[command(flatten)]
+    pub profile: ProfileArg,
+}
+
+pub fn run(a: DevicesArgs) -> Result<(), Failure> {
+    let lp = load_profile(&a.profile)?;
     let falcons = usb::list_falcons();
     let hid_devices = hid::list();
     for line in report(

@@ -18,9 +18,8 @@ use std::path::PathBuf;
 use serde::Serialize;
 
 use crate::classify::{Scaling, TrainingExample};
-use crate::cli::ProfileArg;
-use crate::commands::{Failure, load_profile};
 use crate::dataset::{self, Skipped, Unusable, named_once};
+use crate::support::{Failure, ProfileArg, load_profile};
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Outlier {
@@ -220,14 +219,30 @@ impl Inspection {
     }
 }
 
+#[derive(Debug, clap::Args)]
+pub struct InspectArgs {
+    #[command(flatten)]
+    pub profile: ProfileArg,
+    #[arg(required = true, value_name = "PATH")]
+    pub paths: Vec<PathBuf>,
+    /// Outlier threshold t: distance d to the class centroid beyond median + t x 1.4826 x MAD, on the scale d^(2/3).
+    #[arg(long, default_value_t = 3.0, value_name = "T")]
+    pub threshold: f64,
+    /// Print JSON for scripts.
+    #[arg(long)]
+    pub json: bool,
+}
+
 /// `hapticlab inspect`.
-pub fn run(
-    profile: &ProfileArg,
-    paths: &[PathBuf],
-    threshold: f64,
-    json: bool,
-) -> Result<(), Failure> {
-    let lp = load_profile(profile)?;
+pub fn run(a: InspectArgs) -> Result<(), Failure> {
+    let InspectArgs {
+        profile,
+        paths,
+        threshold,
+        json,
+    } = a;
+    let paths = &paths[..];
+    let lp = load_profile(&profile)?;
     if !(threshold.is_finite() && threshold > 0.0) {
         return Err(Failure::BadInput(format!(
             "--threshold must be a positive number, got {threshold}"

@@ -24,12 +24,11 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use crate::analysis::FeatureExtractor;
-use crate::cli::ProfileArg;
-use crate::commands::{Failure, load_profile};
 use crate::dataset::{self, features_of, label_of};
 use crate::recording;
+use crate::support::{Failure, ProfileArg, load_profile};
 
-static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
+static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
 #[derive(Debug, Args, Clone)]
 pub struct PlotArgs {

@@ -314,7 +314,8 @@ impl App {
                 self.info(format!(
                     "evaluating {} by {} (the profile's [evaluation])",
                     self.dataset.dir.display(),
-                    crate::study::Plan::new(&self.profile.profile, &Default::default()).describe()
+                    crate::evaluate::plan::Plan::new(&self.profile.profile, &Default::default())
+                        .describe()
                 ));
                 return vec![Action::Evaluate];
             }

@@ -17,9 +17,9 @@ use crate::analysis::FeatureExtractor;
 use crate::classify::{Model, TrainingExample};
 use crate::dataset;
 use crate::evaluate::Report;
+use crate::evaluate::plan::{self, Dataset, Overrides, Plan};
 use crate::profile::{Analysis, LoadedProfile, SplitMethod};
 use crate::recording;
-use crate::study::{self, Dataset, Plan, ValidationArgs};
 
 /// The model file the console writes into (and reads from) a dataset folder.
 pub const MODEL_FILE: &str = "model.json";
@@ -314,7 +314,7 @@ impl Jobs {
 /// 5-fold cross-validation (every texture has at least 5) or leave-one-out;
 /// and the note saying so.
 pub fn evaluation_plan(lp: &LoadedProfile, examples: &[TrainingExample]) -> (Plan, Option<String>) {
-    let mut plan = Plan::new(&lp.profile, &ValidationArgs::default());
+    let mut plan = Plan::new(&lp.profile, &Overrides::default());
     plan.threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut counts: std::collections::BTreeMap<&str, usize> = std::collections::BTreeMap::new();
     for e in examples {
@@ -371,32 +371,23 @@ pub fn evaluate_dataset(
     let an = &lp.profile.analysis;
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let data = Dataset::load(&[dir.to_path_buf()], an, dataset::Keep::Features, threads)
-        .map_err(|f| f.message().to_string())?;
+        .map_err(|f| f.to_string())?;
     if data.scans.is_empty() {
         return Err(format!(
             "no complete recordings in {} to evaluate",
             dir.display()
         ));
     }
-    let examples = data.examples(an).map_err(|f| f.message().to_string())?;
+    let examples = data.examples(an).map_err(|f| f.to_string())?;
     let (plan, why) = evaluation_plan(lp, &examples);
     let groups = match &plan.group_by {
-        Some(g) => Some(data.groups(g).map_err(|f| f.message().to_string())?),
+        Some(g) => Some(data.groups(g).map_err(|f| f.to_string())?),
         None => None,
     };
-    let r = study::validate(&lp.profile, examples, groups.as_deref(), &plan)
-        .map_err(|f| f.message().to_string())?;
+    let r = plan::validate(&lp.profile, examples, groups.as_deref(), &plan)
+        .map_err(|f| f.to_string())?;
     let note: Vec<String> = why.into_iter().chain(r.k_notice()).collect();
-    let report = Report {
-        labels: r.labels,
-        confusion: r.confusion,
-        accuracy: r.accuracy,
-        per_class: r.per_class,
-        train: r.train,
-        test: r.test,
-        predictions: r.predictions,
-    };
-    Ok((report, plan.describe(), note.join("; ")))
+    Ok((r.report, plan.describe(), note.join("; ")))
 }
 
 fn train(lp: &LoadedProfile, dir: &Path) -> Result<(Model, usize), String> {

@@ -20,7 +20,7 @@ use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 
-use super::{ClassRate, EvaluateError, PredictionRow, class_rates, class_seed, evaluate};
+use super::{EvaluateError, Report, class_rates, class_seed, evaluate};
 use crate::classify::{KFallback, Model, TrainingExample, plural};
 use crate::profile::{Analysis, Classifier, SplitMethod};
 
@@ -263,16 +263,11 @@ pub fn k_notice(folds: &[FoldResult]) -> Option<String> {
 /// the macro-F1.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CvReport {
-    pub labels: Vec<String>,
-    pub confusion: Vec<Vec<usize>>,
-    /// Pooled: correct / tested over all folds.
-    pub accuracy: f64,
-    pub per_class: Vec<ClassRate>,
-    /// Every file that trained in some fold.
-    pub train: Vec<String>,
-    /// Every file tested, fold by fold.
-    pub test: Vec<String>,
-    pub predictions: Vec<PredictionRow>,
+    /// Pooled over the folds: correct / tested over all of them; `train`
+    /// holds every file that trained in some fold, `test` every file
+    /// tested, fold by fold.
+    #[serde(flatten)]
+    pub report: Report,
     pub method: String,
     pub seed: u64,
     pub folds: Vec<FoldResult>,
@@ -330,7 +325,7 @@ pub fn cross_validate(
     seed: u64,
     threads: usize,
 ) -> Result<CvReport, EvaluateError> {
-    let run = |test_idx: &Vec<usize>| -> Result<(super::Report, usize, Option<KFallback>), EvaluateError> {
+    let run = |test_idx: &Vec<usize>| -> Result<(Report, usize, Option<KFallback>), EvaluateError> {
         let mut is_test = vec![false; examples.len()];
         for &i in test_idx {
             is_test[i] = true;
@@ -343,10 +338,14 @@ pub fn cross_validate(
             .collect();
         let test: Vec<TrainingExample> = test_idx.iter().map(|&i| examples[i].clone()).collect();
         let model = Model::train_adapting_k(profile_name, analysis, classifier, train)?;
-        Ok((evaluate(&model, &test)?, model.classifier.k, model.k_fallback))
+        Ok((
+            evaluate(&model, &test)?,
+            model.classifier.k,
+            model.k_fallback,
+        ))
     };
     let threads = threads.clamp(1, folds.len().max(1));
-    type FoldRun = Result<(super::Report, usize, Option<KFallback>), EvaluateError>;
+    type FoldRun = Result<(Report, usize, Option<KFallback>), EvaluateError>;
     let mut results: Vec<Option<FoldRun>> = (0..folds.len()).map(|_| None).collect();
     std::thread::scope(|s| {
         let chunks = results.chunks_mut(folds.len().div_ceil(threads).max(1));
@@ -398,11 +397,15 @@ pub fn cross_validate(
     let accs: Vec<f64> = fold_results.iter().map(|f| f.accuracy).collect();
     let (accuracy_mean, accuracy_std) = mean_std(&accs);
     Ok(CvReport {
-        accuracy: correct as f64 / tested.max(1) as f64,
-        per_class,
-        train: examples.iter().map(|e| e.file.clone()).collect(),
-        test,
-        predictions,
+        report: Report {
+            accuracy: correct as f64 / tested.max(1) as f64,
+            per_class,
+            train: examples.iter().map(|e| e.file.clone()).collect(),
+            test,
+            predictions,
+            labels,
+            confusion,
+        },
         method: method.to_string(),
         seed,
         folds: fold_results,
@@ -410,9 +413,16 @@ pub fn cross_validate(
         accuracy_std,
         macro_f1,
         f1,
-        labels,
-        confusion,
     })
+}
+
+/// A cross-validation's report is a [`Report`] (pooled over the folds) with
+/// more: `r.accuracy`, `r.confusion`, … read the pooled one.
+impl std::ops::Deref for CvReport {
+    type Target = Report;
+    fn deref(&self) -> &Report {
+        &self.report
+    }
 }
 
 impl CvReport {
@@ -421,18 +431,9 @@ impl CvReport {
         k_notice(&self.folds)
     }
 
-    /// As [`super::Report::table`], plus the spread and the macro-F1.
+    /// As [`Report::table`], plus the spread and the macro-F1.
     pub fn table(&self) -> String {
-        let r = super::Report {
-            labels: self.labels.clone(),
-            confusion: self.confusion.clone(),
-            accuracy: self.accuracy,
-            per_class: self.per_class.clone(),
-            train: Vec::new(),
-            test: Vec::new(),
-            predictions: Vec::new(),
-        };
-        let mut out = r.table();
+        let mut out = self.report.table();
         out.push_str(&format!(
             "{}: {} folds, accuracy per fold {:.1} ± {:.1} % (mean ± sd), macro-F1 {:.3}\n",
             self.method,

@@ -1,6 +1,6 @@
-//! `evaluate` with honest validation (k-fold, leave-one-out, grouped folds)
-//! and parameter sweeps (`--sweep KEY=VALUES`): the thesis's section 4.3
-//! parameter selection as one command.
+//! Parameter sweeps (`evaluate --sweep KEY=VALUES`): the thesis's section
+//! 4.3 parameter selection, one validation ([`super::plan::validate`]) per
+//! value of a profile key.
 //!
 //! The recordings are read once ([`crate::dataset::load`], on every core)
 //! into a [`Dataset`] holding each one's feature vector and metadata, or,
@@ -16,267 +16,25 @@
 //! folder, same seed for every value) and evaluates it; over recordings on
 //! disk they are refused.
 
-use std::path::PathBuf;
+//! Like the rest of `evaluate`, this never prints and knows no front end.
 
-use clap::Args;
 use serde::Serialize;
 
-use crate::analysis::FeatureExtractor;
+use super::EvaluateError;
+use super::cv::CvReport;
+use super::plan::{Dataset, Plan, validate};
 use crate::classify::TrainingExample;
-use crate::cli::ProfileArg;
-use crate::commands::{Failure, load_profile};
-use crate::dataset::{self, Entry, Keep, Options, Skipped, Unusable};
-use crate::evaluate::cv::{self, CvReport};
-use crate::evaluate::{self as ev};
-use crate::profile::{Analysis, Profile, SplitMethod};
+use crate::dataset::{self, Options, Skipped, Unusable, meta_text};
+use crate::profile::{Analysis, Profile};
 
-/// The options `evaluate` gains for cross-validation and sweeps.
-#[derive(Debug, Args, Clone, Default)]
-pub struct ValidationArgs {
-    /// k-fold cross-validation with N folds, stratified by class (or grouped with --group-by).
-    #[arg(long, value_name = "N", conflicts_with = "loo")]
-    pub folds: Option<usize>,
-    /// Leave-one-out (leave-one-group-out with --group-by).
-    #[arg(long)]
-    pub loo: bool,
-    /// Keep recordings with the same value of this metadata key (session, trial, …) on one side of every split.
-    #[arg(long, value_name = "KEY")]
-    pub group_by: Option<String>,
-    /// Seed of the folds' shuffle (default: the profile's evaluation.shuffle_seed, else 0).
-    #[arg(long, value_name = "S")]
-    pub seed: Option<u64>,
-    /// Evaluate once per value of a profile key: `k=1..15`, `k=1..15:2`, `metric=euclidean,cosine`, `spacing=0.0002,0.0003`, `spectrum=magnitude,welch`; with --simulate also `controller.stiffness_n_per_m[1]=90..540:90`, `path.speed_m_per_s=0.005..0.03:0.005`.
-    #[arg(long, value_name = "KEY=VALUES")]
-    pub sweep: Option<String>,
-    /// Worker threads for the folds and the reading (default: the number of cores).
-    #[arg(long, value_name = "N")]
-    pub threads: Option<usize>,
-    /// Evaluate a dataset simulated from the profile in virtual time (no PATH; a temporary folder, removed after); with --sweep of a [controller], [path], [simulator] or [device] key, one dataset per value.
-    #[arg(long)]
-    pub simulate: bool,
-    /// With --simulate: scans per texture (default: the profile's train_per_class + test_per_class).
-    #[arg(long, value_name = "N")]
-    pub per_class: Option<usize>,
-}
-
-impl ValidationArgs {
-    /// Whether anything beyond the thesis's holdout was asked for.
-    pub fn is_active(&self) -> bool {
-        self.folds.is_some()
-            || self.loo
-            || self.group_by.is_some()
-            || self.sweep.is_some()
-            || self.simulate
-            || self.per_class.is_some()
-    }
-}
-
-fn bad(m: impl std::fmt::Display) -> Failure {
-    Failure::BadInput(m.to_string())
-}
-
-/// The recordings of one evaluation, loaded once ([`dataset::load`]): their
-/// feature vectors under the profile's analysis ([`Keep::Features`]), or,
-/// for a sweep over an `[analysis]` key, the columns the analysis reads
-/// ([`Keep::Samples`]) so features are extracted again per value.
-#[derive(Debug, Clone)]
-pub struct Dataset {
-    pub scans: Vec<Entry>,
-    /// Recordings left out (incomplete), in file-name order.
-    pub skipped: Vec<Skipped>,
-    /// The analysis the features were made under ([`Keep::Features`]).
-    analysis: Analysis,
-    keep: Keep,
-}
-
-pub use crate::dataset::meta_text;
-
-impl Dataset {
-    /// Read every recording under `paths` on `threads` threads, keeping
-    /// what `keep` says. Incomplete recordings are listed, not kept; a
-    /// malformed one is an error.
-    pub fn load(
-        paths: &[PathBuf],
-        analysis: &Analysis,
-        keep: Keep,
-        threads: usize,
-    ) -> Result<Dataset, Failure> {
-        let options = Options {
-            keep,
-            unusable: Unusable::Fail,
-            threads,
-        };
-        Dataset::load_files(
-            &crate::commands::find_recordings(paths)?,
-            analysis,
-            options,
-            &|| {},
-        )
-    }
-
-    /// The recordings in `files`, loaded as `options` say; `progress`
-    /// hears each file.
-    pub fn load_files(
-        files: &[PathBuf],
-        analysis: &Analysis,
-        options: Options,
-        progress: &(dyn Fn() + Sync),
-    ) -> Result<Dataset, Failure> {
-        let loaded = dataset::load(files, analysis, options, progress)?;
-        Ok(Dataset {
-            scans: loaded.entries,
-            skipped: loaded.skipped,
-            analysis: analysis.clone(),
-            keep: options.keep,
-        })
-    }
-
-    /// The feature vectors under `analysis`: the kept ones when it is the
-    /// analysis they were made under, else extracted again from the kept
-    /// columns (whose channels must be `analysis`'s).
-    pub fn examples(&self, analysis: &Analysis) -> Result<Vec<TrainingExample>, Failure> {
-        if self.keep == Keep::Features {
-            if *analysis != self.analysis {
-                return Err(Failure::Runtime(
-                    "the recordings were loaded for other analysis settings (features only)".into(),
-                ));
-            }
-            return Ok(self.scans.iter().map(Entry::example).collect());
-        }
-        let mut fx = FeatureExtractor::try_new(analysis).map_err(bad)?;
-        self.scans
-            .iter()
-            .map(|s| {
-                Ok(TrainingExample {
-                    file: s.file.clone(),
-                    label: s.label.clone(),
-                    features: s.features_with(&mut fx)?,
-                })
-            })
-            .collect()
-    }
-
-    /// Each scan's value of a metadata key; a scan without it is an error.
-    pub fn groups(&self, key: &str) -> Result<Vec<String>, Failure> {
-        self.scans
-            .iter()
-            .map(|s| {
-                s.meta_text(key).ok_or_else(|| {
-                    bad(format!(
-                        "{}: no metadata key `{key}` to group by (--group-by)",
-                        s.file
-                    ))
-                })
-            })
-            .collect()
-    }
-}
-
-/// The validation the arguments and the profile ask for.
-#[derive(Debug, Clone)]
-pub struct Plan {
-    pub method: SplitMethod,
-    pub folds: usize,
-    pub group_by: Option<String>,
-    pub seed: u64,
-    /// For a holdout: shuffle each class with this seed, else take the
-    /// recordings in file-name order (as plain `evaluate` does).
-    pub holdout_shuffle: Option<u64>,
-    pub threads: usize,
-}
-
-impl Plan {
-    pub fn new(p: &Profile, args: &ValidationArgs) -> Plan {
-        let e = &p.evaluation;
-        let method = if args.loo {
-            SplitMethod::LeaveOneOut
-        } else if args.folds.is_some()
-            || (args.group_by.is_some() && e.method == SplitMethod::Holdout)
-        {
-            SplitMethod::KFold
-        } else {
-            e.method
-        };
-        Plan {
-            method,
-            folds: args.folds.or(e.folds).unwrap_or(10),
-            group_by: args.group_by.clone().or_else(|| e.group_by.clone()),
-            seed: args.seed.or(e.shuffle_seed).unwrap_or(0),
-            holdout_shuffle: args.seed.or(e.shuffle_seed),
-            threads: args
-                .threads
-                .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
-        }
-    }
-
-    pub fn describe(&self) -> String {
-        let g = self
-            .group_by
-            .as_ref()
-            .map_or(String::new(), |g| format!(", grouped by {g}"));
-        match self.method {
-            SplitMethod::Holdout => match self.holdout_shuffle {
-                Some(s) => format!("holdout split (shuffled, seed {s})"),
-                None => "holdout split (file-name order)".into(),
-            },
-            SplitMethod::KFold => format!(
-                "{}-fold cross-validation{g}, seed {}",
-                self.folds, self.seed
-            ),
-            SplitMethod::LeaveOneOut if self.group_by.is_some() => {
-                format!("leave-one-group-out{g}")
-            }
-            SplitMethod::LeaveOneOut => "leave-one-out".into(),
-        }
-    }
-}
-
-/// Validate `profile`'s classifier on `examples` as `plan` says.
-pub fn validate(
-    profile: &Profile,
-    examples: Vec<TrainingExample>,
-    groups: Option<&[String]>,
-    plan: &Plan,
-) -> Result<CvReport, Failure> {
-    if plan.method == SplitMethod::Holdout {
-        let mut eval = profile.evaluation.clone();
-        eval.shuffle_seed = plan.holdout_shuffle;
-        let split = ev::split(examples, &eval).map_err(bad)?;
-        let mut all = split.train.clone();
-        all.extend(split.test.iter().cloned());
-        let n_train = split.train.len();
-        let folds = vec![(n_train..all.len()).collect()];
-        return cv::cross_validate(
-            &all,
-            &folds,
-            &profile.name,
-            &profile.analysis,
-            &profile.classifier,
-            "holdout",
-            plan.seed,
-            1,
-        )
-        .map_err(bad);
-    }
-    let labels: Vec<&str> = examples.iter().map(|e| e.label.as_str()).collect();
-    let folds = cv::make_folds(&labels, groups, plan.method, plan.folds, plan.seed).map_err(bad)?;
-    cv::cross_validate(
-        &examples,
-        &folds,
-        &profile.name,
-        &profile.analysis,
-        &profile.classifier,
-        &plan.describe(),
-        plan.seed,
-        plan.threads,
-    )
-    .map_err(bad)
+fn bad(m: impl std::fmt::Display) -> EvaluateError {
+    EvaluateError::Input(m.to_string())
 }
 
 /// `KEY=VALUES` into the key and its values as TOML literals: `1..15`,
 /// `1..15:2`, `0.005..0.02:0.005` (a range, ends included), or a comma
 /// list (`euclidean,cosine`, `[0,1],[1,2]`).
-pub fn parse_sweep(spec: &str) -> Result<(String, Vec<toml::Value>), Failure> {
+pub fn parse_sweep(spec: &str) -> Result<(String, Vec<toml::Value>), EvaluateError> {
     let (key, values) = spec.split_once('=').ok_or_else(|| {
         bad(format!(
             "--sweep {spec:?}: expected KEY=VALUES, e.g. k=1..15"
@@ -311,7 +69,12 @@ pub fn parse_sweep(spec: &str) -> Result<(String, Vec<toml::Value>), Failure> {
 
 /// `a..b` or `a..b:step`: whole numbers when all three are, else decimals
 /// rounded to the most decimals written (so 0.1 steps stay 0.1, 0.2, …).
-fn parse_range(key: &str, values: &str, a: &str, b: &str) -> Result<Vec<toml::Value>, Failure> {
+fn parse_range(
+    key: &str,
+    values: &str,
+    a: &str,
+    b: &str,
+) -> Result<Vec<toml::Value>, EvaluateError> {
     let (b, step) = match b.split_once(':') {
         Some((b, s)) => (b, s),
         None => (b, "1"),
@@ -412,7 +175,7 @@ impl SweepKey {
 /// `[classifier]`, `[evaluation]`, then `[controller]`, `[path]`,
 /// `[simulator]`, `[device]`; a 3-vector's component as `field[1]` or
 /// `field.y`.
-pub fn resolve_key(profile: &Profile, key: &str) -> Result<SweepKey, Failure> {
+pub fn resolve_key(profile: &Profile, key: &str) -> Result<SweepKey, EvaluateError> {
     let doc = toml::Table::try_from(profile).map_err(bad)?;
     let unknown = || {
         bad(format!(
@@ -483,7 +246,11 @@ pub fn resolve_key(profile: &Profile, key: &str) -> Result<SweepKey, Failure> {
 /// The profile with `key` set to `value` (see [`resolve_key`]), validated
 /// as a profile file would be. A whole number where the profile holds a
 /// decimal is taken as that decimal.
-pub fn with_key(profile: &Profile, key: &str, value: &toml::Value) -> Result<Profile, Failure> {
+pub fn with_key(
+    profile: &Profile,
+    key: &str,
+    value: &toml::Value,
+) -> Result<Profile, EvaluateError> {
     let k = resolve_key(profile, key)?;
     with_resolved(profile, &k, value)
 }
@@ -493,7 +260,7 @@ pub fn with_resolved(
     profile: &Profile,
     k: &SweepKey,
     value: &toml::Value,
-) -> Result<Profile, Failure> {
+) -> Result<Profile, EvaluateError> {
     let name = k.name();
     let mut doc = toml::Table::try_from(profile).map_err(bad)?;
     let as_like = |old: Option<&toml::Value>, v: &toml::Value| match (old, v) {
@@ -621,13 +388,10 @@ pub fn simulated_dataset(
     analysis: &Analysis,
     options: Options,
     progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<Dataset, Failure> {
+) -> Result<Dataset, EvaluateError> {
     // Removed on drop, and on Ctrl-C (which would otherwise skip the drop).
-    let dir = crate::scratch::ScratchFolder::new("hapticlab-simulate-").map_err(|e| {
-        Failure::Runtime(format!(
-            "cannot make a temporary folder for the simulated scans: {e}"
-        ))
-    })?;
+    let dir = crate::scratch::ScratchFolder::new("hapticlab-simulate-")
+        .map_err(EvaluateError::Scratch)?;
     let opts = crate::acquire::SimulateOptions {
         out: dir.path().to_path_buf(),
         per_class: sim.per_class,
@@ -670,8 +434,8 @@ pub fn simulated_dataset(
 
 fn point(value: &toml::Value, r: &CvReport, data: &Dataset) -> SweepPoint {
     SweepPoint {
-        value: crate::study::meta_text(value),
-        accuracy: r.accuracy,
+        value: meta_text(value),
+        accuracy: r.report.accuracy,
         accuracy_mean: r.accuracy_mean,
         accuracy_std: r.accuracy_std,
         macro_f1: r.macro_f1,
@@ -692,7 +456,7 @@ pub fn sweep(
     values: &[toml::Value],
     plan: &Plan,
     progress: &dyn Fn(usize),
-) -> Result<Sweep, Failure> {
+) -> Result<Sweep, EvaluateError> {
     let k = resolve_key(profile, key)?;
     if k.needs_simulation() {
         return Err(bad(format!(
@@ -753,7 +517,7 @@ pub fn sweep_simulated(
     plan: &Plan,
     sim: SimPlan,
     progress: &(dyn Fn(usize, usize, usize) + Sync),
-) -> Result<Sweep, Failure> {
+) -> Result<Sweep, EvaluateError> {
     let k = resolve_key(&lp.profile, key)?;
     let profiles = values
         .iter()
@@ -809,7 +573,7 @@ pub fn sweep_simulated(
                         .iter()
                         .filter(|s| matches!(s, Skipped::Incomplete { .. }))
                         .count(),
-                    error: Some(f.message().to_string()),
+                    error: Some(f.to_string()),
                 });
                 continue;
             }
@@ -819,7 +583,7 @@ pub fn sweep_simulated(
             None => None,
         };
         let r = validate(&lp_v.profile, examples, groups.as_deref(), plan)
-            .map_err(|f| bad(format!("--sweep {} = {v}: {}", k.name(), f.message())))?;
+            .map_err(|f| bad(format!("--sweep {} = {v}: {f}", k.name())))?;
         points.push(point(v, &r, &data));
     }
     Ok(Sweep {
@@ -888,201 +652,4 @@ impl Sweep {
         }
         out
     }
-}
-
-/// `hapticlab evaluate` with cross-validation, a sweep, or simulated data.
-pub fn run_evaluate(
-    profile: &ProfileArg,
-    paths: &[PathBuf],
-    shuffle_seed: Option<u64>,
-    json: bool,
-    args: &ValidationArgs,
-) -> Result<(), Failure> {
-    let lp = load_profile(profile)?;
-    let mut args = args.clone();
-    if args.seed.is_none() {
-        args.seed = shuffle_seed;
-    }
-    let plan = Plan::new(&lp.profile, &args);
-    let sweep_spec = match &args.sweep {
-        Some(spec) => {
-            let (key, values) = parse_sweep(spec)?;
-            let k = resolve_key(&lp.profile, &key)?;
-            Some((spec, key, k, values))
-        }
-        None => None,
-    };
-    match (args.simulate, paths.is_empty()) {
-        (true, false) => {
-            return Err(bad(
-                "--simulate evaluates datasets simulated from the profile: give no PATH",
-            ));
-        }
-        (false, true) => {
-            return Err(bad(
-                "no recordings: give a PATH, or --simulate to evaluate a simulated dataset",
-            ));
-        }
-        _ => {}
-    }
-    if let Some((spec, _, k, _)) = &sweep_spec
-        && k.needs_simulation()
-        && !args.simulate
-    {
-        return Err(bad(format!(
-            "--sweep {}: this key changes the recordings themselves, so it cannot be swept over \
-             recordings on disk; simulate a dataset per value instead: \
-             hapticlab evaluate --profile {} --simulate --folds 5 --sweep {spec}",
-            k.name(),
-            profile.profile.display()
-        )));
-    }
-    let sim = SimPlan {
-        per_class: args.per_class.unwrap_or(
-            lp.profile.evaluation.train_per_class + lp.profile.evaluation.test_per_class,
-        ),
-        threads: plan.threads,
-    };
-    if args.per_class.is_some() && !args.simulate {
-        return Err(bad(
-            "--per-class sets how many scans --simulate makes per texture; add --simulate (and no PATH)",
-        ));
-    }
-    if args.simulate && sim.per_class == 0 {
-        return Err(bad("--per-class must be at least 1"));
-    }
-    let e = &lp.profile.evaluation;
-    if args.simulate
-        && plan.method == SplitMethod::Holdout
-        && sim.per_class < e.train_per_class + e.test_per_class
-    {
-        return Err(bad(format!(
-            "--per-class {}: the profile's holdout split needs {} scans per texture ({} to train, {} to test); \
-             simulate at least that many, or cross-validate (--folds N)",
-            sim.per_class,
-            e.train_per_class + e.test_per_class,
-            e.train_per_class,
-            e.test_per_class
-        )));
-    }
-    let n_textures = lp.profile.textures.len();
-    if let Some((_, key, k, values)) = &sweep_spec
-        && k.needs_simulation()
-    {
-        let per_value = sim.per_class * n_textures;
-        let pb = crate::commands::progress_bar((per_value * values.len()) as u64, "simulating");
-        let s = sweep_simulated(&lp, key, values, &plan, sim, &|i, done, _| {
-            if done == 1 {
-                pb.set_message(format!(
-                    "{} = {} ({}/{})",
-                    k.name(),
-                    meta_text(&values[i]),
-                    i + 1,
-                    values.len()
-                ));
-            }
-            pb.set_position((i * per_value + done) as u64);
-        })?;
-        pb.finish_and_clear();
-        if json {
-            crate::outln!("{}", serde_json::to_string(&s).map_err(bad)?);
-        } else {
-            crate::outln!(
-                "profile {}: sweeping {} over {} values, each on {} simulated scans per texture (seed {}), {}",
-                lp.profile.name,
-                s.key,
-                values.len(),
-                sim.per_class,
-                lp.profile.simulator.seed,
-                plan.describe(),
-            );
-            crate::outp!("{}", s.table());
-        }
-        return Ok(());
-    }
-    // Samples are kept only when a sweep extracts features again per value;
-    // otherwise memory holds one feature vector per recording.
-    let keep = match &sweep_spec {
-        Some((_, _, k, _)) if k.table == "analysis" => Keep::Samples,
-        _ => Keep::Features,
-    };
-    let options = Options {
-        keep,
-        unusable: Unusable::Fail,
-        threads: plan.threads,
-    };
-    let data = if args.simulate {
-        let pb = crate::commands::progress_bar((sim.per_class * n_textures) as u64, "simulating");
-        let d = simulated_dataset(&lp, sim, &lp.profile.analysis, options, &|done, _| {
-            pb.set_position(done as u64)
-        });
-        pb.finish_and_clear();
-        d?
-    } else {
-        let files = crate::commands::find_recordings(paths)?;
-        let pb = crate::commands::progress_bar(files.len() as u64, "reading");
-        let d = Dataset::load_files(&files, &lp.profile.analysis, options, &|| pb.inc(1));
-        pb.finish_and_clear();
-        d?
-    };
-    crate::commands::warn_skipped(&data.skipped);
-    let source = if args.simulate {
-        format!(
-            "{} simulated recordings (seed {})",
-            data.scans.len(),
-            lp.profile.simulator.seed
-        )
-    } else {
-        crate::classify::plural(data.scans.len(), "recording", "recordings")
-    };
-    if let Some((_, key, _, values)) = &sweep_spec {
-        let s = sweep(&lp.profile, &data, key, values, &plan, &|_| {})?;
-        if json {
-            crate::outln!("{}", serde_json::to_string(&s).map_err(bad)?);
-        } else {
-            crate::outln!(
-                "profile {}: sweeping {} over {} values, {}, {source}",
-                lp.profile.name,
-                s.key,
-                values.len(),
-                plan.describe(),
-            );
-            crate::outp!("{}", s.table());
-        }
-        return Ok(());
-    }
-    let groups = match &plan.group_by {
-        Some(g) => Some(data.groups(g)?),
-        None => None,
-    };
-    let examples = data.examples(&lp.profile.analysis)?;
-    let report = validate(&lp.profile, examples, groups.as_deref(), &plan)?;
-    let notice = report.k_notice();
-    if let Some(n) = &notice {
-        crate::errln!("note: {n}");
-    }
-    if json {
-        crate::outln!("{}", serde_json::to_string(&report).map_err(bad)?);
-    } else {
-        crate::outln!(
-            "profile {}: k-NN k = {}{} ({:?}, {:?} votes{}), {}, {source}",
-            lp.profile.name,
-            lp.profile.classifier.k_text(),
-            if notice.is_some() {
-                ", chosen by CV in folds with too few scans of a texture (see the note)"
-            } else {
-                ""
-            },
-            lp.profile.classifier.metric,
-            lp.profile.classifier.weights,
-            if lp.profile.classifier.standardize {
-                ", standardised"
-            } else {
-                ""
-            },
-            plan.describe(),
-        );
-        crate::outp!("{}", report.table());
-    }
-    Ok(())
 }

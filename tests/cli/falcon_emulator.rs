@@ -7,12 +7,12 @@ use std::path::Path;
 
 use hapticlab::acquire::{SimulateOptions, simulate_dataset, simulate_one};
 use hapticlab::classify::Model;
-use hapticlab::commands::load_examples;
 use hapticlab::device::falcon::{self, OpenError};
 use hapticlab::evaluate::{evaluate, split};
 use hapticlab::profile::Evaluation;
 use hapticlab::profile::LoadedProfile;
 use hapticlab::recording;
+use hapticlab::support::load_examples;
 
 fn quick() -> LoadedProfile {
     LoadedProfile::load(Path::new("tests/data/profiles/quick-emulator.toml")).unwrap()

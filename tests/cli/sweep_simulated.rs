@@ -4,10 +4,11 @@
 
 use std::process::Command;
 
-use hapticlab::profile::LoadedProfile;
-use hapticlab::study::{
-    Plan, SimPlan, ValidationArgs, resolve_key, simulated_dataset, sweep_simulated, with_key,
+use hapticlab::evaluate::plan::{Overrides, Plan};
+use hapticlab::evaluate::sweep::{
+    SimPlan, resolve_key, simulated_dataset, sweep_simulated, with_key,
 };
+use hapticlab::profile::LoadedProfile;
 
 fn hapticlab(args: &[&str]) -> std::process::Output {
     crate::common::hapticlab().args(args).output().unwrap()
@@ -36,7 +37,7 @@ fn simulation_keys_resolve_by_table_bare_name_or_component() {
         "textures.label",
     ] {
         let e = resolve_key(&p, bad).unwrap_err();
-        assert_eq!(e.exit_code(), 2, "{bad}");
+        assert!(e.is_bad_input(), "{bad}");
     }
     // One component changes, the others stay; a whole number becomes a decimal.
     let q = with_key(
@@ -51,9 +52,9 @@ fn simulation_keys_resolve_by_table_bare_name_or_component() {
     // Values the profile refuses are refused, naming the key.
     let e = with_key(&p, "path.speed_m_per_s", &toml::Value::Float(-1.0)).unwrap_err();
     assert!(
-        e.message().contains("path.speed_m_per_s"),
+        e.to_string().contains("path.speed_m_per_s"),
         "{}",
-        e.message()
+        e.to_string()
     );
 }
 
@@ -106,9 +107,9 @@ fn each_value_simulates_its_own_recordings() {
 #[test]
 fn a_simulated_sweep_reports_each_value_and_repeats_exactly() {
     let lp = LoadedProfile::thesis();
-    let args = ValidationArgs {
+    let args = Overrides {
         folds: Some(4),
-        ..ValidationArgs::default()
+        ..Overrides::default()
     };
     let plan = Plan::new(&lp.profile, &args);
     // 4 folds of 16 scans leave 12 to train the thesis's k = 10.
@@ -149,9 +150,9 @@ fn a_simulated_sweep_reports_each_value_and_repeats_exactly() {
 #[test]
 fn a_value_whose_recordings_cannot_be_analysed_is_reported_not_fatal() {
     let lp = LoadedProfile::thesis();
-    let args = ValidationArgs {
+    let args = Overrides {
         folds: Some(4),
-        ..ValidationArgs::default()
+        ..Overrides::default()
     };
     let plan = Plan::new(&lp.profile, &args);
     let sim = SimPlan {

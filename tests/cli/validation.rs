@@ -6,8 +6,8 @@ use std::process::Command;
 
 use hapticlab::classify::TrainingExample;
 use hapticlab::evaluate::cv::{cross_validate, f1_scores, make_folds};
+use hapticlab::evaluate::sweep::{parse_sweep, with_key};
 use hapticlab::profile::{Classifier, LoadedProfile, SplitMethod};
-use hapticlab::study::{parse_sweep, with_key};
 
 use crate::common::{analysis, ex};
 
@@ -167,7 +167,7 @@ fn sweep_values_and_keys() {
     let q = with_key(&p, "k", &toml::Value::Integer(3)).unwrap();
     assert_eq!(q.classifier.k, 3);
     let q = with_key(&p, "spectrum", &toml::Value::String("welch".into())).unwrap_err();
-    assert!(q.message().contains("analysis.bins"), "{}", q.message());
+    assert!(q.to_string().contains("analysis.bins"), "{}", q.to_string());
     let q = with_key(&p, "taper", &toml::Value::String("hann".into())).unwrap();
     assert_eq!(q.analysis.taper, hapticlab::profile::Taper::Hann);
     assert!(with_key(&p, "nonsense", &toml::Value::Integer(1)).is_err());
@@ -399,23 +399,24 @@ fn a_holdout_through_the_study_code_takes_the_same_split_as_plain_evaluate() {
     let plain = hapticlab::evaluate::split(examples.clone(), &p.evaluation).unwrap();
     let want: BTreeSet<String> = plain.test.iter().map(|e| e.file.clone()).collect();
 
-    let plan = hapticlab::study::Plan::new(p, &hapticlab::study::ValidationArgs::default());
+    let plan =
+        hapticlab::evaluate::plan::Plan::new(p, &hapticlab::evaluate::plan::Overrides::default());
     assert!(
         plan.describe().contains("file-name order"),
         "{}",
         plan.describe()
     );
-    let report = hapticlab::study::validate(p, examples.clone(), None, &plan).unwrap();
+    let report = hapticlab::evaluate::plan::validate(p, examples.clone(), None, &plan).unwrap();
     let got: BTreeSet<String> = report.test.iter().cloned().collect();
     assert_eq!(got, want);
 
     // Asked for a seed, it shuffles, as `evaluate --shuffle-seed` does.
-    let args = hapticlab::study::ValidationArgs {
+    let args = hapticlab::evaluate::plan::Overrides {
         seed: Some(7),
         ..Default::default()
     };
-    let plan = hapticlab::study::Plan::new(p, &args);
-    let report = hapticlab::study::validate(p, examples.clone(), None, &plan).unwrap();
+    let plan = hapticlab::evaluate::plan::Plan::new(p, &args);
+    let report = hapticlab::evaluate::plan::validate(p, examples.clone(), None, &plan).unwrap();
     let mut eval = p.evaluation.clone();
     eval.shuffle_seed = Some(7);
     let shuffled = hapticlab::evaluate::split(examples, &eval).unwrap();

@@ -5,9 +5,9 @@
 
 use hapticlab::acquire::{SimulateOptions, simulate_dataset};
 use hapticlab::classify::Model;
-use hapticlab::commands::load_examples;
 use hapticlab::evaluate::{evaluate, split};
 use hapticlab::profile::{Evaluation, LoadedProfile};
+use hapticlab::support::load_examples;
 
 const PER_CLASS: usize = 12;
 

@@ -5,9 +5,9 @@
 use std::path::Path;
 
 use hapticlab::analysis::FeatureExtractor;
+use hapticlab::evaluate::sweep::with_key;
 use hapticlab::profile::{LoadedProfile, Taper};
 use hapticlab::recording;
-use hapticlab::study::with_key;
 
 /// The thesis profile with `[analysis]` lines replaced.
 fn thesis_with(replace: &[(&str, &str)]) -> Result<LoadedProfile, String> {

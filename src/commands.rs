@@ -1,0 +1,117 @@
+//! The headless commands' dispatcher: [`Command`] (every command with its
+//! arguments) and [`run`]. Each command is one file under `commands/`
+//! holding its clap arguments and its `run`, which turns them into engine
+//! calls and prints the result for people (or JSON for scripts); errors
+//! come back as [`Failure`], which `main` maps to an exit code. What the
+//! commands share (`Failure`, `--profile`, progress bars, finding
+//! recordings) is in [`crate::support`], below every front end.
+
+use clap::Subcommand;
+
+use crate::support::Failure;
+
+pub mod check;
+pub mod classify;
+pub mod console;
+pub mod devices;
+pub mod doctor;
+pub mod evaluate;
+pub mod features;
+pub mod import;
+pub mod inspect;
+pub mod plot;
+pub mod replay;
+pub mod scan;
+pub mod simulate;
+pub mod train;
+
+/// Every command, each holding its arguments.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Open the lab console (live position, force, traces, spectrum, prediction).
+    #[command(
+        after_help = "Example:\n  hapticlab console --profile profiles/thesis.toml --dataset recordings/session1"
+    )]
+    Console(console::ConsoleArgs),
+    /// Simulate a dataset in virtual time: N scans of every texture in the profile.
+    #[command(
+        after_help = "Example:\n  hapticlab simulate --out recordings/my-sim --per-class 30 --seed 7"
+    )]
+    Simulate(simulate::SimulateArgs),
+    /// Acquire live scans in real time on the profile's device; prints loop statistics per scan.
+    #[command(
+        after_help = "Example:\n  hapticlab scan --label S2 --count 3 --out recordings/session1"
+    )]
+    Scan(scan::ScanArgs),
+    /// Compute the feature vector (spectrum bins) of each recording.
+    #[command(
+        after_help = "Example:\n  hapticlab features recordings/thesis-sim --out features.csv"
+    )]
+    Features(features::FeaturesArgs),
+    /// Train a k-NN model on recordings and save it.
+    #[command(
+        after_help = "Example:\n  hapticlab train recordings/thesis-sim --out thesis.model.json"
+    )]
+    Train(train::TrainArgs),
+    /// Classify recordings with a trained model.
+    #[command(
+        after_help = "Example:\n  hapticlab classify --model thesis.model.json recordings/thesis-sim/S3/S3_025.csv"
+    )]
+    Classify(classify::ClassifyArgs),
+    /// Train and test on a split of the recordings; print the confusion matrix (Table 4.1).
+    #[command(
+        after_help = "Examples:\n  hapticlab evaluate recordings/thesis-sim --json > report.json\n  hapticlab evaluate recordings/thesis-sim --folds 10 --seed 1\n  hapticlab evaluate recordings/lab --folds 5 --group-by session\n  hapticlab evaluate recordings/thesis-sim --folds 10 --sweep k=1..15\n  hapticlab evaluate --profile thesis --simulate --folds 5 --sweep controller.stiffness_n_per_m[1]=90..540:90"
+    )]
+    Evaluate(evaluate::EvaluateArgs),
+    /// Play recordings back through the console's dashboard (1×, 4×, 16×, single steps).
+    #[command(
+        after_help = "Keys: ↑/↓ recording, space pause, +/- speed, . step, ← restart, p predict, q quit.\n\nExample:\n  hapticlab replay recordings/thesis-sim\n  hapticlab replay recordings/thesis-sim/S2/S2_003.csv"
+    )]
+    Replay(replay::ReplayArgs),
+    /// List attached Novint Falcons and HID triggers, and whether they can be opened.
+    #[command(after_help = "Example:\n  hapticlab devices --profile profiles/thesis-falcon.toml")]
+    Devices(devices::DevicesArgs),
+    /// Is this PC ready for the profile? Falcon USB access, firmware, real-time limits, terminal, dataset folder; the fix for each.
+    #[command(
+        after_help = "Exit code 0 when nothing failed, 1 when a check failed.\n\nExamples:\n  hapticlab doctor --profile profiles/thesis-falcon.toml --dataset recordings/session1\n  hapticlab doctor --json"
+    )]
+    Doctor(doctor::DoctorArgs),
+    /// A dataset's health: recordings per class, incomplete files, feature spread, outliers by file.
+    #[command(
+        after_help = "Example:\n  hapticlab inspect recordings/thesis-sim\n  hapticlab inspect recordings/lab --threshold 4 --json"
+    )]
+    Inspect(inspect::InspectArgs),
+    /// Import CSV or WAV files from other rigs as recordings v1.
+    #[command(
+        after_help = "Examples:\n  hapticlab import rig/*.csv --out recordings/rig --time-column time --channels ax,ay --label S2 --meta session=3\n  hapticlab import raw/S1/a.csv --out recordings/rig --rate 3200 --channels a0,a1,a2,a3 --burst 4 --names acc\n  hapticlab import sound/S3/*.wav --out recordings/sound"
+    )]
+    Import(crate::import::ImportArgs),
+    /// Draw figures (PNG or SVG): a trace and its spectrum, a confusion matrix, features per class, a sweep.
+    #[command(
+        after_help = "Examples:\n  hapticlab plot trace recordings/thesis-sim/S2/S2_001.csv.gz --out s2.png\n  hapticlab evaluate recordings/thesis-sim --folds 10 --json > r.json && hapticlab plot confusion r.json --out confusion.svg\n  hapticlab plot features recordings/thesis-sim --per-class 5 --out features.png\n  hapticlab evaluate recordings/thesis-sim --folds 5 --sweep k=1..15 --json > s.json && hapticlab plot sweep s.json --out sweep.png"
+    )]
+    Plot(plot::PlotArgs),
+    /// Check profiles: parse and validate every value.
+    #[command(after_help = "Example:\n  hapticlab check profiles/*.toml")]
+    Check(check::CheckArgs),
+}
+
+/// Run one command.
+pub fn run(cmd: Command) -> Result<(), Failure> {
+    match cmd {
+        Command::Console(a) => console::run(a),
+        Command::Replay(a) => replay::run(a),
+        Command::Simulate(a) => simulate::run(a),
+        Command::Scan(a) => scan::run(a),
+        Command::Features(a) => features::run(a),
+        Command::Train(a) => train::run(a),
+        Command::Classify(a) => classify::run(a),
+        Command::Evaluate(a) => evaluate::run(a),
+        Command::Check(a) => check::run(a),
+        Command::Devices(a) => devices::run(a),
+        Command::Doctor(a) => doctor::run(a),
+        Command::Plot(a) => plot::run(&a),
+        Command::Import(a) => import::run(a),
+        Command::Inspect(a) => inspect::run(a),
+    }
+}

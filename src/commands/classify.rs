@@ -1,0 +1,99 @@
+//! `hapticlab classify`: recordings named by a trained model, one line (or
+//! a JSON row) each, with the votes and the nearest neighbour.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+
+use crate::analysis::FeatureExtractor;
+use crate::classify::Model;
+use crate::dataset::{self, DatasetError};
+use crate::recording;
+use crate::support::{Failure, ProfileArg, bad, find_recordings, load_profile};
+
+#[derive(Debug, Args)]
+pub struct ClassifyArgs {
+    /// The profile whose analysis settings the model must have been trained under.
+    #[command(flatten)]
+    pub profile: ProfileArg,
+    #[arg(long, value_name = "MODEL")]
+    pub model: PathBuf,
+    #[arg(required = true, value_name = "FILE")]
+    pub files: Vec<PathBuf>,
+    /// Print JSON for scripts.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(a: ClassifyArgs) -> Result<(), Failure> {
+    classify(&a.profile, &a.model, &a.files, a.json)
+}
+
+fn classify(
+    profile: &ProfileArg,
+    model_path: &Path,
+    files: &[PathBuf],
+    json: bool,
+) -> Result<(), Failure> {
+    let lp = load_profile(profile)?;
+    let model = Model::load(model_path).map_err(bad)?;
+    // The model's stored features were made under its analysis settings;
+    // a model whose settings differ from the profile's is refused.
+    model
+        .check_settings(&lp.profile.analysis)
+        .map_err(|e| bad(format!("{}: {e}", model_path.display())))?;
+    // Other classifier settings still classify, but never silently.
+    if let Err(e) = model.check_classifier(&lp.profile.classifier) {
+        crate::errln!(
+            "warning: {}: {e}; classifying with the model's settings",
+            model_path.display()
+        );
+    }
+    if let Some(note) = model.k_notice() {
+        crate::errln!("note: {}: {note}", model_path.display());
+    }
+    let mut ex = FeatureExtractor::new(&model.analysis);
+    let files = find_recordings(files)?;
+    let mut rows = Vec::new();
+    for f in &files {
+        let rec = recording::read(f).map_err(DatasetError::from)?;
+        if !rec.is_complete() {
+            let _ = writeln!(
+                std::io::stderr(),
+                "warning: {}: incomplete scan, classified anyway",
+                f.display()
+            );
+        }
+        let feats = dataset::features_of(&rec, f, &mut ex)?;
+        let p = model.classify(&feats).map_err(bad)?;
+        if !json {
+            let votes: Vec<String> = p.votes.iter().map(|(l, v)| format!("{l}:{v}")).collect();
+            let truth = rec.label().map_or(String::new(), |l| {
+                format!(
+                    " (recorded as {l}{})",
+                    if l == p.label { ", right" } else { ", WRONG" }
+                )
+            });
+            crate::outln!(
+                "{}: {}{} — votes {}, nearest {:.3e}",
+                f.display(),
+                p.label,
+                truth,
+                votes.join(" "),
+                p.neighbours.first().map_or(f64::NAN, |n| n.distance)
+            );
+        }
+        rows.push(serde_json::json!({
+            "file": f.display().to_string(),
+            "label": rec.label(),
+            "predicted": p.label,
+            "votes": p.votes,
+            "neighbours": p.neighbours,
+        }));
+    }
+    if json {
+        crate::outln!("{}", serde_json::Value::Array(rows));
+    }
+    Ok(())
+}

@@ -1,0 +1,23 @@
+//! `hapticlab doctor`: its arguments; the checks live in [`crate::doctor`].
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::support::{Failure, ProfileArg};
+
+#[derive(Debug, Args)]
+pub struct DoctorArgs {
+    #[command(flatten)]
+    pub profile: ProfileArg,
+    /// The dataset folder to check (default: the console's, recordings/session-<date>).
+    #[arg(long, value_name = "DIR")]
+    pub dataset: Option<PathBuf>,
+    /// Print JSON for scripts: {checks: [{name, status, finding, fix}], ok}.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(a: DoctorArgs) -> Result<(), Failure> {
+    crate::doctor::run(&a.profile, a.dataset, a.json)
+}

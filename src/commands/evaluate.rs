@@ -1,0 +1,360 @@
+//! `hapticlab evaluate`: one command path for the thesis's holdout split,
+//! k-fold, leave-one-out, grouped folds and parameter sweeps, over
+//! recordings or datasets simulated on the fly. This file holds the
+//! arguments and the printing; the work is the engine's
+//! ([`crate::evaluate`]: `split`/`evaluate` for the holdout,
+//! `evaluate/plan.rs` for cross-validation, `evaluate/sweep.rs` for sweeps).
+//!
+//! Without any validation flag, under a profile whose `[evaluation]` asks
+//! for a holdout, it prints the thesis's Table 4.1 (`--json`: the
+//! [`crate::evaluate::Report`]); otherwise a [`crate::evaluate::cv::CvReport`]
+//! or a [`crate::evaluate::sweep::Sweep`].
+
+use std::path::PathBuf;
+
+use clap::Args;
+
+use crate::classify::Model;
+use crate::dataset::meta_text;
+use crate::dataset::{self, Keep, Options, Unusable};
+use crate::evaluate::plan::{Dataset, Overrides, Plan, validate};
+use crate::evaluate::sweep::{
+    SimPlan, parse_sweep, resolve_key, simulated_dataset, sweep, sweep_simulated,
+};
+use crate::evaluate::{self, EvaluateError};
+use crate::profile::SplitMethod;
+use crate::support::{
+    Failure, ProfileArg, bad, find_recordings, load_examples_on, load_profile, progress_bar,
+    runtime, warn_skipped,
+};
+
+#[derive(Debug, Args)]
+pub struct EvaluateArgs {
+    #[command(flatten)]
+    pub profile: ProfileArg,
+    /// Recordings or folders of recordings (none with --simulate).
+    #[arg(
+        required_unless_present = "simulate",
+        conflicts_with = "simulate",
+        value_name = "PATH"
+    )]
+    pub paths: Vec<PathBuf>,
+    /// Shuffle each class with this seed before the split (default: file-name order).
+    #[arg(long, value_name = "S")]
+    pub shuffle_seed: Option<u64>,
+    /// Print JSON for scripts.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub validation: ValidationArgs,
+}
+
+/// The options `evaluate` gains for cross-validation and sweeps.
+#[derive(Debug, Args, Clone, Default)]
+pub struct ValidationArgs {
+    /// k-fold cross-validation with N folds, stratified by class (or grouped with --group-by).
+    #[arg(long, value_name = "N", conflicts_with = "loo")]
+    pub folds: Option<usize>,
+    /// Leave-one-out (leave-one-group-out with --group-by).
+    #[arg(long)]
+    pub loo: bool,
+    /// Keep recordings with the same value of this metadata key (session, trial, …) on one side of every split.
+    #[arg(long, value_name = "KEY")]
+    pub group_by: Option<String>,
+    /// Seed of the folds' shuffle (default: the profile's evaluation.shuffle_seed, else 0).
+    #[arg(long, value_name = "S")]
+    pub seed: Option<u64>,
+    /// Evaluate once per value of a profile key: `k=1..15`, `k=1..15:2`, `metric=euclidean,cosine`, `spacing=0.0002,0.0003`, `spectrum=magnitude,welch`; with --simulate also `controller.stiffness_n_per_m[1]=90..540:90`, `path.speed_m_per_s=0.005..0.03:0.005`.
+    #[arg(long, value_name = "KEY=VALUES")]
+    pub sweep: Option<String>,
+    /// Worker threads for the folds and the reading (default: the number of cores).
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+    /// Evaluate a dataset simulated from the profile in virtual time (no PATH; a temporary folder, removed after); with --sweep of a [controller], [path], [simulator] or [device] key, one dataset per value.
+    #[arg(long)]
+    pub simulate: bool,
+    /// With --simulate: scans per texture (default: the profile's train_per_class + test_per_class).
+    #[arg(long, value_name = "N")]
+    pub per_class: Option<usize>,
+}
+
+impl ValidationArgs {
+    /// What these flags set over the profile's `[evaluation]`.
+    pub fn overrides(&self) -> Overrides {
+        Overrides {
+            folds: self.folds,
+            loo: self.loo,
+            group_by: self.group_by.clone(),
+            seed: self.seed,
+            threads: self.threads,
+        }
+    }
+
+    /// Whether anything beyond the thesis's holdout was asked for.
+    pub fn is_active(&self) -> bool {
+        self.folds.is_some()
+            || self.loo
+            || self.group_by.is_some()
+            || self.sweep.is_some()
+            || self.simulate
+            || self.per_class.is_some()
+    }
+}
+
+/// `hapticlab evaluate`: the holdout of the thesis when nothing else is
+/// asked for, else cross-validation, a sweep, or simulated data.
+pub fn run(a: EvaluateArgs) -> Result<(), Failure> {
+    let method = load_profile(&a.profile)?.profile.evaluation.method;
+    if a.validation.is_active() || method != SplitMethod::Holdout {
+        validated(&a.profile, &a.paths, a.shuffle_seed, a.json, &a.validation)
+    } else {
+        let threads = a.validation.threads.unwrap_or_else(dataset::cores);
+        holdout(&a.profile, &a.paths, a.shuffle_seed, a.json, threads)
+    }
+}
+
+fn holdout(
+    profile: &ProfileArg,
+    paths: &[PathBuf],
+    shuffle_seed: Option<u64>,
+    json: bool,
+    threads: usize,
+) -> Result<(), Failure> {
+    let lp = load_profile(profile)?;
+    let examples = load_examples_on(paths, &lp.profile.analysis, threads)?;
+    let mut eval = lp.profile.evaluation.clone();
+    if shuffle_seed.is_some() {
+        eval.shuffle_seed = shuffle_seed;
+    }
+    let split = evaluate::split(examples, &eval).map_err(|e| match e {
+        EvaluateError::NotEnough { .. } => {
+            bad(format!("{e}; cross-validate instead (--folds 5 or --loo)"))
+        }
+        e => bad(e),
+    })?;
+    let model = Model::train_adapting_k(
+        &lp.profile.name,
+        &lp.profile.analysis,
+        &lp.profile.classifier,
+        split.train,
+    )
+    .map_err(bad)?;
+    if let Some(note) = model.k_notice() {
+        crate::errln!("note: {note}");
+    }
+    let report = evaluate::evaluate(&model, &split.test).map_err(bad)?;
+    if json {
+        crate::outln!("{}", serde_json::to_string(&report).map_err(runtime)?);
+    } else {
+        crate::outln!(
+            "profile {}: k-NN k = {}, {} training and {} test recordings per class{}",
+            lp.profile.name,
+            lp.profile.classifier.k_text(),
+            eval.train_per_class,
+            eval.test_per_class,
+            eval.shuffle_seed
+                .map_or(" (file-name order)".into(), |s| format!(
+                    " (shuffled, seed {s})"
+                ))
+        );
+        crate::outp!("{}", report.table());
+    }
+    Ok(())
+}
+
+/// `hapticlab evaluate` with cross-validation, a sweep, or simulated data.
+fn validated(
+    profile: &ProfileArg,
+    paths: &[PathBuf],
+    shuffle_seed: Option<u64>,
+    json: bool,
+    args: &ValidationArgs,
+) -> Result<(), Failure> {
+    let lp = load_profile(profile)?;
+    let mut args = args.clone();
+    if args.seed.is_none() {
+        args.seed = shuffle_seed;
+    }
+    let plan = Plan::new(&lp.profile, &args.overrides());
+    let sweep_spec = match &args.sweep {
+        Some(spec) => {
+            let (key, values) = parse_sweep(spec)?;
+            let k = resolve_key(&lp.profile, &key)?;
+            Some((spec, key, k, values))
+        }
+        None => None,
+    };
+    match (args.simulate, paths.is_empty()) {
+        (true, false) => {
+            return Err(bad(
+                "--simulate evaluates datasets simulated from the profile: give no PATH",
+            ));
+        }
+        (false, true) => {
+            return Err(bad(
+                "no recordings: give a PATH, or --simulate to evaluate a simulated dataset",
+            ));
+        }
+        _ => {}
+    }
+    if let Some((spec, _, k, _)) = &sweep_spec
+        && k.needs_simulation()
+        && !args.simulate
+    {
+        return Err(bad(format!(
+            "--sweep {}: this key changes the recordings themselves, so it cannot be swept over \
+             recordings on disk; simulate a dataset per value instead: \
+             hapticlab evaluate --profile {} --simulate --folds 5 --sweep {spec}",
+            k.name(),
+            profile.profile.display()
+        )));
+    }
+    let sim = SimPlan {
+        per_class: args.per_class.unwrap_or(
+            lp.profile.evaluation.train_per_class + lp.profile.evaluation.test_per_class,
+        ),
+        threads: plan.threads,
+    };
+    if args.per_class.is_some() && !args.simulate {
+        return Err(bad(
+            "--per-class sets how many scans --simulate makes per texture; add --simulate (and no PATH)",
+        ));
+    }
+    if args.simulate && sim.per_class == 0 {
+        return Err(bad("--per-class must be at least 1"));
+    }
+    let e = &lp.profile.evaluation;
+    if args.simulate
+        && plan.method == SplitMethod::Holdout
+        && sim.per_class < e.train_per_class + e.test_per_class
+    {
+        return Err(bad(format!(
+            "--per-class {}: the profile's holdout split needs {} scans per texture ({} to train, {} to test); \
+             simulate at least that many, or cross-validate (--folds N)",
+            sim.per_class,
+            e.train_per_class + e.test_per_class,
+            e.train_per_class,
+            e.test_per_class
+        )));
+    }
+    let n_textures = lp.profile.textures.len();
+    if let Some((_, key, k, values)) = &sweep_spec
+        && k.needs_simulation()
+    {
+        let per_value = sim.per_class * n_textures;
+        let pb = progress_bar((per_value * values.len()) as u64, "simulating");
+        let s = sweep_simulated(&lp, key, values, &plan, sim, &|i, done, _| {
+            if done == 1 {
+                pb.set_message(format!(
+                    "{} = {} ({}/{})",
+                    k.name(),
+                    meta_text(&values[i]),
+                    i + 1,
+                    values.len()
+                ));
+            }
+            pb.set_position((i * per_value + done) as u64);
+        })?;
+        pb.finish_and_clear();
+        if json {
+            crate::outln!("{}", serde_json::to_string(&s).map_err(bad)?);
+        } else {
+            crate::outln!(
+                "profile {}: sweeping {} over {} values, each on {} simulated scans per texture (seed {}), {}",
+                lp.profile.name,
+                s.key,
+                values.len(),
+                sim.per_class,
+                lp.profile.simulator.seed,
+                plan.describe(),
+            );
+            crate::outp!("{}", s.table());
+        }
+        return Ok(());
+    }
+    // Samples are kept only when a sweep extracts features again per value;
+    // otherwise memory holds one feature vector per recording.
+    let keep = match &sweep_spec {
+        Some((_, _, k, _)) if k.table == "analysis" => Keep::Samples,
+        _ => Keep::Features,
+    };
+    let options = Options {
+        keep,
+        unusable: Unusable::Fail,
+        threads: plan.threads,
+    };
+    let data = if args.simulate {
+        let pb = progress_bar((sim.per_class * n_textures) as u64, "simulating");
+        let d = simulated_dataset(&lp, sim, &lp.profile.analysis, options, &|done, _| {
+            pb.set_position(done as u64)
+        });
+        pb.finish_and_clear();
+        d?
+    } else {
+        let files = find_recordings(paths)?;
+        let pb = progress_bar(files.len() as u64, "reading");
+        let d = Dataset::load_files(&files, &lp.profile.analysis, options, &|| pb.inc(1));
+        pb.finish_and_clear();
+        d?
+    };
+    warn_skipped(&data.skipped);
+    let source = if args.simulate {
+        format!(
+            "{} simulated recordings (seed {})",
+            data.scans.len(),
+            lp.profile.simulator.seed
+        )
+    } else {
+        crate::classify::plural(data.scans.len(), "recording", "recordings")
+    };
+    if let Some((_, key, _, values)) = &sweep_spec {
+        let s = sweep(&lp.profile, &data, key, values, &plan, &|_| {})?;
+        if json {
+            crate::outln!("{}", serde_json::to_string(&s).map_err(bad)?);
+        } else {
+            crate::outln!(
+                "profile {}: sweeping {} over {} values, {}, {source}",
+                lp.profile.name,
+                s.key,
+                values.len(),
+                plan.describe(),
+            );
+            crate::outp!("{}", s.table());
+        }
+        return Ok(());
+    }
+    let groups = match &plan.group_by {
+        Some(g) => Some(data.groups(g)?),
+        None => None,
+    };
+    let examples = data.examples(&lp.profile.analysis)?;
+    let report = validate(&lp.profile, examples, groups.as_deref(), &plan)?;
+    let notice = report.k_notice();
+    if let Some(n) = &notice {
+        crate::errln!("note: {n}");
+    }
+    if json {
+        crate::outln!("{}", serde_json::to_string(&report).map_err(bad)?);
+    } else {
+        crate::outln!(
+            "profile {}: k-NN k = {}{} ({:?}, {:?} votes{}), {}, {source}",
+            lp.profile.name,
+            lp.profile.classifier.k_text(),
+            if notice.is_some() {
+                ", chosen by CV in folds with too few scans of a texture (see the note)"
+            } else {
+                ""
+            },
+            lp.profile.classifier.metric,
+            lp.profile.classifier.weights,
+            if lp.profile.classifier.standardize {
+                ", standardised"
+            } else {
+                ""
+            },
+            plan.describe(),
+        );
+        crate::outp!("{}", report.table());
+    }
+    Ok(())
+}

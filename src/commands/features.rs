@@ -1,0 +1,68 @@
+//! `hapticlab features`: the feature vector (spectrum bins) of each
+//! recording, as `file,label,f1,…,fN` rows ([`crate::dataset`] computes them).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+
+use crate::support::{Failure, ProfileArg, load_examples, load_profile, runtime, write_atomically};
+
+#[derive(Debug, Args)]
+pub struct FeaturesArgs {
+    #[command(flatten)]
+    pub profile: ProfileArg,
+    /// Recordings or folders of recordings.
+    #[arg(required = true, value_name = "PATH")]
+    pub paths: Vec<PathBuf>,
+    /// Write `file,label,f1,…,fN` rows here instead of standard output.
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
+}
+
+pub fn run(a: FeaturesArgs) -> Result<(), Failure> {
+    features(&a.profile, &a.paths, a.out.as_deref())
+}
+
+fn features(profile: &ProfileArg, paths: &[PathBuf], out: Option<&Path>) -> Result<(), Failure> {
+    let lp = load_profile(profile)?;
+    let examples = load_examples(paths, &lp.profile.analysis)?;
+    let n = lp.profile.analysis.feature_count();
+    let mut text = String::from("file,label");
+    for i in 1..=n {
+        text.push_str(&format!(",f{i}"));
+    }
+    text.push('\n');
+    for e in &examples {
+        text.push_str(&csv_field(&e.file));
+        text.push(',');
+        text.push_str(&csv_field(&e.label));
+        for v in &e.features {
+            text.push_str(&format!(",{v:.9e}"));
+        }
+        text.push('\n');
+    }
+    match out {
+        Some(p) => {
+            write_atomically(p, text.as_bytes())?;
+            crate::errln!(
+                "wrote {} feature rows ({} features each) to {}",
+                examples.len(),
+                n,
+                p.display()
+            );
+        }
+        None => std::io::stdout()
+            .write_all(text.as_bytes())
+            .map_err(runtime)?,
+    }
+    Ok(())
+}
+
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
+}

@@ -1,0 +1,50 @@
+//! `hapticlab train`: a k-NN model trained on recordings and saved
+//! ([`crate::classify::Model`]).
+
+use std::path::{Path, PathBuf};
+
+use clap::Args;
+
+use crate::classify::{Model, plural};
+use crate::support::{Failure, ProfileArg, bad, load_examples, load_profile, runtime};
+
+#[derive(Debug, Args)]
+pub struct TrainArgs {
+    #[command(flatten)]
+    pub profile: ProfileArg,
+    #[arg(required = true, value_name = "PATH")]
+    pub paths: Vec<PathBuf>,
+    /// Model file to write (JSON).
+    #[arg(long, value_name = "MODEL")]
+    pub out: PathBuf,
+}
+
+pub fn run(a: TrainArgs) -> Result<(), Failure> {
+    train(&a.profile, &a.paths, &a.out)
+}
+
+fn train(profile: &ProfileArg, paths: &[PathBuf], out: &Path) -> Result<(), Failure> {
+    let lp = load_profile(profile)?;
+    let examples = load_examples(paths, &lp.profile.analysis)?;
+    let n = examples.len();
+    let model = Model::train_adapting_k(
+        &lp.profile.name,
+        &lp.profile.analysis,
+        &lp.profile.classifier,
+        examples,
+    )
+    .map_err(bad)?;
+    if let Some(note) = model.k_notice() {
+        crate::errln!("note: {note}");
+    }
+    model.save(out).map_err(runtime)?;
+    crate::outln!(
+        "trained k-NN (k = {}) on {} of {} ({}); model saved to {}",
+        model.classifier.k,
+        plural(n, "recording", "recordings"),
+        plural(model.labels.len(), "class", "classes"),
+        model.labels.join(", "),
+        out.display()
+    );
+    Ok(())
+}

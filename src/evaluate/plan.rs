@@ -1,0 +1,223 @@
+//! What one evaluation runs on and how: the recordings loaded once
+//! ([`Dataset`], through [`crate::dataset::load`] on every core), the
+//! validation asked for ([`Plan`]: holdout, k-fold, leave-one-out, grouped
+//! folds; from the profile's `[evaluation]` and the command's
+//! [`Overrides`]), and [`validate`], which runs it into a [`CvReport`].
+//! Like the rest of `evaluate`, this never prints and knows no front end.
+
+use std::path::PathBuf;
+
+use super::EvaluateError;
+use super::cv::{self, CvReport};
+use crate::analysis::FeatureExtractor;
+use crate::classify::TrainingExample;
+use crate::dataset::Unusable;
+use crate::dataset::{self, Entry, Keep, Options, Skipped};
+use crate::profile::{Analysis, Profile, SplitMethod};
+
+fn bad(m: impl std::fmt::Display) -> EvaluateError {
+    EvaluateError::Input(m.to_string())
+}
+
+/// What the command line sets over the profile's `[evaluation]` (each
+/// `None`/`false` leaves the profile's choice).
+#[derive(Debug, Clone, Default)]
+pub struct Overrides {
+    /// k-fold with this many folds.
+    pub folds: Option<usize>,
+    /// Leave-one-out (leave-one-group-out with a group key).
+    pub loo: bool,
+    pub group_by: Option<String>,
+    pub seed: Option<u64>,
+    /// Worker threads (default: one per core).
+    pub threads: Option<usize>,
+}
+
+/// The recordings of one evaluation, loaded once ([`dataset::load`]): their
+/// feature vectors under the profile's analysis ([`Keep::Features`]), or,
+/// for a sweep over an `[analysis]` key, the columns the analysis reads
+/// ([`Keep::Samples`]) so features are extracted again per value.
+#[derive(Debug, Clone)]
+pub struct Dataset {
+    pub scans: Vec<Entry>,
+    /// Recordings left out (incomplete), in file-name order.
+    pub skipped: Vec<Skipped>,
+    /// The analysis the features were made under ([`Keep::Features`]).
+    analysis: Analysis,
+    keep: Keep,
+}
+
+impl Dataset {
+    /// Read every recording under `paths` on `threads` threads, keeping
+    /// what `keep` says. Incomplete recordings are listed, not kept; a
+    /// malformed one is an error.
+    pub fn load(
+        paths: &[PathBuf],
+        analysis: &Analysis,
+        keep: Keep,
+        threads: usize,
+    ) -> Result<Dataset, EvaluateError> {
+        let options = Options {
+            keep,
+            unusable: Unusable::Fail,
+            threads,
+        };
+        // Finding no recordings is the user's to fix, as in every command.
+        let files = dataset::find(paths).map_err(bad)?;
+        Dataset::load_files(&files, analysis, options, &|| {})
+    }
+
+    /// The recordings in `files`, loaded as `options` say; `progress`
+    /// hears each file.
+    pub fn load_files(
+        files: &[PathBuf],
+        analysis: &Analysis,
+        options: Options,
+        progress: &(dyn Fn() + Sync),
+    ) -> Result<Dataset, EvaluateError> {
+        let loaded = dataset::load(files, analysis, options, progress)?;
+        Ok(Dataset {
+            scans: loaded.entries,
+            skipped: loaded.skipped,
+            analysis: analysis.clone(),
+            keep: options.keep,
+        })
+    }
+
+    /// The feature vectors under `analysis`: the kept ones when it is the
+    /// analysis they were made under, else extracted again from the kept
+    /// columns (whose channels must be `analysis`'s).
+    pub fn examples(&self, analysis: &Analysis) -> Result<Vec<TrainingExample>, EvaluateError> {
+        if self.keep == Keep::Features {
+            if *analysis != self.analysis {
+                return Err(EvaluateError::FeaturesOnly);
+            }
+            return Ok(self.scans.iter().map(Entry::example).collect());
+        }
+        let mut fx = FeatureExtractor::try_new(analysis).map_err(bad)?;
+        self.scans
+            .iter()
+            .map(|s| {
+                Ok(TrainingExample {
+                    file: s.file.clone(),
+                    label: s.label.clone(),
+                    features: s.features_with(&mut fx)?,
+                })
+            })
+            .collect()
+    }
+
+    /// Each scan's value of a metadata key; a scan without it is an error.
+    pub fn groups(&self, key: &str) -> Result<Vec<String>, EvaluateError> {
+        self.scans
+            .iter()
+            .map(|s| {
+                s.meta_text(key).ok_or_else(|| {
+                    bad(format!(
+                        "{}: no metadata key `{key}` to group by (--group-by)",
+                        s.file
+                    ))
+                })
+            })
+            .collect()
+    }
+}
+
+/// The validation the arguments and the profile ask for.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    pub method: SplitMethod,
+    pub folds: usize,
+    pub group_by: Option<String>,
+    pub seed: u64,
+    /// For a holdout: shuffle each class with this seed, else take the
+    /// recordings in file-name order (as plain `evaluate` does).
+    pub holdout_shuffle: Option<u64>,
+    pub threads: usize,
+}
+
+impl Plan {
+    pub fn new(p: &Profile, args: &Overrides) -> Plan {
+        let e = &p.evaluation;
+        let method = if args.loo {
+            SplitMethod::LeaveOneOut
+        } else if args.folds.is_some()
+            || (args.group_by.is_some() && e.method == SplitMethod::Holdout)
+        {
+            SplitMethod::KFold
+        } else {
+            e.method
+        };
+        Plan {
+            method,
+            folds: args.folds.or(e.folds).unwrap_or(10),
+            group_by: args.group_by.clone().or_else(|| e.group_by.clone()),
+            seed: args.seed.or(e.shuffle_seed).unwrap_or(0),
+            holdout_shuffle: args.seed.or(e.shuffle_seed),
+            threads: args
+                .threads
+                .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+        }
+    }
+
+    pub fn describe(&self) -> String {
+        let g = self
+            .group_by
+            .as_ref()
+            .map_or(String::new(), |g| format!(", grouped by {g}"));
+        match self.method {
+            SplitMethod::Holdout => match self.holdout_shuffle {
+                Some(s) => format!("holdout split (shuffled, seed {s})"),
+                None => "holdout split (file-name order)".into(),
+            },
+            SplitMethod::KFold => format!(
+                "{}-fold cross-validation{g}, seed {}",
+                self.folds, self.seed
+            ),
+            SplitMethod::LeaveOneOut if self.group_by.is_some() => {
+                format!("leave-one-group-out{g}")
+            }
+            SplitMethod::LeaveOneOut => "leave-one-out".into(),
+        }
+    }
+}
+
+/// Validate `profile`'s classifier on `examples` as `plan` says.
+pub fn validate(
+    profile: &Profile,
+    examples: Vec<TrainingExample>,
+    groups: Option<&[String]>,
+    plan: &Plan,
+) -> Result<CvReport, EvaluateError> {
+    if plan.method == SplitMethod::Holdout {
+        let mut eval = profile.evaluation.clone();
+        eval.shuffle_seed = plan.holdout_shuffle;
+        let split = super::split(examples, &eval)?;
+        let mut all = split.train.clone();
+        all.extend(split.test.iter().cloned());
+        let n_train = split.train.len();
+        let folds = vec![(n_train..all.len()).collect()];
+        return cv::cross_validate(
+            &all,
+            &folds,
+            &profile.name,
+            &profile.analysis,
+            &profile.classifier,
+            "holdout",
+            plan.seed,
+            1,
+        );
+    }
+    let labels: Vec<&str> = examples.iter().map(|e| e.label.as_str()).collect();
+    let folds = cv::make_folds(&labels, groups, plan.method, plan.folds, plan.seed)?;
+    cv::cross_validate(
+        &examples,
+        &folds,
+        &profile.name,
+        &profile.analysis,
+        &profile.classifier,
+        &plan.describe(),
+        plan.seed,
+        plan.threads,
+    )
+}
