@@ -377,7 +377,7 @@ proptest::proptest! {
 }
 
 #[test]
-fn a_holdout_through_the_study_code_takes_the_same_split_as_plain_evaluate() {
+fn a_holdout_through_plan_validate_takes_the_same_split_as_plain_evaluate() {
     // 12 scans of each of two classes, named so file-name order and any
     // shuffle differ.
     let examples: Vec<TrainingExample> = (0..24)
