@@ -337,7 +337,11 @@ fn load_one(
             unreadable,
         }),
     };
-    let rec = match recording::read(file) {
+    // Only the analysis's columns are converted (the others still checked).
+    let wanted: Vec<&str> = std::iter::once(analysis.axis.as_str())
+        .chain(analysis.all_channels())
+        .collect();
+    let rec = match recording::read_columns(file, &wanted) {
         Ok(r) => r,
         Err(e) => return give_up(e.into(), true),
     };

@@ -21,7 +21,7 @@
 
 use std::collections::HashMap;
 use std::fs;
-use std::io::{self, Read};
+use std::io;
 use std::path::{Path, PathBuf};
 
 /// The first line of every recording in this format.
@@ -37,9 +37,10 @@ const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
 
 mod label;
 mod number;
+mod reader;
 mod writer;
 pub use label::check_label;
-use number::{parse_row_fast, parse_value};
+use reader::{Select, gunzip, parse_text};
 pub use writer::{RecordingWriter, compress, decimals_for, sync_folder};
 
 #[derive(Debug, thiserror::Error)]
@@ -77,8 +78,10 @@ pub struct Recording {
     pub path: Option<PathBuf>,
     /// `# key = value` lines, in file order (including `aborted` after the rows).
     pub meta: Vec<(String, toml::Value)>,
+    /// Every column the header names.
     pub columns: Vec<String>,
-    /// Column-major: `data[c][row]`.
+    /// Column-major: `data[c][row]`. A column left unread by
+    /// [`read_columns`] is empty.
     pub data: Vec<Vec<f64>>,
     /// `Some(N)` when the trailer `# end samples = N` was present.
     pub trailer_samples: Option<usize>,
@@ -100,9 +103,14 @@ impl Recording {
     pub fn is_complete(&self) -> bool {
         self.trailer_samples.is_some()
     }
+    /// The samples of a column, or `None` when the header lacks it (or
+    /// [`read_columns`] was not asked for it).
     pub fn column(&self, name: &str) -> Option<&[f64]> {
         let c = self.columns.iter().position(|n| n == name)?;
-        self.data.get(c).map(Vec::as_slice)
+        self.data
+            .get(c)
+            .filter(|d| d.len() == self.len())
+            .map(Vec::as_slice)
     }
     pub fn meta(&self, key: &str) -> Option<&toml::Value> {
         self.meta.iter().find(|(k, _)| k == key).map(|(_, v)| v)
@@ -137,6 +145,19 @@ impl Recording {
 /// Reads a recording; a gzip-compressed one (`.gz`, or gzip's magic bytes) is
 /// decompressed transparently.
 pub fn read(path: &Path) -> Result<Recording, RecordingError> {
+    read_selected(path, Select::All)
+}
+
+/// Reads a recording as [`read`] does, but converts and keeps only `t_s` and
+/// the columns named in `wanted`: the others are checked row by row (a file
+/// is refused exactly when [`read`] refuses it) and left empty. For a
+/// caller that needs a few channels of many, this is most of the reading
+/// saved.
+pub fn read_columns(path: &Path, wanted: &[&str]) -> Result<Recording, RecordingError> {
+    read_selected(path, Select::Only(wanted))
+}
+
+fn read_selected(path: &Path, select: Select<'_>) -> Result<Recording, RecordingError> {
     let bytes = fs::read(path).map_err(|source| RecordingError::Io {
         path: path.to_path_buf(),
         source,
@@ -152,7 +173,7 @@ pub fn read(path: &Path) -> Result<Recording, RecordingError> {
                 .to_string(),
         });
     }
-    let mut recording = parse(&bytes, &origin)?;
+    let mut recording = parse_selected(&bytes, &origin, select)?;
     recording.path = Some(path.to_path_buf());
     Ok(recording)
 }
@@ -160,99 +181,28 @@ pub fn read(path: &Path) -> Result<Recording, RecordingError> {
 /// Parses a recording held in memory (gzip-compressed or not); `origin` names
 /// it in error messages.
 pub fn parse(bytes: &[u8], origin: &str) -> Result<Recording, RecordingError> {
+    parse_selected(bytes, origin, Select::All)
+}
+
+/// Parses a recording held in memory as [`read_columns`] reads a file.
+pub fn parse_columns(
+    bytes: &[u8],
+    origin: &str,
+    wanted: &[&str],
+) -> Result<Recording, RecordingError> {
+    parse_selected(bytes, origin, Select::Only(wanted))
+}
+
+fn parse_selected(
+    bytes: &[u8],
+    origin: &str,
+    select: Select<'_>,
+) -> Result<Recording, RecordingError> {
     if bytes.starts_with(&GZIP_MAGIC) {
         let text = gunzip(bytes, origin)?;
-        return parse_text(&text, origin);
+        return parse_text(&text, origin, select);
     }
-    parse_text(bytes, origin)
-}
-
-/// A gzipped recording may hold at most this much text, or this many times
-/// its compressed size if that is more: a real recording (CSV of decimals)
-/// compresses three to five times, a gzip bomb a thousand.
-const GZIP_MIN_LIMIT: u64 = 1 << 30;
-const GZIP_MAX_RATIO: u64 = 100;
-
-fn gunzip(bytes: &[u8], origin: &str) -> Result<Vec<u8>, RecordingError> {
-    let limit = (bytes.len() as u64)
-        .saturating_mul(GZIP_MAX_RATIO)
-        .max(GZIP_MIN_LIMIT);
-    gunzip_at_most(bytes, origin, limit)
-}
-
-fn gunzip_at_most(bytes: &[u8], origin: &str, limit: u64) -> Result<Vec<u8>, RecordingError> {
-    let mut text = Vec::with_capacity(bytes.len().saturating_mul(4));
-    flate2::read::MultiGzDecoder::new(bytes)
-        .take(limit.saturating_add(1))
-        .read_to_end(&mut text)
-        .map_err(|e| RecordingError::Compressed {
-            origin: origin.to_string(),
-            reason: if e.kind() == io::ErrorKind::UnexpectedEof {
-                format!(
-                    "truncated gzip stream (it ends after {} bytes of text)",
-                    text.len()
-                )
-            } else {
-                format!("corrupt gzip stream ({e})")
-            },
-        })?;
-    if text.len() as u64 > limit {
-        return Err(RecordingError::Compressed {
-            origin: origin.to_string(),
-            reason: format!(
-                "it unpacks to more than {limit} bytes ({} compressed): too large for a recording (a gzip bomb?)",
-                bytes.len()
-            ),
-        });
-    }
-    Ok(text)
-}
-
-fn parse_text(bytes: &[u8], origin: &str) -> Result<Recording, RecordingError> {
-    let text = std::str::from_utf8(bytes).map_err(|e| {
-        let at = e.valid_up_to();
-        let before = bytes.get(..at).unwrap_or_default();
-        let line_start = before
-            .iter()
-            .rposition(|&b| b == b'\n')
-            .map_or(0, |p| p + 1);
-        RecordingError::Malformed {
-            origin: origin.to_string(),
-            line: count_newlines(before) + 1,
-            reason: format!(
-                "invalid UTF-8 (byte 0x{:02x} at column {}); a recording is plain text",
-                bytes.get(at).copied().unwrap_or(0),
-                at - line_start + 1
-            ),
-        }
-    })?;
-    Parser::new(text, origin).run()
-}
-
-fn count_newlines(bytes: &[u8]) -> usize {
-    bytes.iter().filter(|&&b| b == b'\n').count()
-}
-
-/// What a `#` line holds.
-enum Comment<'a> {
-    /// `# end samples = …`, with the text after the key.
-    Trailer(&'a str),
-    /// `# key = value`, with the key and the whole `key = value` text.
-    Meta(&'a str, &'a str),
-    Other,
-}
-
-fn classify_comment(line: &str) -> Comment<'_> {
-    let body = line.trim().strip_prefix('#').unwrap_or(line).trim();
-    if let Some(rest) = body.strip_prefix(TRAILER_KEY)
-        && (rest.is_empty() || rest.starts_with([' ', '\t', '=']))
-    {
-        return Comment::Trailer(rest.trim_start());
-    }
-    match body.split_once('=') {
-        Some((key, _)) if is_bare_key(key.trim()) => Comment::Meta(key.trim(), body),
-        _ => Comment::Other,
-    }
+    parse_text(bytes, origin, select)
 }
 
 /// TOML's bare keys: ASCII letters, digits, `_` and `-`.
@@ -310,315 +260,6 @@ pub(crate) fn check_columns(names: &[&str]) -> Result<(), String> {
         }
     }
     Ok(())
-}
-
-struct Parser<'a> {
-    origin: &'a str,
-    text: &'a str,
-    /// Start of the next line.
-    pos: usize,
-    /// Number of the line last taken (1-based).
-    line: usize,
-    recording: Recording,
-    /// The line of each metadata key, to point at the first when one repeats.
-    meta_lines: HashMap<String, usize>,
-    /// (N, line) of the trailer once seen.
-    trailer: Option<(usize, usize)>,
-    /// The line of the last row read.
-    last_row_line: usize,
-}
-
-impl<'a> Parser<'a> {
-    fn new(text: &'a str, origin: &'a str) -> Self {
-        Self {
-            origin,
-            text,
-            pos: 0,
-            line: 0,
-            recording: Recording::default(),
-            meta_lines: HashMap::new(),
-            trailer: None,
-            last_row_line: 0,
-        }
-    }
-
-    fn next_line(&mut self) -> Option<&'a str> {
-        let rest = self.text.get(self.pos..).filter(|r| !r.is_empty())?;
-        let (line, used) = match rest.find('\n') {
-            Some(i) => (&rest[..i], i + 1),
-            None => (rest, rest.len()),
-        };
-        self.pos += used;
-        self.line += 1;
-        Some(line.strip_suffix('\r').unwrap_or(line))
-    }
-
-    fn error_at(&self, line: usize, reason: impl Into<String>) -> RecordingError {
-        RecordingError::Malformed {
-            origin: self.origin.to_string(),
-            line,
-            reason: reason.into(),
-        }
-    }
-
-    fn error(&self, reason: impl Into<String>) -> RecordingError {
-        self.error_at(self.line, reason)
-    }
-
-    /// Said of a row error on a last line that has no line end.
-    fn cut_short_note(&self) -> &'static str {
-        if self.pos >= self.text.len() && !self.text.ends_with('\n') {
-            " (the file ends in the middle of this row)"
-        } else {
-            ""
-        }
-    }
-
-    fn run(mut self) -> Result<Recording, RecordingError> {
-        self.format_line()?;
-        self.metadata_and_header()?;
-        let torn = self.cut_torn_row();
-        self.rows()?;
-        if torn && let Some((_, at)) = self.trailer {
-            return Err(self.error_at(
-                self.line + 1,
-                format!(
-                    "a row after the trailer on line {at}; the trailer must come last \
-                     (the file ends in the middle of this row)"
-                ),
-            ));
-        }
-        self.recording.torn_last_row = torn;
-        if let Some((count, at)) = self.trailer {
-            let read = self.recording.len();
-            if count != read {
-                return Err(self.error_at(
-                    at,
-                    format!("the trailer says {count} samples, but {read} rows were read"),
-                ));
-            }
-            self.recording.trailer_samples = Some(count);
-        }
-        Ok(self.recording)
-    }
-
-    /// A last line with no line end that is not a comment is a row whose
-    /// write was cut short (the writer hands the OS whole rows, so only an
-    /// interrupted write leaves one): leave it out. True when one was.
-    fn cut_torn_row(&mut self) -> bool {
-        if self.text.ends_with('\n') {
-            return false;
-        }
-        let start = self.text.rfind('\n').map_or(0, |i| i + 1);
-        let last = self.text[start..].trim();
-        if start < self.pos || last.is_empty() || last.starts_with('#') {
-            return false;
-        }
-        self.text = &self.text[..start];
-        true
-    }
-
-    fn format_line(&mut self) -> Result<(), RecordingError> {
-        let first = self.next_line().unwrap_or_default();
-        self.line = 1;
-        let first = first.strip_prefix('\u{feff}').unwrap_or(first).trim_end();
-        if first == FORMAT_LINE {
-            return Ok(());
-        }
-        Err(self.error(match first.strip_prefix(FORMAT_PREFIX) {
-            Some(version) => format!(
-                "unsupported recording format v{} (this build reads v1)",
-                version.chars().take(QUOTE_CHARS).collect::<String>()
-            ),
-            None if self.text.is_empty() => "not a hapticlab recording (the file is empty)".into(),
-            None => format!("not a hapticlab recording (the first line must be \"{FORMAT_LINE}\")"),
-        }))
-    }
-
-    /// The metadata up to the header, then the header.
-    fn metadata_and_header(&mut self) -> Result<(), RecordingError> {
-        let header = loop {
-            let Some(line) = self.next_line() else {
-                return Err(
-                    self.error("no header: the file ends before the line of column names (t_s,…)")
-                );
-            };
-            let line = line.trim();
-            if line.starts_with('#') {
-                self.comment(line)?;
-            } else if !line.is_empty() {
-                break line;
-            }
-        };
-        let names: Vec<&str> = header.split(',').map(str::trim).collect();
-        if names.first().and_then(|n| parse_value(n)).is_some() {
-            return Err(self.error(
-                "missing header: found a row of values where the column names (t_s,…) should be",
-            ));
-        }
-        check_columns(&names).map_err(|reason| self.error(reason))?;
-        self.recording.columns = names.iter().map(|n| n.to_string()).collect();
-        Ok(())
-    }
-
-    fn rows(&mut self) -> Result<(), RecordingError> {
-        let columns = self.recording.columns.len();
-        let bytes = self.text.as_bytes();
-        let rest = bytes.get(self.pos..).unwrap_or_default();
-        // A row takes at least two bytes a value, which bounds the
-        // reservation whatever the input.
-        let rows = (count_newlines(rest) + 1).min(rest.len() / (2 * columns) + 1);
-        self.recording.data = (0..columns).map(|_| Vec::with_capacity(rows)).collect();
-        let mut row = vec![0.0; columns];
-        while let Some(&first_byte) = bytes.get(self.pos) {
-            if first_byte != b'#'
-                && self.trailer.is_none()
-                && let Some(end) = parse_row_fast(bytes, self.pos, &mut row)
-            {
-                self.pos = end;
-                self.line += 1;
-            } else {
-                let Some(line) = self.next_line() else { break };
-                let trimmed = line.trim();
-                if trimmed.starts_with('#') {
-                    self.comment(trimmed)?;
-                    continue;
-                } else if trimmed.is_empty() {
-                    continue;
-                } else if let Some((_, at)) = self.trailer {
-                    return Err(self.error(format!(
-                        "a row after the trailer on line {at}; the trailer must come last"
-                    )));
-                }
-                self.row_carefully(line, &mut row)?;
-            }
-            self.check_time(row[0])?;
-            for (column, &value) in self.recording.data.iter_mut().zip(&row) {
-                column.push(value);
-            }
-        }
-        if let (Some(&first), Some(&last)) = (
-            self.recording.data[0].first(),
-            self.recording.data[0].last(),
-        ) && self.recording.len() > 1
-            && last <= first
-        {
-            return Err(self.error_at(
-                self.last_row_line,
-                format!(
-                    "t_s never increases: all {} samples are at {last} s",
-                    self.recording.len()
-                ),
-            ));
-        }
-        Ok(())
-    }
-
-    /// The time of the row just read (on `self.line`): a finite number of
-    /// seconds, never less than the row before's. Equal neighbours pass:
-    /// `t_s` is written to the microsecond, and two ticks of a loop catching
-    /// up can fall in one.
-    fn check_time(&mut self, t: f64) -> Result<(), RecordingError> {
-        if !t.is_finite() {
-            return Err(self.error(format!(
-                "t_s is {t}: the time must be a finite number of seconds"
-            )));
-        }
-        if let Some(&before) = self.recording.data[0].last()
-            && t < before
-        {
-            return Err(self.error(format!(
-                "t_s goes back from {before} s (line {}) to {t} s: the time must never decrease",
-                self.last_row_line
-            )));
-        }
-        self.last_row_line = self.line;
-        Ok(())
-    }
-
-    /// A row the fast path turned down: parse it or say exactly what is wrong.
-    fn row_carefully(&self, line: &str, row: &mut [f64]) -> Result<(), RecordingError> {
-        let names = &self.recording.columns;
-        let count = line.split(',').count();
-        if count != names.len() {
-            return Err(self.error(format!(
-                "row has {count} values, the header has {}{}",
-                names.len(),
-                self.cut_short_note()
-            )));
-        }
-        for ((slot, field), name) in row.iter_mut().zip(line.split(',')).zip(names) {
-            let field = field.trim();
-            *slot = parse_value(field).ok_or_else(|| {
-                let what = if field.is_empty() {
-                    "is empty".to_string()
-                } else {
-                    format!("is not a number: {}", quote(field))
-                };
-                self.error(format!(
-                    "the value of {name} {what}{}",
-                    self.cut_short_note()
-                ))
-            })?;
-        }
-        Ok(())
-    }
-
-    /// A `#` line: the trailer, metadata, or a comment to pass over.
-    fn comment(&mut self, line: &str) -> Result<(), RecordingError> {
-        match classify_comment(line) {
-            Comment::Trailer(text) => {
-                if self.recording.columns.is_empty() {
-                    return Err(
-                        self.error("the trailer `# end samples = N` comes before the header")
-                    );
-                }
-                if let Some((_, at)) = self.trailer {
-                    return Err(self.error(format!("a second trailer (the first is on line {at})")));
-                }
-                let count = text
-                    .strip_prefix('=')
-                    .and_then(|n| n.trim().parse::<usize>().ok())
-                    .ok_or_else(|| {
-                        self.error(format!(
-                            "malformed trailer {}: expected `# end samples = N`",
-                            quote(line)
-                        ))
-                    })?;
-                self.trailer = Some((count, self.line));
-            }
-            Comment::Meta(key, body) => self.meta(key, body)?,
-            Comment::Other => {}
-        }
-        Ok(())
-    }
-
-    fn meta(&mut self, key: &str, body: &str) -> Result<(), RecordingError> {
-        if let Some(first) = self.meta_lines.get(key) {
-            return Err(self.error(format!(
-                "metadata `{key}` is given twice (first on line {first})"
-            )));
-        }
-        let mut table: toml::Table = toml::from_str(body).map_err(|e| {
-            self.error(format!(
-                "metadata `{key}`: the value is not valid TOML ({})",
-                e.message()
-            ))
-        })?;
-        let value = table.remove(key).ok_or_else(|| {
-            self.error(format!("metadata `{key}`: the line holds no value for it"))
-        })?;
-        if key == "label" {
-            let label = value.as_str().ok_or_else(|| {
-                self.error("metadata `label`: must be a string (the texture's name)")
-            })?;
-            check_label(label)
-                .map_err(|reason| self.error(format!("metadata `label`: {reason}")))?;
-        }
-        self.meta_lines.insert(key.to_string(), self.line);
-        self.recording.meta.push((key.to_string(), value));
-        Ok(())
-    }
 }
 
 /// All recordings under `paths`: files as given, folders walked recursively
@@ -682,6 +323,7 @@ fn walk(
 
 #[cfg(test)]
 mod tests {
+    use super::reader::{Comment, classify_comment, gunzip_at_most};
     use super::*;
 
     #[test]
@@ -780,6 +422,31 @@ mod tests {
             "is not a number: \"{}\"…",
             "y".repeat(QUOTE_CHARS)
         )));
+    }
+
+    #[test]
+    fn reading_some_columns_keeps_those_and_refuses_what_a_full_read_refuses() {
+        let some = parse_columns(EXAMPLE.as_bytes(), "example.csv", &["y_m", "nope"]).unwrap();
+        let all = parse(EXAMPLE.as_bytes(), "example.csv").unwrap();
+        assert_eq!(some.columns, all.columns);
+        assert_eq!((some.len(), some.is_complete()), (3, true));
+        assert_eq!(some.column("t_s"), all.column("t_s"));
+        assert_eq!(some.column("y_m"), all.column("y_m"));
+        assert_eq!(some.column("x_m"), None);
+        assert!(some.data[1].is_empty());
+        let head = "# hapticlab recording v1\nt_s,x_m,y_m\n";
+        for rows in [
+            "0,1,2\n0.001,abc,2\n",
+            "0,1,2\n0.001,,2\n",
+            "0,1\n",
+            "0,1,2\n0,1,2\n",
+        ] {
+            let text = format!("{head}{rows}# end samples = 2\n");
+            let full = parse(text.as_bytes(), "x.csv").map_err(|e| e.to_string());
+            let part = parse_columns(text.as_bytes(), "x.csv", &["y_m"]).map_err(|e| e.to_string());
+            assert_eq!(part.clone().err(), full.clone().err(), "{rows:?}");
+            assert!(part.is_err() || full.is_ok());
+        }
     }
 
     #[test]
