@@ -60,6 +60,33 @@ fn bench(c: &mut Criterion) {
     c.bench_function("k-NN query (80 x 49, k = 10)", |b| {
         b.iter(|| model.classify(black_box(&query)).unwrap())
     });
+    // A parsed 5 s, 44.1 kHz clip (a tone plus broadband texture), one
+    // 0.5 s window, log-Welch of 2048-point segments (issue 13).
+    let audio = hapticlab::profile::Analysis {
+        channel: "pac".into(),
+        axis: "t_s".into(),
+        window: [1.0, 1.5],
+        spacing: 1.0 / 44100.0,
+        detrend: hapticlab::profile::Detrend::Mean,
+        spectrum: hapticlab::profile::SpectrumKind::LogWelch,
+        taper: hapticlab::profile::Taper::Hann,
+        welch_segment: Some(2048),
+        ..Default::default()
+    };
+    let mut ax = FeatureExtractor::new(&hapticlab::profile::Analysis {
+        bins: [1, 1024],
+        ..audio
+    });
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let t: Vec<f64> = (0..5 * 44100).map(|j| j as f64 / 44100.0).collect();
+    let pac: Vec<f64> = t
+        .iter()
+        .map(|&t| (2.0 * std::f64::consts::PI * 310.0 * t).sin() + rng.random_range(-0.5..0.5))
+        .collect();
+    c.bench_function(
+        "features (5 s at 44.1 kHz, 0.5 s window, log-Welch 2048)",
+        |b| b.iter(|| ax.features(black_box(&t), black_box(&pac)).unwrap()[0]),
+    );
     c.bench_function("features + k-NN query", |b| {
         b.iter(|| {
             let f = fx.features(black_box(&x), black_box(&y)).unwrap();

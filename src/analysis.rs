@@ -54,6 +54,7 @@
 //! `channel` and then each of `channels` is resampled along the same axis
 //! and analysed alike; the feature vector is their features concatenated.
 
+mod bands;
 mod resample;
 mod spectrum;
 
@@ -63,6 +64,7 @@ use thiserror::Error;
 
 use crate::profile::Analysis;
 use crate::profile::check_options;
+use bands::BandFeatures;
 use resample::Resampler;
 use spectrum::Spectrum;
 
@@ -188,7 +190,7 @@ pub fn check_settings(settings: &Analysis) -> Result<(), String> {
     }
     let [a, b] = settings.bins;
     let m = settings.dft_points();
-    if settings.band.is_none() && (a > b || b > m / 2) {
+    if settings.band.is_none() && settings.bands.is_none() && (a > b || b > m / 2) {
         return Err(format!(
             "analysis.bins must be [first, last] with first <= last <= {}, got {:?}",
             m / 2,
@@ -212,6 +214,10 @@ pub struct FeatureExtractor {
     /// The concatenated features of every channel.
     features: Vec<f64>,
     kept: [usize; 2],
+    /// `bands` (and `cepstra`), when set: reduce the linear power to them.
+    bands: Option<BandFeatures>,
+    /// One channel's band features.
+    band_values: Vec<f64>,
     has_spectrum: bool,
 }
 
@@ -241,8 +247,15 @@ impl FeatureExtractor {
     pub fn try_new(settings: &Analysis) -> Result<Self, AnalysisError> {
         check_settings(settings).map_err(AnalysisError::Settings)?;
         let n = settings.points();
+        let bands = BandFeatures::new(settings);
+        // Bands sum linear power; they take the log themselves.
+        let kind = if bands.is_some() {
+            settings.spectrum.linear()
+        } else {
+            settings.spectrum
+        };
         let spectrum = Spectrum::new(
-            settings.spectrum,
+            kind,
             settings.taper,
             settings.detrend,
             settings.dft_points(),
@@ -257,6 +270,8 @@ impl FeatureExtractor {
             spectrum,
             features: vec![0.0; settings.feature_count()],
             kept: settings.kept_bins(),
+            band_values: vec![0.0; bands.as_ref().map_or(0, BandFeatures::len)],
+            bands,
             has_spectrum: false,
         })
     }
@@ -284,8 +299,19 @@ impl FeatureExtractor {
     /// signal (`settings.features_per_channel()` values).
     pub fn features(&mut self, axis: &[f64], signal: &[f64]) -> Result<&[f64], AnalysisError> {
         self.transform(axis, signal)?;
-        let [a, b] = self.kept;
-        Ok(&self.values[a..=b])
+        Ok(self.channel_features())
+    }
+
+    /// The features of the spectrum last transformed: the kept bins, or the
+    /// band energies / cepstra.
+    fn channel_features(&mut self) -> &[f64] {
+        match &mut self.bands {
+            Some(b) => {
+                b.compute(&self.values, &mut self.band_values);
+                &self.band_values
+            }
+            None => &self.values[self.kept[0]..=self.kept[1]],
+        }
     }
 
     fn transform(&mut self, axis: &[f64], signal: &[f64]) -> Result<(), AnalysisError> {
@@ -315,10 +341,16 @@ impl FeatureExtractor {
                 signals.len()
             )));
         }
-        let [a, b] = self.kept;
         for (c, signal) in signals.iter().enumerate().rev() {
             self.transform(axis, signal)?;
-            self.features[c * per..(c + 1) * per].copy_from_slice(&self.values[a..=b]);
+            if let Some(b) = &mut self.bands {
+                b.compute(&self.values, &mut self.band_values);
+            }
+            let own = match self.bands {
+                Some(_) => &self.band_values[..],
+                None => &self.values[self.kept[0]..=self.kept[1]],
+            };
+            self.features[c * per..(c + 1) * per].copy_from_slice(own);
         }
         Ok(&self.features)
     }
@@ -346,7 +378,8 @@ impl FeatureExtractor {
     /// The full one-sided spectrum (of the settings' kind), bins `0..=m/2`,
     /// of the window [`Self::features`] last transformed, for display; empty
     /// before the first. The features are `spectrum()[a..=b]` with
-    /// `[a, b] = settings.kept_bins()`.
+    /// `[a, b] = settings.kept_bins()`; with `bands` it is the linear power
+    /// (Welch's for `log-welch`) the bands sum.
     pub fn spectrum(&self) -> &[f64] {
         if self.has_spectrum { &self.values } else { &[] }
     }

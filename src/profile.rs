@@ -37,7 +37,9 @@ pub mod textures;
 
 /// The one label rule, owned by the recording format.
 pub use crate::recording::check_label;
-pub use analysis::{Analysis, Detrend, SpectrumKind, Taper, check_options};
+pub use analysis::{
+    Analysis, BandScale, Bands, Detrend, LOG_FLOOR, SpectrumKind, Taper, check_options,
+};
 pub use classifier::{Classifier, K_AUTO, Metric, Weights};
 pub use console::{CONSOLE_ACTIONS, ConsoleSettings, KeySpec, NAMED_KEYS, parse_key};
 pub use controller::Controller;

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
 
-use crate::profile::{Detrend, SpectrumKind, Taper};
+use crate::profile::{Detrend, LOG_FLOOR, SpectrumKind, Taper};
 
 /// Remove the window's trend in place: nothing, its mean, or its
 /// least-squares straight line (against the sample index, which is the
@@ -93,10 +93,11 @@ pub fn taper_weights(taper: Taper, m: usize) -> Vec<f64> {
 /// - power: `c_k |X_k|² / Σ w_j²` with `c_k = 2` for the bins that have a
 ///   mirror image (not DC, not Nyquist), else 1; without a taper the bins
 ///   add up to the window's energy `Σ x_j²` (Parseval);
-/// - log-power: `log10` of the power (floored at 1e-300);
+/// - log-power: `log10(max(power, LOG_FLOOR))`;
 /// - Welch: the power of each segment of `m` points (segment mean removed
 ///   unless the detrend is `none`, then tapered), averaged over the segments
-///   that fit with the overlap; white noise of variance σ² gives 2σ² per bin.
+///   that fit with the overlap; white noise of variance σ² gives 2σ² per bin;
+/// - log-Welch: `log10(max(welch, LOG_FLOOR))`.
 #[derive(Clone)]
 pub(crate) struct Spectrum {
     kind: SpectrumKind,
@@ -147,8 +148,10 @@ impl Spectrum {
     /// Welch segments that fit in `n` points (1 for the other kinds).
     pub(crate) fn segments(&self, n: usize) -> usize {
         match self.kind {
-            SpectrumKind::Welch if n >= self.m => 1 + (n - self.m) / self.step,
-            SpectrumKind::Welch => 0,
+            SpectrumKind::Welch | SpectrumKind::LogWelch if n >= self.m => {
+                1 + (n - self.m) / self.step
+            }
+            SpectrumKind::Welch | SpectrumKind::LogWelch => 0,
             _ => 1,
         }
     }
@@ -162,7 +165,7 @@ impl Spectrum {
     pub(crate) fn compute(&mut self, x: &[f64], out: &mut [f64]) {
         debug_assert_eq!(out.len(), self.len());
         match self.kind {
-            SpectrumKind::Welch => {
+            SpectrumKind::Welch | SpectrumKind::LogWelch => {
                 out.fill(0.0);
                 let count = self.segments(x.len());
                 for s in 0..count {
@@ -182,6 +185,9 @@ impl Spectrum {
                 }
                 let inv = 1.0 / count.max(1) as f64;
                 out.iter_mut().for_each(|o| *o *= inv);
+                if self.kind == SpectrumKind::LogWelch {
+                    out.iter_mut().for_each(|o| *o = o.max(LOG_FLOOR).log10());
+                }
             }
             kind => {
                 for ((o, &v), w) in self.segment.iter_mut().zip(x).zip(&self.weights) {
@@ -192,7 +198,7 @@ impl Spectrum {
                     for (k, o) in out.iter_mut().enumerate() {
                         *o = *o * *o * self.power_scale(k);
                         if kind == SpectrumKind::LogPower {
-                            *o = o.max(1e-300).log10();
+                            *o = o.max(LOG_FLOOR).log10();
                         }
                     }
                 }

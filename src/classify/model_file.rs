@@ -118,7 +118,13 @@ impl Model {
         if m.spectrum != p.spectrum {
             return differ("analysis.spectrum", json(&m.spectrum), json(&p.spectrum));
         }
-        if m.bins != p.bins && m.band.is_none() {
+        if m.bands != p.bands {
+            return differ("analysis.bands", json(&m.bands), json(&p.bands));
+        }
+        if m.cepstra != p.cepstra {
+            return differ("analysis.cepstra", json(&m.cepstra), json(&p.cepstra));
+        }
+        if m.bins != p.bins && m.band.is_none() && m.bands.is_none() {
             return differ("analysis.bins", json(&m.bins), json(&p.bins));
         }
         if m.channels != p.channels {
@@ -137,7 +143,7 @@ impl Model {
                 json(&p.welch_segment),
             );
         }
-        if m.overlap() != p.overlap() && m.spectrum == crate::profile::SpectrumKind::Welch {
+        if m.overlap() != p.overlap() && m.spectrum.is_welch() {
             return differ(
                 "analysis.welch_overlap",
                 json(&m.welch_overlap),

@@ -28,11 +28,81 @@ pub enum SpectrumKind {
     /// The one-sided periodogram `|X_k|² / n` (the bins in between doubled,
     /// so the bins sum to `Σ x² `, Parseval).
     Power,
-    /// `log10` of the power, with a floor of 1e-300.
+    /// `log10` of the power, floored at [`LOG_FLOOR`].
     LogPower,
     /// Welch's averaged periodogram: segments of `welch_segment` points
     /// overlapping by `welch_overlap`, each tapered by `taper`.
     Welch,
+    /// `log10` of the Welch spectrum, floored at [`LOG_FLOOR`].
+    LogWelch,
+}
+
+/// The floor under every logarithm of a power (`log-power`, `log-welch`,
+/// log band energies, cepstra): `log10(max(P, LOG_FLOOR))`, so a silent
+/// window gives finite features (−300) rather than −inf.
+pub const LOG_FLOOR: f64 = 1e-300;
+
+impl SpectrumKind {
+    /// Welch's segments (`welch`, `log-welch`).
+    pub fn is_welch(self) -> bool {
+        matches!(self, SpectrumKind::Welch | SpectrumKind::LogWelch)
+    }
+    /// A logarithm of a power (`log-power`, `log-welch`).
+    pub fn is_log(self) -> bool {
+        matches!(self, SpectrumKind::LogPower | SpectrumKind::LogWelch)
+    }
+    /// The linear power this kind takes the log of (itself when not a log).
+    pub fn linear(self) -> SpectrumKind {
+        match self {
+            SpectrumKind::LogPower => SpectrumKind::Power,
+            SpectrumKind::LogWelch => SpectrumKind::Welch,
+            k => k,
+        }
+    }
+}
+
+/// How `bands` spaces its edges.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum BandScale {
+    /// Geometric: each band a fixed ratio wider than the one before.
+    #[default]
+    Log,
+    /// Arithmetic: every band equally wide.
+    Linear,
+}
+
+/// `bands = { count = N, from = F0, to = F1, scale = "log" }`: the power
+/// summed over `count` bands with edges spaced from `from` to `to` (in the
+/// unit of `band`: Hz on a time axis, cycles/mm on a position axis).
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Bands {
+    pub count: usize,
+    pub from: f64,
+    pub to: f64,
+    #[serde(default)]
+    pub scale: BandScale,
+}
+
+impl Bands {
+    /// The `count + 1` edges e_0 = from .. e_N = to.
+    pub fn edges(&self) -> Vec<f64> {
+        let n = self.count.max(1);
+        (0..=n)
+            .map(|i| {
+                let t = i as f64 / n as f64;
+                if i == n {
+                    self.to
+                } else {
+                    match self.scale {
+                        BandScale::Log => self.from * (self.to / self.from).powf(t),
+                        BandScale::Linear => self.from + (self.to - self.from) * t,
+                    }
+                }
+            })
+            .collect()
+    }
 }
 
 /// The taper applied to the window (or to each Welch segment) before the DFT.
@@ -95,6 +165,14 @@ pub struct Analysis {
     /// Welch only: overlap of consecutive segments, 0 <= overlap < 1 (default 0.5).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub welch_overlap: Option<f64>,
+    /// Band energies instead of `bins`/`band`: one feature per band, the
+    /// power summed over its bins (its log10 for a log spectrum).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bands: Option<Bands>,
+    /// The first `cepstra` coefficients of the orthonormal DCT-II of the log
+    /// band energies instead of the energies themselves (as MFCCs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cepstra: Option<usize>,
 }
 
 /// What `window = "scan-leg"` reads as until [`super::Profile::resolve_window`]
@@ -188,6 +266,8 @@ impl Default for Analysis {
             band: None,
             welch_segment: None,
             welch_overlap: None,
+            bands: None,
+            cepstra: None,
         }
     }
 }
@@ -204,9 +284,10 @@ impl Analysis {
     /// Points of one DFT: the window's, or a Welch segment's.
     pub fn dft_points(&self) -> usize {
         let n = self.points();
-        match self.spectrum {
-            SpectrumKind::Welch => self.welch_segment.unwrap_or((n / 4).max(4)),
-            _ => n,
+        if self.spectrum.is_welch() {
+            self.welch_segment.unwrap_or((n / 4).max(4))
+        } else {
+            n
         }
     }
     /// Welch overlap as a fraction (default one half).
@@ -233,9 +314,45 @@ impl Analysis {
             "cycles per axis unit"
         }
     }
-    /// The first and last bin kept (inclusive), from `band` or `bins`; the
-    /// first is past the last when the band holds no bin.
+    /// Each band's bins, `[first, end)`, when `bands` is set: bin `k`
+    /// (at `f_k = k · bin_width()`) is in band `i` when `e_i <= f_k < e_{i+1}`,
+    /// and the last band also takes `f_k == e_N`. Only bins `0..=m/2` exist,
+    /// so a band above the Nyquist frequency holds none (`first == end`).
+    pub fn band_bins(&self) -> Vec<[usize; 2]> {
+        let Some(b) = self.bands else {
+            return Vec::new();
+        };
+        let w = self.bin_width();
+        let top = self.dft_points() / 2 + 1;
+        let edges = b.edges();
+        // The first bin at or above `e` (strictly above when `strict`).
+        let first_from = |e: f64, strict: bool| {
+            let mut k = ((e / w).floor().max(0.0) as usize).min(top);
+            while k > 0 && (k - 1) as f64 * w >= e {
+                k -= 1;
+            }
+            while k < top && ((k as f64 * w) < e || (strict && k as f64 * w == e)) {
+                k += 1;
+            }
+            k
+        };
+        (0..b.count)
+            .map(|i| {
+                let last = i + 1 == b.count;
+                [first_from(edges[i], false), first_from(edges[i + 1], last)]
+            })
+            .collect()
+    }
+    /// The first and last bin kept (inclusive), from `bands`, `band` or
+    /// `bins`; the first is past the last when the band holds no bin. With
+    /// `bands`, the bins the bands span (for plots).
     pub fn kept_bins(&self) -> [usize; 2] {
+        if self.bands.is_some() {
+            let b = self.band_bins();
+            let first = b.first().map_or(0, |r| r[0]);
+            let end = b.last().map_or(0, |r| r[1]);
+            return [first, end.saturating_sub(1)];
+        }
         match self.band {
             None => self.bins,
             Some([lo, hi]) => {
@@ -249,6 +366,12 @@ impl Analysis {
     }
     /// Features per channel.
     pub fn features_per_channel(&self) -> usize {
+        if let Some(m) = self.cepstra {
+            return m;
+        }
+        if let Some(b) = self.bands {
+            return b.count;
+        }
         let [a, b] = self.kept_bins();
         (b + 1).saturating_sub(a)
     }
@@ -262,7 +385,7 @@ impl Analysis {
 pub fn check_options(s: &Analysis) -> Result<(), (String, String)> {
     let bad = |key: &str, reason: String| Err((format!("analysis.{key}"), reason));
     let n = s.points();
-    if s.spectrum == SpectrumKind::Welch {
+    if s.spectrum.is_welch() {
         let m = s.dft_points();
         if m < 4 || m > n {
             return bad(
@@ -280,14 +403,15 @@ pub fn check_options(s: &Analysis) -> Result<(), (String, String)> {
     } else if s.welch_segment.is_some() {
         return bad(
             "welch_segment",
-            "is only used with spectrum = \"welch\"".into(),
+            "is only used with spectrum = \"welch\" or \"log-welch\"".into(),
         );
     } else if s.welch_overlap.is_some() {
         return bad(
             "welch_overlap",
-            "is only used with spectrum = \"welch\"".into(),
+            "is only used with spectrum = \"welch\" or \"log-welch\"".into(),
         );
     }
+    check_bands(s)?;
     if let Some([lo, hi]) = s.band {
         let nyquist = s.bin_width() * (s.dft_points() / 2) as f64;
         let unit = s.frequency_unit();
@@ -310,6 +434,77 @@ pub fn check_options(s: &Analysis) -> Result<(), (String, String)> {
                 ),
             );
         }
+    }
+    Ok(())
+}
+
+/// `bands` and `cepstra`: `Err((key, reason))`.
+fn check_bands(s: &Analysis) -> Result<(), (String, String)> {
+    let bad = |key: &str, reason: String| Err((format!("analysis.{key}"), reason));
+    let Some(b) = s.bands else {
+        if s.cepstra.is_some() {
+            return bad(
+                "cepstra",
+                "needs `bands` (the cepstra are the DCT of the log band energies)".into(),
+            );
+        }
+        return Ok(());
+    };
+    let unit = s.frequency_unit();
+    if s.band.is_some() {
+        return bad("bands", "replaces `band`: set one of them, not both".into());
+    }
+    if s.spectrum == SpectrumKind::Magnitude {
+        return bad(
+            "bands",
+            "sums power, so it needs spectrum = \"power\", \"log-power\", \"welch\" or \"log-welch\", not \"magnitude\"".into(),
+        );
+    }
+    if b.count == 0 || b.count > 4096 {
+        return bad("bands.count", format!("must be 1 to 4096, got {}", b.count));
+    }
+    let low = if b.scale == BandScale::Log {
+        "0 < from"
+    } else {
+        "0 <= from"
+    };
+    if !(b.from.is_finite()
+        && b.to.is_finite()
+        && b.from >= 0.0
+        && b.to > b.from
+        && (b.scale == BandScale::Linear || b.from > 0.0))
+    {
+        return bad(
+            "bands",
+            format!(
+                "needs {low} < to in {unit}, got from = {}, to = {}",
+                b.from, b.to
+            ),
+        );
+    }
+    let edges = b.edges();
+    for (i, [first, end]) in s.band_bins().into_iter().enumerate() {
+        if first >= end {
+            return bad(
+                "bands",
+                format!(
+                    "band {i} ({:.4}–{:.4} {unit}) holds no spectrum bin (bins are {:.4} {unit} apart up to {:.4} {unit}): \
+                     raise `from`, use fewer bands, or longer segments",
+                    edges[i],
+                    edges[i + 1],
+                    s.bin_width(),
+                    s.bin_width() * (s.dft_points() / 2) as f64,
+                ),
+            );
+        }
+    }
+    if let Some(m) = s.cepstra
+        && !(1..=b.count).contains(&m)
+    {
+        return bad(
+            "cepstra",
+            format!("must be 1 to bands.count ({}), got {m}", b.count),
+        );
     }
     Ok(())
 }
@@ -390,7 +585,7 @@ pub(super) fn validate(an: &Analysis, p: &PathSpec) -> Result<(), Invalid> {
         );
     }
     let m = an.dft_points();
-    if an.band.is_none() && (an.bins[0] > an.bins[1] || an.bins[1] > m / 2) {
+    if an.band.is_none() && an.bands.is_none() && (an.bins[0] > an.bins[1] || an.bins[1] > m / 2) {
         return bad(
             "analysis.bins",
             format!(

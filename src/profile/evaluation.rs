@@ -23,7 +23,11 @@ pub enum SplitMethod {
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Evaluation {
+    /// Holdout only (required there): recordings of each class trained on.
+    /// K-fold and leave-one-out need neither count (0 when not given).
+    #[serde(default)]
     pub train_per_class: usize,
+    #[serde(default)]
     pub test_per_class: usize,
     /// When set, each class's recordings are shuffled with this seed before
     /// the split; otherwise they are taken in file-name order.
@@ -72,10 +76,16 @@ pub(super) fn validate(
     if e.group_by.as_deref() == Some("") {
         return bad("evaluation.group_by", "must name a metadata key");
     }
-    if e.train_per_class == 0 {
-        return bad("evaluation.train_per_class", "must be at least 1");
+    if e.method == SplitMethod::Holdout && e.train_per_class == 0 {
+        return bad(
+            "evaluation.train_per_class",
+            "must be at least 1 (method = \"holdout\" splits by it)",
+        );
     }
-    if !classifier.k_is_auto() && classifier.k > e.train_per_class * textures.max(1) {
+    if e.train_per_class > 0
+        && !classifier.k_is_auto()
+        && classifier.k > e.train_per_class * textures.max(1)
+    {
         return bad(
             "classifier.k",
             format!(
@@ -85,4 +95,25 @@ pub(super) fn validate(
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn check(toml_text: &str) -> Result<(), Invalid> {
+        let e: Evaluation = toml::from_str(toml_text).unwrap();
+        validate(&e, &Classifier::default(), 4)
+    }
+
+    #[test]
+    fn only_the_holdout_demands_train_per_class() {
+        assert!(check("method = \"leave-one-out\"").is_ok());
+        assert!(check("method = \"k-fold\"").is_ok());
+        assert!(check("method = \"k-fold\"\nfolds = 5").is_ok());
+        assert!(check("train_per_class = 20\ntest_per_class = 10").is_ok());
+        let err = format!("{:?}", check("test_per_class = 10").unwrap_err());
+        assert!(err.contains("train_per_class"), "{err}");
+        assert!(check("method = \"leave-one-out\"\nfolds = 3").is_err());
+    }
 }
