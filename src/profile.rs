@@ -37,7 +37,7 @@ pub mod textures;
 
 /// The one label rule, owned by the recording format.
 pub use crate::recording::check_label;
-pub use analysis::{Analysis, Detrend, SpectrumKind, Taper, check_options};
+pub use analysis::{Analysis, Detrend, SpectrumKind, Taper, Windows, check_options, check_windows};
 pub use classifier::{Classifier, K_AUTO, Metric, Weights};
 pub use console::{CONSOLE_ACTIONS, ConsoleSettings, KeySpec, NAMED_KEYS, parse_key};
 pub use controller::Controller;
