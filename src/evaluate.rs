@@ -6,6 +6,7 @@
 //! recordings or extracts features, and never prints.
 
 pub mod cv;
+pub mod windows;
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
