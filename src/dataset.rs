@@ -132,6 +132,21 @@ pub fn features_of(
         })
 }
 
+/// The feature vectors of each of a recording's sub-windows, in window
+/// order (the window alone without `[analysis] windows`).
+pub fn window_features_of(
+    rec: &Recording,
+    file: &Path,
+    ex: &mut FeatureExtractor,
+) -> Result<Vec<Vec<f64>>, DatasetError> {
+    let (axis, signals) = columns_of(rec, file, ex.settings())?;
+    ex.all_window_features(axis, &signals)
+        .map_err(|source| DatasetError::Analysis {
+            file: file.display().to_string(),
+            source,
+        })
+}
+
 /// One recording as a labelled example.
 pub fn example_of(
     rec: &Recording,
@@ -376,14 +391,7 @@ fn load_one(
         Err(e) => return give_up(e, false),
     };
     if keep == Keep::Features && analysis.windows.is_some() {
-        let windows = columns_of(&rec, file, analysis).and_then(|(axis, signals)| {
-            ex.all_window_features(axis, &signals)
-                .map_err(|source| DatasetError::Analysis {
-                    file: name(),
-                    source,
-                })
-        });
-        let windows = match windows {
+        let windows = match window_features_of(&rec, file, ex) {
             Ok(w) => w,
             Err(e) => return give_up(e, false),
         };

@@ -467,3 +467,106 @@ mod tests {
         }
     }
 }
+
+#[cfg(test)]
+mod thesis_tests {
+    use super::*;
+    use crate::dataset;
+    use crate::profile::{LoadedProfile, Windows};
+    use std::path::Path;
+
+    /// The thesis's recordings with three sub-windows along each stroke.
+    fn thesis_windows() -> (crate::profile::Profile, Vec<WindowedRecording>) {
+        let mut profile = LoadedProfile::thesis().profile;
+        profile.analysis.bins = [1, 24];
+        profile.analysis.windows = Some(Windows {
+            length: 0.0147,
+            hop: 0.0075,
+        });
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("recordings/thesis-sim");
+        let files = dataset::find(&[dir]).unwrap();
+        let loaded = dataset::load(
+            &files,
+            &profile.analysis,
+            dataset::Options::default(),
+            &|| {},
+        )
+        .unwrap();
+        let recs = recordings(&loaded.entries, None);
+        assert_eq!(recs.len(), files.len());
+        assert!(recs.iter().all(|r| r.windows.len() == 3));
+        (profile, recs)
+    }
+
+    #[test]
+    fn thesis_holdout_and_folds_by_recording_with_three_windows_per_stroke() {
+        let (profile, recs) = thesis_windows();
+        let (train, test) = split_recordings(&recs, &profile.evaluation).unwrap();
+        let model = Model::train(
+            &profile.name,
+            &profile.analysis,
+            &profile.classifier,
+            window_examples(&train),
+        )
+        .unwrap();
+        assert_eq!(model.examples.len(), 3 * train.len());
+        let r = evaluate_recordings(&model, &test).unwrap();
+        assert_eq!(r.report.tested(), test.len());
+        assert_eq!(r.windows.len(), test.len());
+        assert!(r.windows.iter().all(|w| w.prediction.windows.len() == 3));
+        assert!(r.report.accuracy >= 0.9, "{}", r.report.table());
+        // The recordings a seed sends to test are those it would without
+        // windows.
+        let plain: Vec<TrainingExample> = recs
+            .iter()
+            .map(|r| TrainingExample {
+                file: r.file.clone(),
+                label: r.label.clone(),
+                features: vec![0.0],
+            })
+            .collect();
+        let s = super::super::split(plain, &profile.evaluation).unwrap();
+        let want: Vec<&str> = s.test.iter().map(|e| e.file.as_str()).collect();
+        let got: Vec<&str> = test.iter().map(|r| r.file.as_str()).collect();
+        assert_eq!(got, want);
+
+        let folds = recording_folds(&recs, SplitMethod::KFold, 5, 7).unwrap();
+        let one = cross_validate_recordings(
+            &recs,
+            &folds,
+            &profile.name,
+            &profile.analysis,
+            &profile.classifier,
+            "5-fold",
+            7,
+            1,
+        )
+        .unwrap();
+        let two = cross_validate_recordings(
+            &recs,
+            &folds,
+            &profile.name,
+            &profile.analysis,
+            &profile.classifier,
+            "5-fold",
+            7,
+            2,
+        )
+        .unwrap();
+        assert_eq!(one, two);
+        assert_eq!(one.report.test.len(), recs.len());
+        assert!(one.report.accuracy >= 0.9, "{}", one.report.accuracy);
+        let json = serde_json::to_value(&one).unwrap();
+        for key in [
+            "labels",
+            "confusion",
+            "accuracy",
+            "predictions",
+            "folds",
+            "windows",
+        ] {
+            assert!(json.get(key).is_some(), "{key}");
+        }
+        assert_eq!(json["windows"][0]["windows"].as_array().unwrap().len(), 3);
+    }
+}
