@@ -50,6 +50,13 @@
 //! length): Hz on a time axis, cycles/mm on a position axis once divided by
 //! 1000; `band = [lo, hi]` keeps the bins in that range instead of `bins`.
 //!
+//! # Sub-windows
+//! With `windows = { length, hop }` the window is cut into sub-windows
+//! ([`Analysis::sub_windows`]) and each is analysed exactly as if it were
+//! the window: [`FeatureExtractor::window_features`] moves the resampling
+//! grid to the sub-window's start and reuses the one FFT plan and buffers,
+//! so a sub-window costs no allocation beyond its output.
+//!
 //! # Several channels
 //! `channel` and then each of `channels` is resampled along the same axis
 //! and analysed alike; the feature vector is their features concatenated.
@@ -63,7 +70,7 @@ use std::fmt;
 use thiserror::Error;
 
 use crate::profile::Analysis;
-use crate::profile::check_options;
+use crate::profile::{check_options, check_windows};
 use bands::BandFeatures;
 use resample::Resampler;
 use spectrum::Spectrum;
@@ -179,6 +186,9 @@ pub fn check_settings(settings: &Analysis) -> Result<(), String> {
             settings.window
         ));
     }
+    if let Some(w) = settings.windows {
+        check_windows(settings, w).map_err(|reason| format!("analysis.windows {reason}"))?;
+    }
     if (w1 - w0) / settings.spacing > (1u64 << 20) as f64 {
         return Err("analysis.spacing leaves more than 1048576 points in the window".into());
     }
@@ -219,6 +229,8 @@ pub struct FeatureExtractor {
     /// One channel's band features.
     band_values: Vec<f64>,
     has_spectrum: bool,
+    /// Every sub-window's `[start, end]` (the window alone without `windows`).
+    sub_windows: Vec<[f64; 2]>,
 }
 
 impl fmt::Debug for FeatureExtractor {
@@ -273,6 +285,7 @@ impl FeatureExtractor {
             band_values: vec![0.0; bands.as_ref().map_or(0, BandFeatures::len)],
             bands,
             has_spectrum: false,
+            sub_windows: settings.sub_windows(),
         })
     }
 
@@ -355,6 +368,44 @@ impl FeatureExtractor {
         Ok(&self.features)
     }
 
+    /// The `[start, end]` of each sub-window along the axis, in order (the
+    /// window alone when `windows` is not set).
+    pub fn sub_windows(&self) -> &[[f64; 2]] {
+        &self.sub_windows
+    }
+
+    /// The features of every channel of sub-window `j` (see
+    /// [`Analysis::sub_windows`]): exactly what an extractor whose window
+    /// is that sub-window gives, with this one's FFT plan and buffers.
+    /// Without `windows`, sub-window 0 is the window.
+    ///
+    /// # Panics
+    /// When `j` is not below `sub_windows().len()`.
+    pub fn window_features(
+        &mut self,
+        j: usize,
+        axis: &[f64],
+        signals: &[&[f64]],
+    ) -> Result<&[f64], AnalysisError> {
+        self.resampler.set_start(self.sub_windows[j][0]);
+        let done = self.features_of_channels(axis, signals).map(|_| ());
+        self.resampler.set_start(self.sub_windows[0][0]);
+        done?;
+        Ok(&self.features)
+    }
+
+    /// The features of every sub-window in order, each as
+    /// [`Self::window_features`] gives it: one vector per sub-window.
+    pub fn all_window_features(
+        &mut self,
+        axis: &[f64],
+        signals: &[&[f64]],
+    ) -> Result<Vec<Vec<f64>>, AnalysisError> {
+        (0..self.sub_windows.len())
+            .map(|j| self.window_features(j, axis, signals).map(<[f64]>::to_vec))
+            .collect()
+    }
+
     /// The last window resampled (by [`Self::resample`] or
     /// [`Self::features`]), before the detrend; empty before the first.
     pub fn resampled(&self) -> &[f64] {
@@ -423,6 +474,74 @@ mod tests {
         assert_eq!(fx.features(&x, &y).unwrap().len(), 49);
         assert_eq!(fx.spectrum().len(), 51);
         assert_eq!(fx.detrended().len(), 100);
+    }
+
+    #[test]
+    fn each_sub_window_is_analysed_as_if_it_were_the_window() {
+        let mut a = thesis();
+        a.bins = [1, 24];
+        a.windows = Some(crate::profile::Windows {
+            length: 0.0147,
+            hop: 0.0075,
+        });
+        let subs = a.sub_windows();
+        assert_eq!(subs.len(), 3, "{subs:?}");
+        let mut fx = FeatureExtractor::new(&a);
+        assert_eq!(fx.points(), 50);
+        let x = ramp(0.0897, 9000);
+        let y: Vec<f64> = x
+            .iter()
+            .map(|x| (x * 2000.0).sin() * 1e-3 + (x * 777.0).cos() * x)
+            .collect();
+        let all = fx.all_window_features(&x, &[&y]).unwrap();
+        assert_eq!(all.len(), 3);
+        for (j, [s, e]) in subs.iter().copied().enumerate() {
+            let mut one = a.clone();
+            one.windows = None;
+            one.window = [s, e];
+            let mut single = FeatureExtractor::new(&one);
+            assert_eq!(single.points(), 50);
+            let want = single.features_of_channels(&x, &[&y]).unwrap().to_vec();
+            assert_eq!(all[j], want, "sub-window {j}");
+        }
+        assert_ne!(all[0], all[1]);
+        // The extractor's own window is back at the first sub-window.
+        let first = fx.features_of_channels(&x, &[&y]).unwrap().to_vec();
+        assert_eq!(first, all[0]);
+    }
+
+    #[test]
+    fn sub_windows_follow_the_spec_and_none_fit_when_too_long() {
+        let mut a = Analysis {
+            axis: "t_s".into(),
+            channel: "f".into(),
+            window: [0.0, 1.0],
+            spacing: 0.001,
+            ..thesis()
+        };
+        a.windows = Some(crate::profile::Windows {
+            length: 0.5,
+            hop: 0.25,
+        });
+        assert_eq!(a.sub_windows(), vec![[0.0, 0.5], [0.25, 0.75], [0.5, 1.0]]);
+        a.windows = Some(crate::profile::Windows {
+            length: 0.3,
+            hop: 0.3,
+        });
+        let s = a.sub_windows();
+        assert_eq!(s.len(), 3, "{s:?}");
+        a.windows = Some(crate::profile::Windows {
+            length: 1.5,
+            hop: 0.3,
+        });
+        assert!(a.sub_windows().is_empty());
+        assert!(
+            check_settings(&a)
+                .unwrap_err()
+                .contains("analysis.windows length 1.5 s")
+        );
+        a.windows = None;
+        assert_eq!(a.sub_windows(), vec![[0.0, 1.0]]);
     }
 
     #[test]

@@ -16,6 +16,11 @@
 //! that cannot be read or analysed, each with its reason, and otherwise the
 //! first of those in file-name order is the error.
 //!
+//! With `[analysis] windows` set, [`Keep::Features`] gives one [`Entry`] per
+//! sub-window instead, each naming its recording and its window index, in
+//! file-name order and then window order ([`Keep::Samples`] still gives one
+//! per recording).
+//!
 //! [`features_of`] is the one place that picks the analysis's columns out of
 //! a recording: the axis, then `channel`, then each of `channels`.
 
@@ -127,6 +132,21 @@ pub fn features_of(
         })
 }
 
+/// The feature vectors of each of a recording's sub-windows, in window
+/// order (the window alone without `[analysis] windows`).
+pub fn window_features_of(
+    rec: &Recording,
+    file: &Path,
+    ex: &mut FeatureExtractor,
+) -> Result<Vec<Vec<f64>>, DatasetError> {
+    let (axis, signals) = columns_of(rec, file, ex.settings())?;
+    ex.all_window_features(axis, &signals)
+        .map_err(|source| DatasetError::Analysis {
+            file: file.display().to_string(),
+            source,
+        })
+}
+
 /// One recording as a labelled example.
 pub fn example_of(
     rec: &Recording,
@@ -214,6 +234,9 @@ pub struct Entry {
     pub axis: Vec<f64>,
     /// `channel`, then `channels`, with [`Keep::Samples`], else empty.
     pub signals: Vec<Vec<f64>>,
+    /// The sub-window these features are of (0, 1, … along the window),
+    /// when `[analysis] windows` is set and features are kept.
+    pub window: Option<usize>,
 }
 
 impl Entry {
@@ -315,8 +338,24 @@ impl Loaded {
     }
 }
 
+/// The window index of each row of [`load`]'s examples (in its order: a
+/// recording's sub-windows are consecutive, window 0 first): 0, 1, … within
+/// each run of rows from one file. For `features --out`'s `window` column.
+pub fn window_indices(examples: &[TrainingExample]) -> Vec<usize> {
+    let mut out = Vec::with_capacity(examples.len());
+    for (i, e) in examples.iter().enumerate() {
+        let j = match i.checked_sub(1) {
+            Some(p) if examples[p].file == e.file => out[p] + 1,
+            _ => 0,
+        };
+        out.push(j);
+    }
+    out
+}
+
 enum Outcome {
-    Usable(Entry),
+    /// One entry, or one per sub-window.
+    Usable(Vec<Entry>),
     Skipped(Skipped),
     Failed(DatasetError),
 }
@@ -355,6 +394,28 @@ fn load_one(
         Ok(l) => l,
         Err(e) => return give_up(e, false),
     };
+    if keep == Keep::Features && analysis.windows.is_some() {
+        let windows = match window_features_of(&rec, file, ex) {
+            Ok(w) => w,
+            Err(e) => return give_up(e, false),
+        };
+        let file = name();
+        return Outcome::Usable(
+            windows
+                .into_iter()
+                .enumerate()
+                .map(|(j, features)| Entry {
+                    file: file.clone(),
+                    label: label.clone(),
+                    meta: rec.meta.clone(),
+                    features,
+                    axis: vec![],
+                    signals: vec![],
+                    window: Some(j),
+                })
+                .collect(),
+        );
+    }
     let (features, axis, signals) = match keep {
         Keep::Features => match features_of(&rec, file, ex) {
             Ok(f) => (f, vec![], vec![]),
@@ -369,14 +430,15 @@ fn load_one(
             Err(e) => return give_up(e, false),
         },
     };
-    Outcome::Usable(Entry {
+    Outcome::Usable(vec![Entry {
         file: name(),
         label,
         meta: rec.meta,
         features,
         axis,
         signals,
-    })
+        window: None,
+    }])
 }
 
 /// Read `files` on `options.threads` threads and turn each into an
@@ -427,7 +489,7 @@ pub fn load(
     let mut out = Loaded::default();
     for (_, r) in results {
         match r {
-            Outcome::Usable(e) => out.entries.push(e),
+            Outcome::Usable(e) => out.entries.extend(e),
             Outcome::Skipped(s) => out.skipped.push(s),
             Outcome::Failed(e) => return Err(e),
         }
@@ -552,6 +614,48 @@ mod tests {
         let err = load(&files, &a, Options::default(), &|| {}).unwrap_err();
         assert!(err.is_bad_input());
         assert!(err.to_string().contains("b.csv:1"), "{err}");
+    }
+
+    #[test]
+    fn windows_give_one_example_per_sub_window_in_file_then_window_order() {
+        let files: Vec<PathBuf> = shipped().into_iter().step_by(20).collect();
+        let mut a = thesis_analysis();
+        a.bins = [1, 24];
+        a.windows = Some(crate::profile::Windows {
+            length: 0.0147,
+            hop: 0.0075,
+        });
+        let one = load(
+            &files,
+            &a,
+            Options {
+                threads: 1,
+                ..Options::default()
+            },
+            &|| {},
+        )
+        .unwrap();
+        let many = load(&files, &a, Options::default(), &|| {}).unwrap();
+        assert_eq!(one.entries, many.entries);
+        assert_eq!(one.entries.len(), 3 * files.len());
+        let mut ex = FeatureExtractor::new(&a);
+        for (i, f) in files.iter().enumerate() {
+            let rec = recording::read(f).unwrap();
+            let (axis, signals) = columns_of(&rec, f, &a).unwrap();
+            for j in 0..3 {
+                let e = &one.entries[3 * i + j];
+                assert_eq!(e.file, f.display().to_string());
+                assert_eq!(e.window, Some(j));
+                assert_eq!(e.features.len(), 24);
+                assert_eq!(e.features, ex.window_features(j, axis, &signals).unwrap());
+            }
+        }
+        let idx = window_indices(&one.examples());
+        assert_eq!(&idx[..6], &[0, 1, 2, 0, 1, 2]);
+        // Without windows: one entry per recording, no window index.
+        let plain = load(&files, &thesis_analysis(), Options::default(), &|| {}).unwrap();
+        assert!(plain.entries.iter().all(|e| e.window.is_none()));
+        assert_eq!(plain.entries.len(), files.len());
     }
 
     #[test]

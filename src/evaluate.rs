@@ -14,6 +14,7 @@
 pub mod cv;
 pub mod plan;
 pub mod sweep;
+pub mod windows;
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;

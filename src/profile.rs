@@ -38,7 +38,8 @@ pub mod textures;
 /// The one label rule, owned by the recording format.
 pub use crate::recording::check_label;
 pub use analysis::{
-    Analysis, BandScale, Bands, Detrend, LOG_FLOOR, SpectrumKind, Taper, check_options,
+    Analysis, BandScale, Bands, Detrend, LOG_FLOOR, SpectrumKind, Taper, Windows, check_options,
+    check_windows,
 };
 pub use classifier::{Classifier, K_AUTO, Metric, Weights};
 pub use console::{CONSOLE_ACTIONS, ConsoleSettings, KeySpec, NAMED_KEYS, parse_key};

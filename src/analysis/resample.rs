@@ -40,6 +40,12 @@ impl Resampler {
         }
     }
 
+    /// Move the grid to start at `start` (a sub-window's), keeping its
+    /// points and spacing.
+    pub(crate) fn set_start(&mut self, start: f64) {
+        self.start = start;
+    }
+
     /// Whether a resampling has succeeded since construction.
     pub(crate) fn has_run(&self) -> bool {
         self.has_run

@@ -65,6 +65,10 @@ fn classify(
                 f.display()
             );
         }
+        if model.analysis.windows.is_some() {
+            rows.push(classify_by_windows(&model, &rec, f, &mut ex, json)?);
+            continue;
+        }
         let feats = dataset::features_of(&rec, f, &mut ex)?;
         let p = model.classify(&feats).map_err(bad)?;
         if !json {
@@ -96,4 +100,48 @@ fn classify(
         crate::outln!("{}", serde_json::Value::Array(rows));
     }
     Ok(())
+}
+
+/// `classify` of one recording by its sub-windows' vote: the line (unless
+/// `json`) and the JSON row, which adds the tally and each sub-window's vote.
+fn classify_by_windows(
+    model: &Model,
+    rec: &recording::Recording,
+    f: &Path,
+    ex: &mut FeatureExtractor,
+    json: bool,
+) -> Result<serde_json::Value, Failure> {
+    let windows = dataset::window_features_of(rec, f, ex)?;
+    let p = model.classify_windows(&windows).map_err(bad)?;
+    let votes: Vec<(String, usize)> = p
+        .tally
+        .iter()
+        .map(|t| (t.label.clone(), t.windows))
+        .collect();
+    if !json {
+        let shown: Vec<String> = votes.iter().map(|(l, v)| format!("{l}:{v}")).collect();
+        let truth = rec.label().map_or(String::new(), |l| {
+            format!(
+                " (recorded as {l}{})",
+                if l == p.label { ", right" } else { ", WRONG" }
+            )
+        });
+        crate::outln!(
+            "{}: {}{} — {} of {} windows, window votes {}",
+            f.display(),
+            p.label,
+            truth,
+            p.tally[0].windows,
+            p.windows.len(),
+            shown.join(" ")
+        );
+    }
+    Ok(serde_json::json!({
+        "file": f.display().to_string(),
+        "label": rec.label(),
+        "predicted": p.label,
+        "votes": votes,
+        "tally": p.tally,
+        "windows": p.windows,
+    }))
 }

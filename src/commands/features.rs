@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use clap::Args;
 
+use crate::dataset;
 use crate::support::{Failure, ProfileArg, load_examples, load_profile, runtime, write_atomically};
 
 #[derive(Debug, Args)]
@@ -28,15 +29,29 @@ fn features(profile: &ProfileArg, paths: &[PathBuf], out: Option<&Path>) -> Resu
     let lp = load_profile(profile)?;
     let examples = load_examples(paths, &lp.profile.analysis)?;
     let n = lp.profile.analysis.feature_count();
-    let mut text = String::from("file,label");
+    // One row per sub-window, with its index, when `windows` is set.
+    let windows = lp
+        .profile
+        .analysis
+        .windows
+        .is_some()
+        .then(|| dataset::window_indices(&examples));
+    let mut text = String::from(if windows.is_some() {
+        "file,label,window"
+    } else {
+        "file,label"
+    });
     for i in 1..=n {
         text.push_str(&format!(",f{i}"));
     }
     text.push('\n');
-    for e in &examples {
+    for (row, e) in examples.iter().enumerate() {
         text.push_str(&csv_field(&e.file));
         text.push(',');
         text.push_str(&csv_field(&e.label));
+        if let Some(w) = &windows {
+            text.push_str(&format!(",{}", w[row]));
+        }
         for v in &e.features {
             text.push_str(&format!(",{v:.9e}"));
         }

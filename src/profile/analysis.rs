@@ -173,6 +173,26 @@ pub struct Analysis {
     /// band energies instead of the energies themselves (as MFCCs).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cepstra: Option<usize>,
+
+    // --- Sub-windows (issue 13 part 3) ---
+    /// Cut the window into sub-windows `length` long every `hop` (axis
+    /// unit), each analysed as if it were the window; a recording is
+    /// classified by its sub-windows' vote. See [`Windows`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub windows: Option<Windows>,
+}
+
+/// `windows = { length = L, hop = H }`: sub-window `j` starts at
+/// `s_j = w0 + j·H` for `j = 0, 1, …` while `s_j + L <= w1 + 1e-9·L`, with
+/// `[w0, w1]` the resolved `window`; each is analysed exactly as if
+/// `window = [s_j, s_j + L]`.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Windows {
+    /// Sub-window length, in the axis unit.
+    pub length: f64,
+    /// Distance between consecutive sub-window starts, in the axis unit.
+    pub hop: f64,
 }
 
 /// What `window = "scan-leg"` reads as until [`super::Profile::resolve_window`]
@@ -268,14 +288,42 @@ impl Default for Analysis {
             welch_overlap: None,
             bands: None,
             cepstra: None,
+            windows: None,
         }
     }
 }
 
 impl Analysis {
-    /// Number of resampled points in the window: both ends included.
+    /// Number of resampled points in the window (in one sub-window when
+    /// `windows` is set): both ends included.
     pub fn points(&self) -> usize {
-        ((self.window[1] - self.window[0]) / self.spacing + 1e-6).floor() as usize + 1
+        let span = match self.windows {
+            Some(w) => w.length,
+            None => self.window[1] - self.window[0],
+        };
+        (span / self.spacing + 1e-6).floor() as usize + 1
+    }
+    /// The `[start, end]` of every sub-window in order (the whole window
+    /// alone when `windows` is not set); empty when none fits.
+    pub fn sub_windows(&self) -> Vec<[f64; 2]> {
+        let [w0, w1] = self.window;
+        let Some(Windows { length, hop }) = self.windows else {
+            return vec![self.window];
+        };
+        if !(length > 0.0 && hop > 0.0 && length.is_finite() && hop.is_finite()) {
+            return Vec::new();
+        }
+        let mut out = Vec::new();
+        let mut j = 0usize;
+        loop {
+            let s = w0 + j as f64 * hop;
+            if s + length > w1 + 1e-9 * length {
+                break;
+            }
+            out.push([s, s + length]);
+            j += 1;
+        }
+        out
     }
     /// Every signal column analysed: `channel`, then `channels`.
     pub fn all_channels(&self) -> impl Iterator<Item = &str> {
@@ -509,6 +557,45 @@ fn check_bands(s: &Analysis) -> Result<(), (String, String)> {
     Ok(())
 }
 
+/// Sub-windows (checked once the window is): a positive length and hop, and at least one sub-window in
+/// the window (at most 100000 of them).
+pub fn check_windows(s: &Analysis, w: Windows) -> Result<(), String> {
+    let unit = if s.axis.ends_with("_m") {
+        " m"
+    } else if s.axis.ends_with("_s") {
+        " s"
+    } else {
+        ""
+    };
+    if !(w.length.is_finite() && w.length > 0.0) {
+        return Err(format!(
+            "length must be a positive number (in the axis unit), got {}",
+            w.length
+        ));
+    }
+    if !(w.hop.is_finite() && w.hop > 0.0) {
+        return Err(format!(
+            "hop must be a positive number (in the axis unit), got {}",
+            w.hop
+        ));
+    }
+    let [w0, w1] = s.window;
+    if w0 + w.length > w1 + 1e-9 * w.length {
+        return Err(format!(
+            "length {}{unit} is longer than the window [{w0}, {w1}] ({}{unit}): no sub-window fits",
+            w.length,
+            w1 - w0
+        ));
+    }
+    if (w1 - w0 - w.length) / w.hop > 100_000.0 {
+        return Err(format!(
+            "hop {}{unit} cuts the window into more than 100000 sub-windows",
+            w.hop
+        ));
+    }
+    Ok(())
+}
+
 /// Check `[analysis]` against the path (validated before it).
 pub(super) fn validate(an: &Analysis, p: &PathSpec) -> Result<(), Invalid> {
     let a0 = p.waypoints_m[p.scan_leg - 1];
@@ -551,6 +638,9 @@ pub(super) fn validate(an: &Analysis, p: &PathSpec) -> Result<(), Invalid> {
                 an.window
             ),
         );
+    }
+    if let Some(w) = an.windows {
+        check_windows(an, w).or_else(|reason| bad("analysis.windows", reason))?;
     }
     let leg_extent = match axis_index {
         Some(ax) => (a1[ax] - a0[ax]).abs(),

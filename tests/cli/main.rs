@@ -13,3 +13,4 @@ mod first_session;
 mod plot;
 mod sweep_simulated;
 mod validation;
+mod windows;
