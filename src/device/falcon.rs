@@ -15,7 +15,10 @@
 //! the next `read` collects its reply (waiting at most `reply_timeout`). A
 //! reply that does not come is counted as missed and the last position is
 //! held; after two misses the packet is sent again; after `link_lost_after`
-//! without any reply the device counts as gone.
+//! without any reply the device counts as gone. A failed USB read (a stall,
+//! an overflow, a timeout) counts as a read that brought no bytes, as
+//! libnifalcon treats it; only `read_error_streak` of them in a row, or a
+//! vanished device, end the session.
 
 pub mod emulator;
 pub mod firmware;
@@ -65,6 +68,10 @@ pub enum TransportError {
     Disconnected(String),
     #[error("USB I/O failed: {0}")]
     Io(String),
+    /// A read that failed but may well succeed next time (a stalled or
+    /// overflowing bulk IN transfer, a timeout): no bytes, counted.
+    #[error("a USB read failed: {0}")]
+    Transient(String),
 }
 
 /// A byte pipe to a Falcon's FTDI chip: vendor control requests, and bulk
@@ -78,6 +85,16 @@ pub trait FalconTransport: Send {
     /// Received bytes into `buf`, waiting up to `timeout` for the first;
     /// `Ok(0)` when none came in time.
     fn read(&mut self, buf: &mut [u8], timeout: Duration) -> Result<usize, TransportError>;
+    /// The link's clock, which every read timeout is measured on: the wall
+    /// clock for a real device, the emulator's own time for the emulator.
+    fn now(&self) -> Instant {
+        Instant::now()
+    }
+    /// Close the device and open it again (between firmware attempts, as
+    /// libnifalcon does): pending transfers and buffered bytes are dropped.
+    fn reopen(&mut self) -> Result<(), TransportError> {
+        Ok(())
+    }
     /// The servo loop's time (seconds): the emulator runs its physics up to
     /// it; a real device ignores it.
     fn advance_to(&mut self, _t_s: f64) {}
@@ -99,6 +116,10 @@ pub struct FalconConfig {
     pub reply_timeout: Duration,
     /// Consecutive missed replies after which the device counts as gone.
     pub link_lost_after: u32,
+    /// How long the probe for a running firmware keeps asking.
+    pub probe_window: Duration,
+    /// Failed USB reads in a row after which the link counts as broken.
+    pub read_error_streak: u32,
 }
 
 impl Default for FalconConfig {
@@ -110,6 +131,8 @@ impl Default for FalconConfig {
             firmware_attempts: 20,
             reply_timeout: Duration::from_micros(900),
             link_lost_after: 250,
+            probe_window: Duration::from_secs(1),
+            read_error_streak: 20,
         }
     }
 }
@@ -124,6 +147,8 @@ pub struct FalconStats {
     /// Garbled or partial packets thrown away while resynchronising.
     pub bad_packets: u64,
     pub discarded_bytes: u64,
+    /// USB reads that failed and were ridden out as "no bytes".
+    pub usb_errors: u64,
     /// Forward-kinematics Newton steps per solution: `fk_iterations[n]` counts solutions taking n.
     pub fk_iterations: [u64; 16],
     pub fk_restarts: u64,
@@ -152,6 +177,7 @@ pub struct FalconDevice<T: FalconTransport> {
     motor: [i16; 3],
     awaiting: bool,
     missed_streak: u32,
+    usb_error_streak: u32,
     homed: bool,
     buttons: u8,
     /// Profile frame.
@@ -172,7 +198,10 @@ impl<T: FalconTransport> FalconDevice<T> {
         let report = firmware::ensure_loaded(
             &mut transport,
             config.firmware.as_ref(),
-            config.firmware_attempts,
+            &firmware::LoadOptions {
+                attempts: config.firmware_attempts,
+                probe_window: config.probe_window,
+            },
             log,
         )?;
         firmware::set_normal_mode(&mut transport).map_err(|error| {
@@ -191,6 +220,7 @@ impl<T: FalconTransport> FalconDevice<T> {
             motor: [0; 3],
             awaiting: false,
             missed_streak: 0,
+            usb_error_streak: 0,
             homed: false,
             buttons: 0,
             pos,
@@ -238,7 +268,7 @@ impl<T: FalconTransport> FalconDevice<T> {
                 self.gone = Some(m.clone());
                 DeviceError::Disconnected(m)
             }
-            TransportError::Io(m) => DeviceError::Io(m),
+            TransportError::Io(m) | TransportError::Transient(m) => DeviceError::Io(m),
         }
     }
 
@@ -256,7 +286,7 @@ impl<T: FalconTransport> FalconDevice<T> {
     /// The newest reply that arrives within the timeout.
     fn collect_reply(&mut self) -> Result<Option<ReplyPacket>, DeviceError> {
         let mut newest = None;
-        let deadline = Instant::now() + self.config.reply_timeout;
+        let deadline = self.transport.now() + self.config.reply_timeout;
         loop {
             while let Some(p) = self.reader.next_packet() {
                 if let Some(r) = packet::decode_reply(&p) {
@@ -266,11 +296,26 @@ impl<T: FalconTransport> FalconDevice<T> {
             if newest.is_some() {
                 return Ok(newest);
             }
-            let left = deadline.saturating_duration_since(Instant::now());
-            let n = self
-                .transport
-                .read(&mut self.rx, left)
-                .map_err(|e| self.lost(e))?;
+            let left = deadline.saturating_duration_since(self.transport.now());
+            let n = match self.transport.read(&mut self.rx, left) {
+                Ok(n) => {
+                    self.usb_error_streak = 0;
+                    n
+                }
+                Err(TransportError::Transient(m)) => {
+                    // No bytes this time; only a streak breaks the link.
+                    self.stats.usb_errors += 1;
+                    self.usb_error_streak += 1;
+                    if self.usb_error_streak >= self.config.read_error_streak {
+                        return Err(DeviceError::Io(format!(
+                            "{} USB reads in a row failed (the last: {m}): the link is broken; unplug the Falcon, plug it in directly (not through a hub) and start again",
+                            self.usb_error_streak
+                        )));
+                    }
+                    0
+                }
+                Err(e) => return Err(self.lost(e)),
+            };
             if n == 0 {
                 return Ok(None);
             }
@@ -402,6 +447,7 @@ impl<T: FalconTransport> HapticDevice for FalconDevice<T> {
             replies: self.stats.replies,
             bad_packets: self.reader.stats.bad_packets,
             missed_replies: self.stats.missed_replies,
+            usb_errors: self.stats.usb_errors,
         })
     }
 }
@@ -443,6 +489,8 @@ pub fn config_from_profile(lp: &crate::profile::LoadedProfile) -> Result<FalconC
         firmware_attempts: section.firmware_attempts,
         reply_timeout: Duration::from_secs_f64(section.reply_timeout_ms / 1000.0),
         link_lost_after: (section.link_lost_after_ms / period_ms).ceil().max(2.0) as u32,
+        probe_window: Duration::from_secs_f64(section.probe_window_ms / 1000.0),
+        read_error_streak: section.read_error_streak,
     })
 }
 

@@ -41,6 +41,15 @@ pub struct FalconSection {
     /// Without any reply for this long, the Falcon counts as gone.
     #[serde(default = "default_link_lost")]
     pub link_lost_after_ms: f64,
+    /// How long the probe for a running firmware keeps asking before it
+    /// decides none runs (libnifalcon waits about 1 s; fresh firmware can
+    /// take that long to start).
+    #[serde(default = "default_probe_window")]
+    pub probe_window_ms: f64,
+    /// Failed USB reads in a row (stalls, overflows, timeouts) after which
+    /// the link counts as broken; fewer are counted and ridden out.
+    #[serde(default = "default_read_error_streak")]
+    pub read_error_streak: u32,
     /// Only for `device.kind = "falcon-emulator"`.
     #[serde(default)]
     pub emulator: EmulatorSection,
@@ -64,6 +73,12 @@ fn default_reply_timeout() -> f64 {
 fn default_link_lost() -> f64 {
     250.0
 }
+fn default_probe_window() -> f64 {
+    1000.0
+}
+fn default_read_error_streak() -> u32 {
+    20
+}
 
 impl Default for FalconSection {
     fn default() -> Self {
@@ -76,6 +91,8 @@ impl Default for FalconSection {
             homing_timeout_s: default_homing_timeout(),
             reply_timeout_ms: default_reply_timeout(),
             link_lost_after_ms: default_link_lost(),
+            probe_window_ms: default_probe_window(),
+            read_error_streak: default_read_error_streak(),
             emulator: EmulatorSection::default(),
         }
     }
@@ -96,8 +113,10 @@ pub struct EmulatorSection {
     pub split_rate: f64,
     /// Pull the cable this many seconds after the loop starts.
     pub unplug_after_s: Option<f64>,
-    /// The USB read fails (an I/O error) this many seconds after the loop starts.
+    /// USB reads fail (a stall, as a real bulk IN endpoint can) this many
+    /// seconds after the loop starts, `read_errors` of them in a row.
     pub read_error_after_s: Option<f64>,
+    pub read_errors: u32,
     /// The device stops answering for `stall_ms`, `stalls` times in a row,
     /// from this many seconds after the loop starts.
     pub stall_after_s: Option<f64>,
@@ -105,6 +124,44 @@ pub struct EmulatorSection {
     pub stalls: u32,
     /// A simulated hand homes the grip (pulls it out and pushes it in).
     pub auto_home: bool,
+    /// Fresh firmware answers packets only this long after the upload ends.
+    pub firmware_start_ms: f64,
+    /// A stray byte reaches the host when the loader's baud changes, before
+    /// the sync byte (a driver that does not purge reads it as the echo).
+    pub stale_byte_before_sync: bool,
+    /// The boot loader does not answer until the host has closed and
+    /// reopened the device once.
+    pub upload_needs_reopen: bool,
+    /// The link's timing; absent, every byte is there at once.
+    pub timing: Option<EmulatorTiming>,
+}
+
+/// The emulated link's timing model (`[falcon.emulator.timing]`); the FTDI
+/// latency timer is the one the driver sets (1 ms normal, 16 ms loading).
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct EmulatorTiming {
+    /// One USB crossing between the host and the FTDI chip, each way.
+    pub usb_latency_ms: f64,
+    /// The firmware's time to answer a packet.
+    pub firmware_ms: f64,
+    /// Standard deviation of the host's extra delay in taking a reply.
+    pub jitter_ms: f64,
+    /// The chance that a reply is late, by up to `late_ms` more.
+    pub late_rate: f64,
+    pub late_ms: f64,
+}
+
+impl Default for EmulatorTiming {
+    fn default() -> Self {
+        EmulatorTiming {
+            usb_latency_ms: 0.125,
+            firmware_ms: 0.05,
+            jitter_ms: 0.05,
+            late_rate: 0.002,
+            late_ms: 2.0,
+        }
+    }
 }
 
 impl Default for EmulatorSection {
@@ -117,10 +174,15 @@ impl Default for EmulatorSection {
             split_rate: 0.0,
             unplug_after_s: None,
             read_error_after_s: None,
+            read_errors: 1,
             stall_after_s: None,
             stall_ms: 0.0,
             stalls: 1,
             auto_home: true,
+            firmware_start_ms: 0.0,
+            stale_byte_before_sync: false,
+            upload_needs_reopen: false,
+            timing: None,
         }
     }
 }
@@ -368,6 +430,21 @@ pub fn validate(p: &Profile) -> Result<(), Invalid> {
                 ),
             );
         }
+        if !(f.probe_window_ms.is_finite() && (100.0..=30_000.0).contains(&f.probe_window_ms)) {
+            return bad(
+                "falcon.probe_window_ms",
+                format!(
+                    "must be from 100 to 30000 ms (1000, as libnifalcon waits, unless you know better), got {}",
+                    f.probe_window_ms
+                ),
+            );
+        }
+        if !(1..=10_000).contains(&f.read_error_streak) {
+            return bad(
+                "falcon.read_error_streak",
+                format!("must be from 1 to 10000, got {}", f.read_error_streak),
+            );
+        }
         let e = &f.emulator;
         rate("falcon.emulator.drop_rate", e.drop_rate)?;
         rate("falcon.emulator.garble_rate", e.garble_rate)?;
@@ -389,6 +466,34 @@ pub fn validate(p: &Profile) -> Result<(), Invalid> {
             e.read_error_after_s,
         )?;
         stall("falcon.emulator", e.stall_after_s, e.stall_ms, e.stalls)?;
+        if !(1..=100_000).contains(&e.read_errors) {
+            return bad(
+                "falcon.emulator.read_errors",
+                format!("must be from 1 to 100000, got {}", e.read_errors),
+            );
+        }
+        if !(e.firmware_start_ms.is_finite() && (0.0..=10_000.0).contains(&e.firmware_start_ms)) {
+            return bad(
+                "falcon.emulator.firmware_start_ms",
+                format!("must be from 0 to 10000 ms, got {}", e.firmware_start_ms),
+            );
+        }
+        if let Some(t) = &e.timing {
+            for (key, v, max) in [
+                ("usb_latency_ms", t.usb_latency_ms, 100.0),
+                ("firmware_ms", t.firmware_ms, 100.0),
+                ("jitter_ms", t.jitter_ms, 100.0),
+                ("late_ms", t.late_ms, 1000.0),
+            ] {
+                if !(v.is_finite() && (0.0..=max).contains(&v)) {
+                    return bad(
+                        format!("falcon.emulator.timing.{key}"),
+                        format!("must be from 0 to {max} ms, got {v}"),
+                    );
+                }
+            }
+            rate("falcon.emulator.timing.late_rate", t.late_rate)?;
+        }
         if !e.firmware_loaded && f.firmware.is_none() {
             return bad(
                 "falcon.emulator.firmware_loaded",

@@ -48,6 +48,40 @@ fn a_whole_scan_runs_through_the_emulated_falcon() {
     assert!((mean - -0.0043).abs() < 0.001, "mean height {mean}");
 }
 
+/// The thesis scan through the timed link (`[falcon.emulator.timing]` in
+/// profiles/thesis-emulator.toml): the loop keeps 1 kHz; replies that come
+/// too late are counted as missed, never fatal. Prints the figure: missed
+/// replies per 1000 ticks.
+#[test]
+fn the_thesis_scan_keeps_1_khz_through_the_timed_link() {
+    let lp = LoadedProfile::load(Path::new("profiles/thesis-emulator.toml")).unwrap();
+    assert!(
+        lp.profile
+            .falcon
+            .as_ref()
+            .unwrap()
+            .emulator
+            .timing
+            .is_some()
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let (saved, stats) = simulate_one(&lp, "S3", 5, &dir.path().join("S3/S3_001.csv")).unwrap();
+    assert!(saved.complete && saved.rows > 8900, "{saved:?}");
+    assert!((stats.rate_hz - 1000.0).abs() < 2.0, "{stats:?}");
+    let link = stats.link.unwrap();
+    assert!(link.missed_replies > 0, "no reply was ever late: {link:?}");
+    assert!(
+        link.replies + link.missed_replies >= stats.ticks,
+        "{link:?}"
+    );
+    println!(
+        "missed replies per 1000 ticks through the timed link: {:.2} ({} of {} ticks)",
+        1000.0 * link.missed_replies as f64 / stats.ticks as f64,
+        link.missed_replies,
+        stats.ticks
+    );
+}
+
 /// The thesis's result through the whole driver stack (reduced: 12 scans
 /// per texture, 8 to train and 4 to test; `hapticlab simulate --per-class 30`
 /// on profiles/thesis-emulator.toml and `evaluate` give 40/40).

@@ -270,7 +270,7 @@ fn sim_stall_streak_aborts_per_the_missed_deadline_policy() {
 }
 
 #[test]
-fn emulator_read_error() {
+fn emulator_read_error_is_ridden_out_and_counted() {
     let mut lp = load(QUICK_EMU);
     lp.profile
         .falcon
@@ -278,13 +278,34 @@ fn emulator_read_error() {
         .unwrap()
         .emulator
         .read_error_after_s = Some(2.4);
+    let o = scan_virtual(&lp.profile, emulated(&lp), |_| {});
+    assert_eq!(o.halt, None);
+    assert!(o.saved.complete, "{:?}", o.saved);
+    let link = o.stats.link.expect("link counters");
+    assert_eq!(link.usb_errors, 1, "{link:?}");
+    assert!(
+        o.stats.summary().contains("1 USB errors"),
+        "{}",
+        o.stats.summary()
+    );
+}
+
+#[test]
+fn emulator_read_error_streak() {
+    let mut lp = load(QUICK_EMU);
+    let f = lp.profile.falcon.as_mut().unwrap();
+    f.read_error_streak = 5;
+    f.emulator.read_error_after_s = Some(2.4);
+    f.emulator.read_errors = 5;
     let o = scan_virtual(&lp.profile, emulated(&lp), falcon_forces_off);
     let halt = o.halt.as_deref().expect("the loop halts");
     assert!(
-        halt.contains("device I/O failed") && halt.contains("USB read failed at 2.40"),
+        halt.contains("device I/O failed")
+            && halt.contains("5 USB reads in a row failed")
+            && halt.contains("USB read failed (endpoint stalled) at 2.40"),
         "{halt}"
     );
-    assert_aborted(&o, "read_error_after_s", 50..800);
+    assert_aborted(&o, "USB reads in a row failed", 50..800);
 }
 
 #[test]
@@ -496,9 +517,9 @@ fn scan_reports_an_emulated_read_error() {
     let prof = profile_with(
         dir.path(),
         QUICK_EMU,
-        with_emulator_faults("read_error_after_s = 2.4"),
+        with_emulator_faults("read_error_after_s = 2.4\nread_errors = 100"),
     );
-    scan_with_fault(&prof, &dir.path().join("D"), "USB read failed");
+    scan_with_fault(&prof, &dir.path().join("D"), "USB reads in a row failed");
 }
 
 #[test]

@@ -12,16 +12,20 @@
 //! and the homing flags rise once the grip has been pulled fully out and
 //! pushed fully in — by a simulated hand when `auto_home` is on.
 //!
+//! Time on the link is [`timing::Link`]'s: with `[falcon.emulator.timing]`
+//! replies come as late as USB and the FTDI chip's latency timer make them,
+//! and a read returns nothing when its timeout passes first.
+//!
 //! Faults on demand: replies dropped, garbled or split in two, uploads that
-//! fail (a corrupted echo) a set number of times, unplugging at a given
-//! time (every call then fails as a vanished USB device does, and the motors
-//! stop), a USB read that fails at a given time, and exchanges that stall
-//! (handed to the servo loop's clock through `take_stall`). It never sleeps:
-//! a read that finds nothing returns at once, so the same emulator runs in
-//! virtual and in real time.
+//! fail (a corrupted echo) a set number of times or until the device is
+//! reopened, a stray byte before the sync byte, firmware that starts slowly,
+//! unplugging at a given time (every call then fails as a vanished USB
+//! device does, and the motors stop), USB reads that fail (stall) from a
+//! given time, and exchanges that stall (handed to the servo loop's clock
+//! through `take_stall`, as are the link's waits). It never sleeps, so the
+//! same emulator runs in virtual and in real time.
 
-use std::collections::VecDeque;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -30,6 +34,9 @@ use rand_distr::{Distribution, Normal};
 use super::kinematics::{self, Frame};
 use super::packet::{self, PacketReader, ReplyPacket};
 use super::{FalconTransport, TransportError, ftdi};
+use timing::Link;
+
+pub mod timing;
 use crate::device::HapticDevice;
 use crate::device::sim::SimDevice;
 use crate::profile::hardware::EmulatorSection;
@@ -107,6 +114,12 @@ pub struct EmulatorCounters {
     pub max_motor: i16,
     /// Steps the grip spent beyond the arms' reach (held back there).
     pub unreachable: u64,
+    /// Times the host closed and reopened the device.
+    pub reopens: u32,
+    /// Failed USB reads injected (`read_error_after_s`).
+    pub read_errors: u32,
+    /// Packets ignored because the fresh firmware had not started yet.
+    pub ignored_while_starting: u64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -139,8 +152,11 @@ pub struct EmulatedFalcon {
     fw: Firmware,
     boot_tail: [u8; 3],
     from_host: PacketReader,
-    to_host: VecDeque<u8>,
-    replies_due: u32,
+    link: Link,
+    /// The link's creation, for [`FalconTransport::now`].
+    epoch: Instant,
+    /// Link time from which a fresh firmware answers.
+    fw_ready_at: f64,
     motor: [i16; 3],
     flags: u8,
     /// Per-axis homed flags (bit i: arm i), as the firmware reports them.
@@ -159,7 +175,7 @@ pub struct EmulatedFalcon {
     last_counts: [i16; 3],
     t: f64,
     unplugged: bool,
-    read_error_done: bool,
+    read_errors_left: Option<u32>,
     stalls_done: u32,
     stall: Option<Duration>,
     pub counters: EmulatorCounters,
@@ -185,8 +201,9 @@ impl EmulatedFalcon {
             dtr: false,
             boot_tail: [0; 3],
             from_host: PacketReader::new(),
-            to_host: VecDeque::with_capacity(4096),
-            replies_due: 0,
+            link: Link::new(cfg.device.timing.clone(), cfg.seed),
+            epoch: Instant::now(),
+            fw_ready_at: 0.0,
             motor: [0; 3],
             flags: 0,
             homed_axes: 0,
@@ -199,7 +216,7 @@ impl EmulatedFalcon {
             last_counts: [0; 3],
             t: 0.0,
             unplugged: false,
-            read_error_done: false,
+            read_errors_left: None,
             stalls_done: 0,
             stall: None,
             counters: EmulatorCounters::default(),
@@ -254,30 +271,49 @@ impl EmulatedFalcon {
         self.released = false;
         self.motor = [0; 3];
         self.sim.make_safe();
-        self.replies_due = 0;
         self.from_host.clear();
     }
 
-    fn boot_byte(&mut self, b: u8) {
+    /// What the link did (waits, late replies).
+    pub fn link_counters(&self) -> timing::LinkCounters {
+        self.link.counters
+    }
+
+    /// The boot loader sends `bytes`, the first in the chip at `at`.
+    fn boot_send(&mut self, bytes: &[u8], at: f64, byte_s: f64) {
+        self.link.begin_message();
+        for (i, &b) in bytes.iter().enumerate() {
+            self.link.device_send(b, at + i as f64 * byte_s);
+        }
+    }
+
+    /// A byte for the boot loader, in the Falcon at `at` (link time).
+    fn boot_byte(&mut self, b: u8, at: f64, byte_s: f64) {
         let Firmware::Boot(stage) = self.fw else {
             return;
         };
         match stage {
             Boot::Idle => {
                 self.boot_tail = [self.boot_tail[1], self.boot_tail[2], b];
-                if self.baud == ftdi::BAUD_9600 && self.dtr && self.boot_tail == [0x0A, 0x43, 0x0D]
+                let stuck = self.cfg.device.upload_needs_reopen && self.counters.reopens == 0;
+                if self.baud == ftdi::BAUD_9600
+                    && self.dtr
+                    && !stuck
+                    && self.boot_tail == [0x0A, 0x43, 0x0D]
                 {
                     self.counters.handshakes += 1;
-                    if self.cfg.leading_zero {
-                        self.to_host.push_back(0x00);
-                    }
-                    self.to_host.extend([0x0A, 0x44, 0x2C, 0x0D]);
+                    let answer: &[u8] = if self.cfg.leading_zero {
+                        &[0x00, 0x0A, 0x44, 0x2C, 0x0D]
+                    } else {
+                        &[0x0A, 0x44, 0x2C, 0x0D]
+                    };
+                    self.boot_send(answer, at + byte_s, byte_s);
                     self.fw = Firmware::Boot(Boot::Handshaken);
                 }
             }
             Boot::Handshaken => {
                 if b == 0x41 && self.baud == ftdi::BAUD_LOADER && !self.dtr {
-                    self.to_host.push_back(0x41);
+                    self.boot_send(&[0x41], at + byte_s, byte_s);
                     self.counters.uploads_started += 1;
                     let fail = self.counters.uploads_started <= self.cfg.device.upload_failures;
                     let corrupt_at = fail.then(|| 62 * 40 + self.rng.random_range(0..62));
@@ -297,7 +333,12 @@ impl EmulatedFalcon {
                     return;
                 }
                 let bad = corrupt_at == Some(received);
-                self.to_host.push_back(if bad { b ^ 0x5A } else { b });
+                // The echo's host-side delay is drawn once per chunk.
+                if received % super::firmware::CHUNK == 0 {
+                    self.link.begin_message();
+                }
+                self.link
+                    .device_send(if bad { b ^ 0x5A } else { b }, at + byte_s);
                 self.fw = Firmware::Boot(Boot::Loading {
                     received: received + 1,
                     corrupt_at,
@@ -307,7 +348,9 @@ impl EmulatedFalcon {
         }
     }
 
-    fn apply_command(&mut self, c: packet::CommandPacket) {
+    /// A command packet, whole in the Falcon at `at` (link time): applied,
+    /// and its reply sent.
+    fn apply_command(&mut self, c: packet::CommandPacket, at: f64, byte_s: f64) {
         self.counters.commands += 1;
         self.motor = c.motor;
         self.flags = c.flags;
@@ -318,7 +361,6 @@ impl EmulatedFalcon {
             .max()
             .unwrap_or(0);
         self.counters.max_motor = self.counters.max_motor.max(m);
-        self.replies_due += 1;
         // Torques through the Jacobian at the true position.
         let tau = kinematics::torques_of_commands(c.motor);
         let force = kinematics::inverse(self.falcon_position())
@@ -327,6 +369,34 @@ impl EmulatedFalcon {
             .unwrap_or([0.0; 3]);
         // Same axes in both frames.
         let _ = self.sim.command(force);
+        self.send_reply(at + self.link.firmware_s(), byte_s);
+    }
+
+    /// The reply to the last command, its first byte in the chip at `at`
+    /// (lost or garbled as the faults ask).
+    fn send_reply(&mut self, at: f64, byte_s: f64) {
+        let r = self.reply();
+        if self
+            .rng
+            .random_bool(self.cfg.device.drop_rate.clamp(0.0, 1.0))
+        {
+            self.counters.dropped += 1;
+            return;
+        }
+        let mut bytes = packet::encode_reply(&r);
+        if self
+            .rng
+            .random_bool(self.cfg.device.garble_rate.clamp(0.0, 1.0))
+        {
+            let i = self.rng.random_range(1..15);
+            bytes[i] = b'z';
+            self.counters.garbled += 1;
+        }
+        self.counters.replies += 1;
+        self.link.begin_message();
+        for (i, b) in bytes.into_iter().enumerate() {
+            self.link.device_send(b, at + (i + 1) as f64 * byte_s);
+        }
     }
 
     fn reply(&mut self) -> ReplyPacket {
@@ -435,7 +505,7 @@ impl FalconTransport for EmulatedFalcon {
         match request {
             ftdi::PURGE => {
                 if value & ftdi::PURGE_RX != 0 {
-                    self.to_host.clear();
+                    self.link.purge();
                 }
                 if value & ftdi::PURGE_TX != 0 {
                     self.from_host.clear();
@@ -443,6 +513,15 @@ impl FalconTransport for EmulatedFalcon {
             }
             ftdi::BAUD => {
                 self.baud = value;
+                self.link.set_baud(value);
+                if value == ftdi::BAUD_LOADER
+                    && self.cfg.device.stale_byte_before_sync
+                    && self.fw == Firmware::Boot(Boot::Handshaken)
+                {
+                    // The line glitches as the baud changes: a framing-error byte.
+                    let byte_s = 10.0 / timing::baud_of_divisor(value);
+                    self.boot_send(&[0x00], self.link.now() + byte_s, byte_s);
+                }
                 if value == ftdi::BAUD_NORMAL
                     && let Firmware::Boot(Boot::Loading {
                         received,
@@ -452,6 +531,8 @@ impl FalconTransport for EmulatedFalcon {
                 {
                     if received >= MIN_IMAGE && !corrupted {
                         self.fw = Firmware::Running;
+                        self.fw_ready_at =
+                            self.link.now() + self.cfg.device.firmware_start_ms / 1000.0;
                         self.counters.uploads_completed += 1;
                     } else {
                         self.fw = Firmware::Boot(Boot::Idle);
@@ -469,7 +550,8 @@ impl FalconTransport for EmulatedFalcon {
                     self.dtr = dtr;
                 }
             }
-            ftdi::FLOW | ftdi::LINE | ftdi::LATENCY => {}
+            ftdi::LATENCY => self.link.set_latency_ms(value),
+            ftdi::FLOW | ftdi::LINE => {}
             other => {
                 return Err(TransportError::Io(format!(
                     "the emulated FTDI chip does not know request {other}"
@@ -481,20 +563,27 @@ impl FalconTransport for EmulatedFalcon {
 
     fn write(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
         self.check()?;
+        let (first, byte_s) = self.link.host_write(bytes.len());
         match self.fw {
             Firmware::Boot(_) => {
-                for &b in bytes {
-                    self.boot_byte(b);
+                for (i, &b) in bytes.iter().enumerate() {
+                    self.boot_byte(b, first + i as f64 * byte_s, byte_s);
                 }
             }
             Firmware::Running => {
                 if self.baud != ftdi::BAUD_NORMAL {
                     return Ok(());
                 }
+                let last = first + bytes.len().saturating_sub(1) as f64 * byte_s;
+                if last < self.fw_ready_at {
+                    // Fresh firmware still starting: the packet is lost on it.
+                    self.counters.ignored_while_starting += 1;
+                    return Ok(());
+                }
                 self.from_host.push(bytes);
                 while let Some(p) = self.from_host.next_packet() {
                     match packet::decode_command(&p) {
-                        Some(c) => self.apply_command(c),
+                        Some(c) => self.apply_command(c, last, byte_s),
                         None => self.counters.bad_commands += 1,
                     }
                 }
@@ -503,44 +592,30 @@ impl FalconTransport for EmulatedFalcon {
         Ok(())
     }
 
-    fn read(&mut self, buf: &mut [u8], _timeout: Duration) -> Result<usize, TransportError> {
+    fn read(&mut self, buf: &mut [u8], timeout: Duration) -> Result<usize, TransportError> {
         self.check()?;
-        if !self.read_error_done
+        if self.read_errors_left.is_none()
             && self
                 .cfg
                 .device
                 .read_error_after_s
                 .is_some_and(|a| self.t >= a)
         {
-            self.read_error_done = true;
-            return Err(TransportError::Io(format!(
-                "the emulated Falcon's USB read failed at {:.3} s, as `[falcon.emulator] read_error_after_s` asks (on a real one: check the USB cable and hub)",
+            self.read_errors_left = Some(self.cfg.device.read_errors);
+        }
+        if let Some(left) = self.read_errors_left.as_mut()
+            && *left > 0
+        {
+            *left -= 1;
+            self.counters.read_errors += 1;
+            return Err(TransportError::Transient(format!(
+                "the emulated Falcon's USB read failed (endpoint stalled) at {:.3} s, as `[falcon.emulator] read_error_after_s` asks",
                 self.t
             )));
         }
-        while self.replies_due > 0 {
-            self.replies_due -= 1;
-            let r = self.reply();
-            if self
-                .rng
-                .random_bool(self.cfg.device.drop_rate.clamp(0.0, 1.0))
-            {
-                self.counters.dropped += 1;
-                continue;
-            }
-            let mut bytes = packet::encode_reply(&r);
-            if self
-                .rng
-                .random_bool(self.cfg.device.garble_rate.clamp(0.0, 1.0))
-            {
-                let i = self.rng.random_range(1..15);
-                bytes[i] = b'z';
-                self.counters.garbled += 1;
-            }
-            self.counters.replies += 1;
-            self.to_host.extend(bytes);
-        }
-        let mut n = buf.len().min(self.to_host.len());
+        let mut n = buf
+            .len()
+            .min(self.link.wait_for_bytes(timeout.as_secs_f64()));
         if n > 1
             && self
                 .rng
@@ -549,10 +624,21 @@ impl FalconTransport for EmulatedFalcon {
             n = self.rng.random_range(1..n);
             self.counters.split += 1;
         }
-        for (slot, b) in buf.iter_mut().zip(self.to_host.drain(..n)) {
-            *slot = b;
-        }
+        self.link.take(buf, n);
         Ok(n)
+    }
+
+    fn now(&self) -> Instant {
+        self.epoch + Duration::from_secs_f64(self.link.now())
+    }
+
+    fn reopen(&mut self) -> Result<(), TransportError> {
+        self.check()?;
+        self.counters.reopens += 1;
+        // Whatever the host had pending is gone with its handle.
+        self.link.purge();
+        self.from_host.clear();
+        Ok(())
     }
 
     fn advance_to(&mut self, t_s: f64) {
@@ -560,6 +646,8 @@ impl FalconTransport for EmulatedFalcon {
             return;
         }
         self.t = t_s;
+        self.link.follow(t_s);
+        self.link.clear_waited();
         if !self.unplugged && self.cfg.device.unplug_after_s.is_some_and(|u| t_s >= u) {
             self.unplug();
         }
@@ -579,302 +667,14 @@ impl FalconTransport for EmulatedFalcon {
     }
 
     fn take_stall(&mut self) -> Option<Duration> {
-        self.stall.take()
+        // The link's waits in this tick's reads, and any injected stall.
+        let waited = self.link.take_waited().map(Duration::from_secs_f64);
+        match (self.stall.take(), waited) {
+            (Some(a), Some(b)) => Some(a + b),
+            (a, b) => a.or(b),
+        }
     }
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::device::Reading;
-    use crate::device::falcon::{FalconConfig, FalconDevice, firmware};
-    use crate::profile::LoadedProfile;
-    use std::path::Path;
-
-    fn emulator(cfg: EmulatorConfig) -> EmulatedFalcon {
-        let lp = LoadedProfile::thesis();
-        let sim = SimDevice::new(&lp.profile, Path::new("."), None, 3).unwrap();
-        EmulatedFalcon::new(sim, cfg)
-    }
-
-    fn image() -> firmware::FirmwareImage {
-        let mut rng = ChaCha8Rng::seed_from_u64(5);
-        firmware::FirmwareImage {
-            path: "test-image.bin".into(),
-            bytes: (0..8492).map(|_| rng.random()).collect(),
-        }
-    }
-
-    #[test]
-    fn a_running_firmware_is_probed_and_not_reloaded() {
-        let mut e = emulator(EmulatorConfig::default());
-        let r = firmware::ensure_loaded(&mut e, None, 3, &mut |_| {}).unwrap();
-        assert!(r.already_loaded);
-        assert_eq!(e.counters.uploads_started, 0);
-    }
-
-    #[test]
-    fn the_upload_runs_the_handshake_and_echoes_every_chunk() {
-        let mut e = emulator(EmulatorConfig {
-            device: EmulatorSection {
-                firmware_loaded: false,
-                ..EmulatorSection::default()
-            },
-            leading_zero: true,
-            ..EmulatorConfig::default()
-        });
-        let mut log = Vec::new();
-        let r =
-            firmware::ensure_loaded(&mut e, Some(&image()), 5, &mut |m| log.push(m.to_string()))
-                .unwrap();
-        assert!(!r.already_loaded);
-        assert_eq!(r.attempts, 1);
-        assert!(e.firmware_running());
-        assert_eq!(e.counters.uploads_completed, 1);
-        assert!(
-            log.iter().any(|m| m.contains("firmware running")),
-            "{log:?}"
-        );
-    }
-
-    #[test]
-    fn an_upload_that_fails_twice_succeeds_on_the_third_attempt() {
-        let mut e = emulator(EmulatorConfig {
-            device: EmulatorSection {
-                firmware_loaded: false,
-                upload_failures: 2,
-                ..EmulatorSection::default()
-            },
-            ..EmulatorConfig::default()
-        });
-        let r = firmware::ensure_loaded(&mut e, Some(&image()), 20, &mut |_| {}).unwrap();
-        assert_eq!(r.attempts, 3);
-        assert_eq!(r.failures.len(), 2);
-        assert!(
-            r.failures[0].contains("chunk 41 of 137"),
-            "{:?}",
-            r.failures
-        );
-        assert!(r.failures[0].contains("echo differs"), "{:?}", r.failures);
-        assert_eq!(e.counters.uploads_started, 3);
-    }
-
-    #[test]
-    fn too_many_failures_name_the_failing_step() {
-        let mut e = emulator(EmulatorConfig {
-            device: EmulatorSection {
-                firmware_loaded: false,
-                upload_failures: 5,
-                ..EmulatorSection::default()
-            },
-            ..EmulatorConfig::default()
-        });
-        let err = firmware::ensure_loaded(&mut e, Some(&image()), 3, &mut |_| {})
-            .unwrap_err()
-            .to_string();
-        assert!(err.contains("failed 3 times"), "{err}");
-        assert!(err.contains("chunk 41"), "{err}");
-        // No image at all: says where to get one.
-        let mut e = emulator(EmulatorConfig {
-            device: EmulatorSection {
-                firmware_loaded: false,
-                ..EmulatorSection::default()
-            },
-            ..EmulatorConfig::default()
-        });
-        let err = firmware::ensure_loaded(&mut e, None, 3, &mut |_| {})
-            .unwrap_err()
-            .to_string();
-        assert!(err.contains("libnifalcon"), "{err}");
-    }
-
-    #[test]
-    fn a_silent_boot_loader_fails_at_the_handshake() {
-        // The cable is pulled before anything is said: the link error is named.
-        let mut e = emulator(EmulatorConfig {
-            device: EmulatorSection {
-                firmware_loaded: false,
-                ..EmulatorSection::default()
-            },
-            ..EmulatorConfig::default()
-        });
-        e.unplug();
-        let err = firmware::ensure_loaded(&mut e, Some(&image()), 3, &mut |_| {})
-            .unwrap_err()
-            .to_string();
-        assert!(err.contains("unplugged"), "{err}");
-    }
-
-    #[test]
-    fn the_grip_homes_after_a_pull_out_and_push_in_and_leds_follow() {
-        let e = emulator(EmulatorConfig::default());
-        let mut dev = FalconDevice::open(e, FalconConfig::default(), &mut |_| {}).unwrap();
-        let mut t = 0.0;
-        let mut homed_at = None;
-        let mut last_axes = 0;
-        for k in 1..5000 {
-            t = k as f64 * 0.001;
-            let r = dev.read(t).unwrap();
-            // Before homing a force is asked for: none may be applied. After,
-            // a spring holds the grip at the workspace's centre.
-            let hold = [0.0, 0.0, -0.04];
-            let f = if r.homed {
-                [0, 1, 2].map(|a| 200.0 * (hold[a] - r.pos_m[a]))
-            } else {
-                [0.0, 3.0, 0.0]
-            };
-            dev.command(f).unwrap();
-            // The per-arm flags only ever rise.
-            let axes = dev.transport().homed_axes;
-            assert_eq!(axes & last_axes, last_axes, "a homed flag dropped");
-            last_axes = axes;
-            if !r.homed {
-                assert_eq!(dev.transport().motor, [0; 3]);
-                assert_eq!(dev.transport().flags & packet::LED_RED, packet::LED_RED);
-            } else if homed_at.is_none() {
-                homed_at = Some(t);
-            }
-        }
-        let homed_at = homed_at.expect("homed");
-        assert!(homed_at < 3.0, "homed only at {homed_at} s");
-        assert_eq!(dev.transport().flags & packet::LED_BLUE, packet::LED_BLUE);
-        // After homing the reading is the true position, within an encoder step or two.
-        let r = dev.read(t + 0.001).unwrap();
-        let truth = dev.transport().sim().true_position();
-        for a in 0..3 {
-            assert!(
-                (r.pos_m[a] - truth[a]).abs() < 2e-4,
-                "{:?} vs {truth:?}",
-                r.pos_m
-            );
-        }
-        assert!(dev.transport().counters.max_motor > 0);
-    }
-
-    /// Drive `dev` for `seconds` with `force` of each reading.
-    fn drive(
-        dev: &mut FalconDevice<EmulatedFalcon>,
-        from_s: f64,
-        seconds: f64,
-        force: impl Fn(&Reading) -> [f64; 3],
-    ) -> f64 {
-        let mut t = from_s;
-        for _ in 0..(seconds * 1000.0) as usize {
-            t += 0.001;
-            let r = dev.read(t).unwrap();
-            dev.command(force(&r)).unwrap();
-        }
-        t
-    }
-
-    /// The reading at rest is the true grip position, within encoder steps.
-    fn assert_reading_follows(dev: &mut FalconDevice<EmulatedFalcon>, t: f64) {
-        let r = dev.read(t + 0.001).unwrap();
-        assert!(r.homed);
-        let truth = dev.transport().sim().true_position();
-        for a in 0..3 {
-            assert!(
-                (r.pos_m[a] - truth[a]).abs() < 3e-4,
-                "the reading {:?} is not the grip at {truth:?}",
-                r.pos_m
-            );
-        }
-    }
-
-    #[test]
-    fn once_homed_the_hand_lets_go_in_the_middle_and_the_reading_follows() {
-        let e = emulator(EmulatorConfig::default());
-        let mut dev = FalconDevice::open(e, FalconConfig::default(), &mut |_| {}).unwrap();
-        // Manual mode: no forces asked for, ever.
-        let t = drive(&mut dev, 0.0, 10.0, |_| [0.0; 3]);
-        let emu = dev.transport();
-        assert!(emu.is_homed());
-        assert!(emu.released, "the hand never let go");
-        // Let go in the middle; with no texture under it, the probe's weight
-        // takes it down to the floor (y), but it stays put across (x, z).
-        let p = emu.sim().true_position();
-        for a in [0, 2] {
-            assert!(
-                (p[a] - WORKSPACE_CENTRE_M[a]).abs() < 0.01,
-                "left at {p:?}, not in the middle"
-            );
-        }
-        assert_eq!(emu.counters.unreachable, 0);
-        assert_reading_follows(&mut dev, t);
-    }
-
-    #[test]
-    fn past_the_arms_reach_the_grip_is_held_back_and_still_read() {
-        let e = emulator(EmulatorConfig::default());
-        let mut dev = FalconDevice::open(e, FalconConfig::default(), &mut |_| {}).unwrap();
-        let t = drive(&mut dev, 0.0, 3.0, |_| [0.0; 3]);
-        assert!(dev.transport().is_homed());
-        // Push hard outwards (+z, away from the Falcon's body), towards the
-        // simulator's box wall, which lies beyond what the arms reach.
-        let t = drive(&mut dev, t, 2.0, |_| [0.0, 0.0, 6.0]);
-        let emu = dev.transport();
-        assert!(
-            emu.counters.unreachable > 0,
-            "the grip never left the reach"
-        );
-        let p = emu.sim().true_position();
-        let overshoot = (0..3)
-            .map(|a| (p[a] - emu.reachable[a]).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        assert!(
-            overshoot < 5e-4,
-            "the grip went {overshoot} m past its reach"
-        );
-        assert_reading_follows(&mut dev, t);
-    }
-
-    #[test]
-    fn faults_are_survived_and_counted_and_unplugging_stops_the_motors() {
-        let e = emulator(EmulatorConfig {
-            device: EmulatorSection {
-                drop_rate: 0.05,
-                garble_rate: 0.05,
-                split_rate: 0.3,
-                unplug_after_s: Some(4.0),
-                ..EmulatorSection::default()
-            },
-            ..EmulatorConfig::default()
-        });
-        let mut dev = FalconDevice::open(e, FalconConfig::default(), &mut |_| {}).unwrap();
-        let hold = [0.0, 0.0, -0.04];
-        let mut failed_at = None;
-        for k in 1..5000 {
-            let t = k as f64 * 0.001;
-            match dev.read(t) {
-                Ok(r) => {
-                    let f = if r.homed {
-                        [0, 1, 2].map(|a| 200.0 * (hold[a] - r.pos_m[a]))
-                    } else {
-                        [0.0; 3]
-                    };
-                    dev.command(f).unwrap();
-                }
-                Err(e) => {
-                    assert!(
-                        matches!(e, crate::device::DeviceError::Disconnected(_)),
-                        "{e}"
-                    );
-                    assert!(e.to_string().contains("unplugged"), "{e}");
-                    failed_at = Some(t);
-                    break;
-                }
-            }
-        }
-        let t = failed_at.expect("the unplug is noticed");
-        assert!((4.0..4.01).contains(&t), "noticed at {t}");
-        let s = dev.stats();
-        assert!(s.missed_replies > 50 && s.bad_packets > 50, "{s:?}");
-        assert!(dev.is_homed());
-        // The motors stopped with the cable; the driver stays failed and safe.
-        assert_eq!(dev.transport().motor, [0; 3]);
-        dev.make_safe();
-        assert!(dev.read(t + 0.001).is_err());
-        assert!(dev.command([1.0, 0.0, 0.0]).is_err());
-    }
-}
+mod tests;

@@ -1,17 +1,22 @@
 //! Firmware: the Falcon keeps its firmware in RAM, so after every power-up
 //! the host must upload it. This module owns the image file (checked before
 //! any USB traffic), the FTDI line settings of the two modes (loader and
-//! normal), the probe ("does a firmware answer?"), and the upload's state
-//! machine: handshake at 9600 baud, sync byte at ~140 kbaud, the image in
-//! 62-byte chunks each echoed and compared, then normal mode and a probe —
-//! the whole load retried as real devices need, each failure naming its step.
+//! normal), the probe ("does a firmware answer?", asked for about a second,
+//! as long as libnifalcon waits for fresh firmware to start), and the
+//! upload's state machine: handshake at 9600 baud, the receive buffer purged,
+//! sync byte at ~140 kbaud, the image in 62-byte chunks each echoed and
+//! compared, then normal mode and a probe — the whole load retried as real
+//! devices need, the device closed and reopened between attempts as
+//! libnifalcon does, each failure naming its step. A failed USB read counts
+//! as one that brought no bytes. Every timeout is measured on the
+//! transport's clock ([`FalconTransport::now`]).
 //!
 //! The images are Novint's and not redistributable: the project never ships
 //! one; the profile names the file the user's libnifalcon or Novint install
 //! provides.
 
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use super::packet::{self, CommandPacket, PacketReader};
 use super::{FalconTransport, TransportError, ftdi};
@@ -35,8 +40,26 @@ const SYNC: u8 = 0x41;
 const HANDSHAKE_TRIES: u32 = 100;
 const HANDSHAKE_TIMEOUT: Duration = Duration::from_millis(50);
 const ECHO_TIMEOUT: Duration = Duration::from_millis(250);
-const PROBE_TRIES: u32 = 4;
+/// The probe sends a packet this often while it waits for an answer.
 const PROBE_TIMEOUT: Duration = Duration::from_millis(30);
+
+/// How hard to try (from the profile's `[falcon]`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoadOptions {
+    /// Whole uploads before giving up.
+    pub attempts: u32,
+    /// How long a probe keeps asking for an answer.
+    pub probe_window: Duration,
+}
+
+impl Default for LoadOptions {
+    fn default() -> Self {
+        LoadOptions {
+            attempts: 20,
+            probe_window: Duration::from_secs(1),
+        }
+    }
+}
 
 /// A firmware image read from disk and checked.
 #[derive(Debug, Clone)]
@@ -95,8 +118,8 @@ pub enum UploadStep {
     },
     #[error("after the upload: setting normal mode failed: {0}")]
     NormalMode(TransportError),
-    #[error("after the upload: the firmware does not answer packets")]
-    NoAnswer,
+    #[error("after the upload: the firmware does not answer packets within {window_ms} ms")]
+    NoAnswer { window_ms: u64 },
 }
 
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -154,6 +177,18 @@ pub fn set_loader_mode<T: FalconTransport + ?Sized>(t: &mut T) -> Result<(), Tra
     Ok(())
 }
 
+/// One read, a failed one counting as one that brought no bytes.
+fn read_some<T: FalconTransport + ?Sized>(
+    t: &mut T,
+    buf: &mut [u8],
+    timeout: Duration,
+) -> Result<usize, TransportError> {
+    match t.read(buf, timeout) {
+        Err(TransportError::Transient(_)) => Ok(0),
+        other => other,
+    }
+}
+
 /// Read until `want` bytes arrived or `timeout` passed; returns what came.
 fn read_for<T: FalconTransport + ?Sized>(
     t: &mut T,
@@ -161,11 +196,11 @@ fn read_for<T: FalconTransport + ?Sized>(
     want: usize,
     timeout: Duration,
 ) -> Result<usize, TransportError> {
-    let deadline = Instant::now() + timeout;
+    let deadline = t.now() + timeout;
     let mut got = 0;
     while got < want {
-        let left = deadline.saturating_duration_since(Instant::now());
-        let n = t.read(&mut buf[got..want], left)?;
+        let left = deadline.saturating_duration_since(t.now());
+        let n = read_some(t, &mut buf[got..want], left)?;
         if n == 0 {
             break;
         }
@@ -174,9 +209,12 @@ fn read_for<T: FalconTransport + ?Sized>(
     Ok(got)
 }
 
-/// Whether a firmware answers: in normal mode, send a few zero-force packets
-/// and look for a valid reply.
-pub fn probe<T: FalconTransport + ?Sized>(t: &mut T) -> Result<bool, TransportError> {
+/// Whether a firmware answers: in normal mode, send a zero-force packet
+/// every 30 ms and look for a valid reply, for `window` in all.
+pub fn probe<T: FalconTransport + ?Sized>(
+    t: &mut T,
+    window: Duration,
+) -> Result<bool, TransportError> {
     set_normal_mode(t)?;
     let mut reader = PacketReader::new();
     let mut buf = [0u8; 64];
@@ -184,12 +222,19 @@ pub fn probe<T: FalconTransport + ?Sized>(t: &mut T) -> Result<bool, TransportEr
         motor: [0; 3],
         flags: packet::FLAG_HOMING | packet::LED_RED,
     });
-    for _ in 0..PROBE_TRIES {
+    let end = t.now() + window;
+    // At least one packet, however short the window.
+    let mut first = true;
+    while first || t.now() < end {
+        first = false;
         t.write(&zero)?;
-        let deadline = Instant::now() + PROBE_TIMEOUT;
+        let deadline = (t.now() + PROBE_TIMEOUT).min(end);
         loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            let n = t.read(&mut buf, left)?;
+            let left = deadline.saturating_duration_since(t.now());
+            if left.is_zero() {
+                break;
+            }
+            let n = read_some(t, &mut buf, left)?;
             if n == 0 {
                 break;
             }
@@ -205,8 +250,12 @@ pub fn probe<T: FalconTransport + ?Sized>(t: &mut T) -> Result<bool, TransportEr
     Ok(false)
 }
 
-/// One upload attempt, step by step.
-pub fn upload_once<T: FalconTransport + ?Sized>(t: &mut T, image: &[u8]) -> Result<(), UploadStep> {
+/// One upload attempt, step by step; `probe_window` for the firmware to start.
+pub fn upload_once<T: FalconTransport + ?Sized>(
+    t: &mut T,
+    image: &[u8],
+    probe_window: Duration,
+) -> Result<(), UploadStep> {
     set_loader_mode(t).map_err(UploadStep::Setup)?;
     let mut buf = [0u8; 64];
     let mut ok = false;
@@ -228,8 +277,11 @@ pub fn upload_once<T: FalconTransport + ?Sized>(t: &mut T, image: &[u8]) -> Resu
             tries: HANDSHAKE_TRIES,
         });
     }
+    // Whatever is left over from the handshake or the baud change must not
+    // be taken for the sync byte's echo.
     t.control(ftdi::MODEM, ftdi::DTR_LOW)
         .and_then(|()| t.control(ftdi::BAUD, ftdi::BAUD_LOADER))
+        .and_then(|()| t.control(ftdi::PURGE, ftdi::PURGE_RX))
         .map_err(UploadStep::Setup)?;
     t.write(&[SYNC]).map_err(UploadStep::Setup)?;
     let n = read_for(t, &mut buf, 1, ECHO_TIMEOUT).map_err(UploadStep::Setup)?;
@@ -269,24 +321,27 @@ pub fn upload_once<T: FalconTransport + ?Sized>(t: &mut T, image: &[u8]) -> Resu
         }
     }
     set_normal_mode(t).map_err(UploadStep::NormalMode)?;
-    match probe(t) {
+    match probe(t, probe_window) {
         Ok(true) => Ok(()),
-        Ok(false) => Err(UploadStep::NoAnswer),
+        Ok(false) => Err(UploadStep::NoAnswer {
+            window_ms: probe_window.as_millis() as u64,
+        }),
         Err(e) => Err(UploadStep::NormalMode(e)),
     }
 }
 
-/// Make sure firmware runs: probe, and upload (up to `attempts` times) when
-/// nothing answers. `log` hears each step for the user.
+/// Make sure firmware runs: probe, and upload (up to `opts.attempts` times,
+/// the device reopened between attempts) when nothing answers. `log` hears
+/// each step for the user.
 pub fn ensure_loaded<T: FalconTransport + ?Sized>(
     t: &mut T,
     image: Option<&FirmwareImage>,
-    attempts: u32,
+    opts: &LoadOptions,
     log: &mut dyn FnMut(&str),
 ) -> Result<FirmwareReport, FirmwareError> {
     let link =
         |during: &'static str| move |error: TransportError| FirmwareError::Link { during, error };
-    if probe(t).map_err(link("probing for firmware"))? {
+    if probe(t, opts.probe_window).map_err(link("probing for firmware"))? {
         log("firmware already running");
         return Ok(FirmwareReport {
             already_loaded: true,
@@ -295,15 +350,20 @@ pub fn ensure_loaded<T: FalconTransport + ?Sized>(
     }
     let image = image.ok_or(FirmwareError::NoImage)?;
     let mut report = FirmwareReport::default();
-    let attempts = attempts.max(1);
+    let attempts = opts.attempts.max(1);
     for attempt in 1..=attempts {
         report.attempts = attempt;
+        if attempt > 1 {
+            // A fresh handle, as libnifalcon takes between attempts.
+            log("closing and reopening the Falcon");
+            t.reopen().map_err(link("reopening the Falcon"))?;
+        }
         log(&format!(
             "uploading firmware {} ({} bytes), attempt {attempt} of {attempts}",
             image.path.display(),
             image.bytes.len()
         ));
-        match upload_once(t, &image.bytes) {
+        match upload_once(t, &image.bytes, opts.probe_window) {
             Ok(()) => {
                 log("firmware running");
                 return Ok(report);
@@ -335,6 +395,7 @@ pub fn ensure_loaded<T: FalconTransport + ?Sized>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::time::Instant;
 
     #[test]
     fn missing_and_wrong_size_images_say_where_to_get_one() {
@@ -359,6 +420,8 @@ mod tests {
     /// FTDI requests succeed, bytes vanish.
     struct Silent {
         controls: Vec<(u8, u16)>,
+        now: Instant,
+        reopens: u32,
     }
     impl FalconTransport for Silent {
         fn kind(&self) -> &'static str {
@@ -371,21 +434,41 @@ mod tests {
         fn write(&mut self, _: &[u8]) -> Result<(), TransportError> {
             Ok(())
         }
-        fn read(&mut self, _: &mut [u8], _: Duration) -> Result<usize, TransportError> {
+        fn read(&mut self, _: &mut [u8], timeout: Duration) -> Result<usize, TransportError> {
+            // Nothing comes; the read waits out its timeout (on this clock).
+            self.now += timeout;
             Ok(0)
+        }
+        fn now(&self) -> Instant {
+            self.now
+        }
+        fn reopen(&mut self) -> Result<(), TransportError> {
+            self.reopens += 1;
+            Ok(())
         }
     }
 
     #[test]
     fn a_silent_boot_loader_fails_at_the_handshake_after_every_attempt() {
-        let mut t = Silent { controls: vec![] };
+        let start = Instant::now();
+        let mut t = Silent {
+            controls: vec![],
+            now: start,
+            reopens: 0,
+        };
         let image = FirmwareImage {
             path: "nvent_firmware.bin".into(),
             bytes: vec![0; 8492],
         };
         let mut log = Vec::new();
-        let e =
-            ensure_loaded(&mut t, Some(&image), 2, &mut |m| log.push(m.to_string())).unwrap_err();
+        let opts = LoadOptions {
+            attempts: 2,
+            ..LoadOptions::default()
+        };
+        let e = ensure_loaded(&mut t, Some(&image), &opts, &mut |m| {
+            log.push(m.to_string())
+        })
+        .unwrap_err();
         assert_eq!(
             e,
             FirmwareError::UploadFailed {
@@ -401,6 +484,11 @@ mod tests {
                 .count(),
             2
         );
+        // The probe asked for a second before the first upload; the device
+        // was reopened before the second.
+        assert!(t.now - start >= Duration::from_secs(1));
+        assert_eq!(t.reopens, 1);
+        assert!(log.iter().any(|m| m.contains("reopening")), "{log:?}");
         // Loader mode as the facts give it: 16 ms latency, 9600 baud, RTS low, DTR low then high.
         let loader: Vec<(u8, u16)> = t
             .controls

@@ -7,7 +7,11 @@
 //! small pool of reused buffers, and keeping several bulk IN reads (0x81, one
 //! 64-byte packet each) always pending so that replies stream in at ~1 kHz.
 //! Every IN packet starts with two FTDI modem-status bytes, stripped here.
-//! It says plainly when permissions prevent access and how to fix it.
+//! A failed IN transfer (stall, overflow or other fault, timeout) is handed
+//! up as a transient error, the read resubmitted (after clearing the halt of
+//! a stalled endpoint); only a vanished device is final. It closes and
+//! reopens the same device on request (between firmware attempts). It says
+//! plainly when permissions prevent access and how to fix it.
 
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
@@ -132,7 +136,20 @@ fn transfer_error(e: TransferError) -> TransportError {
     }
 }
 
-pub struct UsbTransport {
+/// What a failed bulk IN transfer means for the link: a vanished device is
+/// final; anything else (a stall, an overflow or CRC fault, a timeout, an
+/// error the OS has no name for) may pass, as libnifalcon treats it.
+fn in_transfer_error(e: TransferError) -> TransportError {
+    match e {
+        TransferError::Disconnected => TransportError::Disconnected("USB device gone".into()),
+        TransferError::Stall => TransportError::Transient("bulk IN endpoint stalled".into()),
+        TransferError::Cancelled => TransportError::Transient("bulk IN transfer timed out".into()),
+        other => TransportError::Transient(format!("bulk IN transfer failed: {other}")),
+    }
+}
+
+/// An open Falcon: its handle, claimed interface, endpoints and buffers.
+struct Handle {
     device: nusb::Device,
     _interface: nusb::Interface,
     ep_in: nusb::Endpoint<Bulk, In>,
@@ -140,7 +157,15 @@ pub struct UsbTransport {
     max_packet: usize,
     rx: VecDeque<u8>,
     free_out: Vec<Buffer>,
+}
+
+pub struct UsbTransport {
+    /// `None` only between closing and reopening.
+    handle: Option<Handle>,
     at: String,
+    /// To find the same device again on reopening.
+    bus: u8,
+    address: u8,
 }
 
 impl UsbTransport {
@@ -155,7 +180,32 @@ impl UsbTransport {
                 format!(" at index {index} ({count} attached; `[falcon] index` counts from 0)")
             })
         })?;
-        let at = location(&info);
+        Self::open_info(&info)
+    }
+
+    fn open_info(info: &nusb::DeviceInfo) -> Result<UsbTransport, UsbError> {
+        Ok(UsbTransport {
+            handle: Some(Handle::open(info)?),
+            at: location(info),
+            bus: info.busnum(),
+            address: info.device_address(),
+        })
+    }
+
+    pub fn describe(&self) -> String {
+        format!("the Novint Falcon at {}", self.at)
+    }
+
+    fn handle(&mut self) -> Result<&mut Handle, TransportError> {
+        self.handle.as_mut().ok_or_else(|| {
+            TransportError::Disconnected(format!("{} could not be reopened", self.at))
+        })
+    }
+}
+
+impl Handle {
+    fn open(info: &nusb::DeviceInfo) -> Result<Handle, UsbError> {
+        let at = location(info);
         let device = info.open().wait().map_err(|e| open_error(at.clone(), e))?;
         // 0403:cb48 is normally left alone by ftdi_sio; detach it if not.
         let interface = device
@@ -173,7 +223,7 @@ impl UsbTransport {
             ep_in.submit(ep_in.allocate(max_packet));
         }
         let free_out = (0..OUT_BUFFERS).map(|_| ep_out.allocate(OUT_LEN)).collect();
-        Ok(UsbTransport {
+        Ok(Handle {
             device,
             _interface: interface,
             ep_in,
@@ -181,12 +231,22 @@ impl UsbTransport {
             max_packet,
             rx: VecDeque::with_capacity(4096),
             free_out,
-            at,
         })
     }
 
-    pub fn describe(&self) -> String {
-        format!("the Novint Falcon at {}", self.at)
+    /// A stalled IN endpoint fails every transfer until its halt is
+    /// cleared: take back the pending reads, clear it, submit them again.
+    fn recover_from_stall(&mut self) {
+        self.ep_in.cancel_all();
+        while self.ep_in.pending() > 0 {
+            if self.ep_in.wait_next_complete(CONTROL_TIMEOUT).is_none() {
+                break;
+            }
+        }
+        let _ = self.ep_in.clear_halt().wait();
+        while self.ep_in.pending() < IN_TRANSFERS {
+            self.ep_in.submit(self.ep_in.allocate(self.max_packet));
+        }
     }
 
     /// Take back finished OUT buffers; wait up to `wait` for one when none is free.
@@ -209,11 +269,7 @@ impl UsbTransport {
     }
 }
 
-impl FalconTransport for UsbTransport {
-    fn kind(&self) -> &'static str {
-        "falcon"
-    }
-
+impl Handle {
     fn control(&mut self, request: u8, value: u16) -> Result<(), TransportError> {
         if request == ftdi::PURGE && value & ftdi::PURGE_RX != 0 {
             self.rx.clear();
@@ -276,14 +332,55 @@ impl FalconTransport for UsbTransport {
             b.clear();
             b.set_requested_len(self.max_packet);
             self.ep_in.submit(b);
-            match status {
-                Ok(()) | Err(TransferError::Cancelled) => {}
-                Err(e) => return Err(transfer_error(e)),
+            if let Err(e) = status {
+                if e == TransferError::Stall {
+                    self.recover_from_stall();
+                }
+                return Err(in_transfer_error(e));
             }
             if self.rx.is_empty() && Instant::now() >= deadline {
                 return Ok(0);
             }
         }
+    }
+}
+
+impl FalconTransport for UsbTransport {
+    fn kind(&self) -> &'static str {
+        "falcon"
+    }
+
+    fn control(&mut self, request: u8, value: u16) -> Result<(), TransportError> {
+        self.handle()?.control(request, value)
+    }
+
+    fn write(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
+        self.handle()?.write(bytes)
+    }
+
+    fn read(&mut self, buf: &mut [u8], timeout: Duration) -> Result<usize, TransportError> {
+        self.handle()?.read(buf, timeout)
+    }
+
+    fn reopen(&mut self) -> Result<(), TransportError> {
+        // Close first: the interface can be claimed by one handle at a time.
+        self.handle = None;
+        let at = self.at.clone();
+        let info = falcons()
+            .map_err(|e| {
+                TransportError::Disconnected(format!("{at} could not be found again: {e}"))
+            })?
+            .into_iter()
+            .find(|d| d.busnum() == self.bus && d.device_address() == self.address)
+            .ok_or_else(|| {
+                TransportError::Disconnected(format!("{at} vanished while it was reopened"))
+            })?;
+        let handle = Handle::open(&info).map_err(|e| match e {
+            UsbError::NotFound(m) => TransportError::Disconnected(m),
+            other => TransportError::Io(other.to_string()),
+        })?;
+        self.handle = Some(handle);
+        Ok(())
     }
 }
 
