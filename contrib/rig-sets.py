@@ -27,15 +27,18 @@ The physics, briefly:
   from clip to clip (here 50-150 mm/s) and wobbles a little within a clip, so
   a material's peaks sit at different frequencies in different clips.
 - Friction noise: white noise shaped by a material-specific spectral envelope
-  (a power-law tilt and two or three resonances of the stylus/finger on the
-  material), the part of the signal a log spectrum describes well.
+  (a power-law tilt, a smooth +-10 dB colouring over log frequency, and two
+  or three resonances of the stylus/finger on the material), the part of
+  the signal a log spectrum describes well.
 - Contact transients: Poisson-timed impacts (material-specific rate), each a
   decaying ring at one of the material's resonances.
-- Level: the contact force and microphone distance change between clips, a
-  gain drawn per clip (about +-5 dB), so linear power features move by a
-  factor of about 3 for the same material.
-- Fingertip only, "over days": the gain drifts with the trial number (up to
-  about +6 dB by trial 10) and the spectral tilt changes slowly (the skin and
+- Knocks (sound only): about one loud 5 ms broadband click per clip, at a
+  random time, whatever the material. A whole-clip spectrum carries them;
+  most 0.5 s windows do not, so windows that vote outvote them.
+- Level: the contact force and microphone distance change between takes, a
+  gain drawn per take (sound: 2.5 dB standard deviation; fingertip: 2 dB).
+- Fingertip only, "over days": the gain drifts with the trial number (about
+  +6 dB by trial 10) and the spectral tilt changes slowly (the skin and
   sensor coupling), so the last five trials differ from the first five in a
   way no training trial shows in full.
 A sensor noise floor and 16-bit (sound) or integer-count (fingertip)
@@ -58,7 +61,8 @@ def material(rng, f_lo, f_hi):
         "tilt": float(rng.uniform(0.0, 3.0)),
         "res_f": np.exp(rng.uniform(np.log(f_lo), np.log(f_hi), n_res)),
         "res_q": rng.uniform(2.0, 8.0, n_res),
-        "res_gain": rng.uniform(5.0, 40.0, n_res),
+        "res_gain": rng.uniform(2.0, 10.0, n_res),
+        "colour": [(rng.uniform(0.1, 0.6), rng.uniform(1.0, 3.0), rng.uniform(0, 6.3)) for _ in range(4)],
         "taps_per_s": float(rng.uniform(0.5, 4.0)),
     }
 
@@ -67,12 +71,14 @@ def envelope(m, f, f_ref, tilt_change=0.0):
     """The amplitude envelope of the friction noise at frequencies f."""
     f = np.maximum(f, 1.0)
     e = (f / f_ref) ** (-(m["tilt"] + tilt_change) / 2)
+    for a, octaves, phase in m["colour"]:
+        e = e * 10 ** (a / 2 * np.sin(2 * np.pi * np.log2(f) / octaves + phase))
     for fc, q, g in zip(m["res_f"], m["res_q"], m["res_gain"]):
         e = e * (1.0 + g / (1.0 + (q * (f / fc - fc / f)) ** 2))
     return e
 
 
-def take(rng, m, rate, seconds, speed_mm_s, gain, tilt_change=0.0):
+def take(rng, m, rate, seconds, speed_mm_s, gain, tilt_change=0.0, knock=0.0):
     """One clip or trial of material m."""
     n = int(round(rate * seconds))
     t = np.arange(n) / rate
@@ -94,6 +100,12 @@ def take(rng, m, rate, seconds, speed_mm_s, gain, tilt_change=0.0):
         j0 = int(at * rate)
         tt = np.arange(min(n - j0, int(0.05 * rate))) / rate
         taps[j0 : j0 + len(tt)] += rng.uniform(2, 10) * np.exp(-tt * fc / 4) * np.sin(2 * np.pi * fc * tt)
+    # Knocks: the hand bumps the rig now and then, whatever the material: a
+    # few loud broadband clicks per take, at random.
+    for at in rng.uniform(0, seconds, rng.poisson(0.2 * seconds)):
+        j0 = int(at * rate)
+        tt = np.arange(min(n - j0, int(0.005 * rate) + 1)) / rate
+        taps[j0 : j0 + len(tt)] += knock * np.exp(rng.normal(0, 0.5)) * np.exp(-tt / 0.001) * rng.standard_normal(len(tt))
     x = m["periodic"] * periodic + noise + taps
     return gain * x + 0.01 * rng.standard_normal(n)
 
@@ -109,7 +121,7 @@ def sound_set(out, seed):
             crng = np.random.default_rng([seed, 1, i, c])
             speed = crng.uniform(50, 150)
             gain = 10 ** (crng.normal(0, 2.5) / 20)
-            x = take(crng, m, rate, 5.0, speed, gain)
+            x = take(crng, m, rate, 5.0, speed, gain, knock=12.0)
             pcm = np.clip(np.rint(x * 1500), -32768, 32767).astype(np.int16)
             wavfile.write(out / label / f"{label}-clip{c + 1}.wav", rate, pcm)
 
@@ -120,7 +132,7 @@ def fingertip_set(out, seed):
     # The slow drift is the rig's (skin, sensor coupling), shared by all
     # materials recorded that day, plus a little of each trial's own.
     day_tilt = np.cumsum(rng.normal(0.015, 0.01, 10))
-    day_gain_db = np.linspace(0, 8, 10) + rng.normal(0, 1, 10)
+    day_gain_db = np.linspace(0, 6, 10) + rng.normal(0, 1, 10)
     for i in range(20):
         m = material(rng, 40.0, 700.0)
         label = f"F{i + 1:02d}"
