@@ -44,8 +44,10 @@ recording against all others), or stratified k-fold (scikit-learn's folds).
 
 Where hapticlab may differ:
 - features agree to float rounding (about 1e-12 relative; `features --out`
-  prints 10 significant digits); a value near a rounding boundary (a sample
-  exactly half-way between grid points) may go to the other grid point;
+  prints 10 significant digits, so a comparison of the files shows up to
+  1e-9); a sample exactly half-way between grid points, or a bin frequency
+  exactly on a band edge (edges from np.geomspace / np.linspace), may fall
+  on the other side in the last bit;
 - k-fold: hapticlab deals its folds with its own seeded shuffle, so the folds
   and the accuracy differ (the mean over folds agrees within the spread);
   holdout and leave-one-out are the same splits;
@@ -89,7 +91,7 @@ def points(lo, hi, h):
 
 def resample(d, s, lo, h, n):
     """The signal on the grid lo + i h, i < n (see src/analysis.rs)."""
-    u = (d - lo) / h
+    u = (d - lo) * (1.0 / h)  # as hapticlab rounds it: samples half-way between grid points go alike
     keep = (u >= -0.5) & (u < n - 0.5)
     u, s = u[keep], s[keep]
     i = np.floor(u + 0.5).astype(np.int64)
@@ -240,6 +242,8 @@ def main():
     args = p.parse_args()
     profile = tomllib.loads(args.profile.read_text())
     a, c, ev = profile["analysis"], profile["classifier"], profile.get("evaluation", {})
+    if "bands" in a and ("band" in a or a.get("spectrum", "magnitude") == "magnitude" or "bins" in a):
+        sys.exit(f"{args.profile}: bands takes a power spectrum and replaces bins and band")
     if c["k"] == "auto" or "shuffle_seed" in ev or "group_by" in ev:
         sys.exit(f"{args.profile}: k = \"auto\", shuffle_seed and group_by are not supported here")
     started = time.perf_counter()
