@@ -141,7 +141,8 @@ def kept(p, width, a):
         band[f == edges[-1]] = N - 1
         inside = (band >= 0) & (band < N)
         if np.bincount(band[inside], minlength=N).min() == 0:
-            raise ValueError("a band holds no bin")
+            i = int(np.argmin(np.bincount(band[inside], minlength=N)))
+            raise ValueError(f"band {i + 1} [{edges[i]:g}, {edges[i + 1]:g}) holds no bin ({width:g} apart): raise `from`, use fewer bands or longer segments")
         E = np.bincount(band[inside], weights=p[inside], minlength=N)
         L = np.log10(np.maximum(E, FLOOR))
         if "cepstra" in a:
@@ -254,7 +255,10 @@ def main():
         if got is None:
             print(f"skipped (incomplete): {f}", file=sys.stderr)
             continue
-        rows = features(got[0], a)
+        try:
+            rows = features(got[0], a)
+        except ValueError as e:
+            sys.exit(f"{f}: {e}")
         rec += [len(names)] * len(rows)
         names.append(str(f))
         labels.append(got[1])

@@ -58,12 +58,12 @@ windows = { length = 0.5, hop = 0.25 }" "$loo"
 profile sound-bands-windows "$sound
 spectrum = \"log-welch\"
 welch_segment = 2048
-bands = { count = 40, from = 50.0, to = 20000.0 }
+bands = { count = 32, from = 200.0, to = 20000.0 }
 windows = { length = 0.5, hop = 0.25 }" "$loo"
 profile sound-cepstra-windows "$sound
 spectrum = \"log-welch\"
 welch_segment = 2048
-bands = { count = 40, from = 50.0, to = 20000.0 }
+bands = { count = 32, from = 200.0, to = 20000.0 }
 cepstra = 20
 windows = { length = 0.5, hop = 0.25 }" "$loo"
 profile finger-welch "$finger
@@ -80,12 +80,12 @@ bins = [1, 128]" "$split"
 profile finger-bands "$finger
 spectrum = \"log-welch\"
 welch_segment = 256
-bands = { count = 24, from = 20.0, to = 1000.0 }" "$split"
+bands = { count = 16, from = 60.0, to = 1000.0 }" "$split"
 profile finger-cepstra "$finger
 spectrum = \"log-welch\"
 welch_segment = 256
-bands = { count = 24, from = 20.0, to = 1000.0 }
-cepstra = 16" "$split"
+bands = { count = 16, from = 60.0, to = 1000.0 }
+cepstra = 12" "$split"
 printf '%-26s %-22s %s\n' setting reference hapticlab
 for p in "$out"/profiles/*.toml; do
   name=$(basename "$p" .toml)
