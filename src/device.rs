@@ -27,6 +27,8 @@ pub struct LinkStats {
     pub bad_packets: u64,
     /// Ticks on which no reply came in time.
     pub missed_replies: u64,
+    /// Ticks on which the motor commands saturated (scaled together).
+    pub saturated_ticks: u64,
 }
 
 impl LinkStats {
@@ -37,6 +39,7 @@ impl LinkStats {
             replies: self.replies.saturating_sub(earlier.replies),
             bad_packets: self.bad_packets.saturating_sub(earlier.bad_packets),
             missed_replies: self.missed_replies.saturating_sub(earlier.missed_replies),
+            saturated_ticks: self.saturated_ticks.saturating_sub(earlier.saturated_ticks),
         }
     }
 }

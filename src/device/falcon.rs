@@ -130,6 +130,9 @@ pub struct FalconStats {
     pub fk_failures: u64,
     /// Ticks on which a force component was dropped at the workspace's edge.
     pub workspace_clamps: u64,
+    /// Ticks on which a motor command reached ±4095 and all three were
+    /// scaled down together (the force's direction kept, its size not).
+    pub saturated_ticks: u64,
     /// Replies received when homing completed.
     pub homed_after_replies: Option<u64>,
     pub firmware: FirmwareReport,
@@ -368,7 +371,10 @@ impl<T: FalconTransport> HapticDevice for FalconDevice<T> {
                 }
             }
             if let Some(j) = self.solver.jacobian() {
-                self.motor = kinematics::motor_commands(kinematics::torques(j, f));
+                let (motor, saturated) =
+                    kinematics::motor_commands_scaled(kinematics::torques(j, f));
+                self.motor = motor;
+                self.stats.saturated_ticks += u64::from(saturated);
             }
         }
         if !self.awaiting {
@@ -402,6 +408,7 @@ impl<T: FalconTransport> HapticDevice for FalconDevice<T> {
             replies: self.stats.replies,
             bad_packets: self.reader.stats.bad_packets,
             missed_replies: self.stats.missed_replies,
+            saturated_ticks: self.stats.saturated_ticks,
         })
     }
 }

@@ -157,8 +157,8 @@ impl LoopStats {
             self.dropped_telemetry
         ) + &self.link.map_or(String::new(), |l| {
             format!(
-                "; link: {} packets, {} replies, {} bad packets, {} missed replies",
-                l.packets, l.replies, l.bad_packets, l.missed_replies
+                "; link: {} packets, {} replies, {} bad packets, {} missed replies, {} saturated ticks",
+                l.packets, l.replies, l.bad_packets, l.missed_replies, l.saturated_ticks
             )
         })
     }
