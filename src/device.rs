@@ -29,6 +29,8 @@ pub struct LinkStats {
     pub missed_replies: u64,
     /// USB reads that failed and were ridden out (stalls, overflows, timeouts).
     pub usb_errors: u64,
+    /// Ticks on which the motor commands saturated (scaled together).
+    pub saturated_ticks: u64,
 }
 
 impl LinkStats {
@@ -40,6 +42,7 @@ impl LinkStats {
             bad_packets: self.bad_packets.saturating_sub(earlier.bad_packets),
             missed_replies: self.missed_replies.saturating_sub(earlier.missed_replies),
             usb_errors: self.usb_errors.saturating_sub(earlier.usb_errors),
+            saturated_ticks: self.saturated_ticks.saturating_sub(earlier.saturated_ticks),
         }
     }
 }

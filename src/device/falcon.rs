@@ -155,6 +155,9 @@ pub struct FalconStats {
     pub fk_failures: u64,
     /// Ticks on which a force component was dropped at the workspace's edge.
     pub workspace_clamps: u64,
+    /// Ticks on which a motor command reached ±4095 and all three were
+    /// scaled down together (the force's direction kept, its size not).
+    pub saturated_ticks: u64,
     /// Replies received when homing completed.
     pub homed_after_replies: Option<u64>,
     pub firmware: FirmwareReport,
@@ -413,7 +416,10 @@ impl<T: FalconTransport> HapticDevice for FalconDevice<T> {
                 }
             }
             if let Some(j) = self.solver.jacobian() {
-                self.motor = kinematics::motor_commands(kinematics::torques(j, f));
+                let (motor, saturated) =
+                    kinematics::motor_commands_scaled(kinematics::torques(j, f));
+                self.motor = motor;
+                self.stats.saturated_ticks += u64::from(saturated);
             }
         }
         if !self.awaiting {
@@ -448,6 +454,7 @@ impl<T: FalconTransport> HapticDevice for FalconDevice<T> {
             bad_packets: self.reader.stats.bad_packets,
             missed_replies: self.stats.missed_replies,
             usb_errors: self.stats.usb_errors,
+            saturated_ticks: self.stats.saturated_ticks,
         })
     }
 }

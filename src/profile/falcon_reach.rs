@@ -30,7 +30,7 @@ pub const DEFAULT_ENCODER_OFFSET_DEG: f64 = 35.0;
 pub const FALCON_MIN_M: [f64; 3] = [-0.05, -0.05, 0.075];
 pub const FALCON_MAX_M: [f64; 3] = [0.05, 0.05, 0.175];
 /// Where the profile's origin lies in the Falcon's frame unless the profile says.
-pub const DEFAULT_ORIGIN_M: [f64; 3] = [0.0, 0.0, 0.16];
+pub const DEFAULT_ORIGIN_M: [f64; 3] = [0.0, 0.0, 0.15];
 
 pub type Vec3 = [f64; 3];
 
@@ -110,6 +110,34 @@ pub fn in_workspace(p: Vec3) -> bool {
     (0..3).all(|a| p[a] >= FALCON_MIN_M[a] && p[a] <= FALCON_MAX_M[a]) && inverse(p).is_ok()
 }
 
+/// How close (degrees) a waypoint may bring a motor arm to its stops.
+pub const JOINT_MARGIN_DEG: f64 = 5.0;
+
+/// The motor arms' travel, degrees (lowest, highest θ1): the angles on the
+/// axis at the workspace box's ends, grip fully pushed in (z 0.075 m,
+/// ≈ −18.3°) and fully pulled out (z 0.175 m, ≈ 73.5°). The mechanical stops
+/// lie about there; they are not measured on a device.
+pub fn joint_limits_deg() -> (f64, f64) {
+    let at = |z: f64| inverse([0.0, 0.0, z]).map_or(f64::NAN, |a| a.theta1[0].to_degrees());
+    (at(FALCON_MIN_M[2]), at(FALCON_MAX_M[2]))
+}
+
+/// The motor arm nearest its stops at `p` (Falcon frame): (leg, θ1 in
+/// degrees, degrees left before the stop; negative beyond it).
+pub fn joint_clearance(p: Vec3) -> Result<(usize, f64, f64), KinematicsError> {
+    let a = inverse(p)?;
+    let (lo, hi) = joint_limits_deg();
+    let mut worst = (0, 0.0, f64::INFINITY);
+    for (leg, t) in a.theta1.iter().enumerate() {
+        let deg = t.to_degrees();
+        let clearance = (deg - lo).min(hi - deg);
+        if clearance < worst.2 {
+            worst = (leg, deg, clearance);
+        }
+    }
+    Ok(worst)
+}
+
 /// The profile frame ↔ the Falcon's: same axes, shifted origin.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Frame {
@@ -139,5 +167,29 @@ impl Frame {
             p[1] - self.origin_m[1],
             p[2] - self.origin_m[2],
         ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_arms_travel_from_the_pushed_in_to_the_pulled_out_grip() {
+        let (lo, hi) = joint_limits_deg();
+        assert!(
+            (lo - -18.3).abs() < 0.1 && (hi - 73.5).abs() < 0.1,
+            "{lo} {hi}"
+        );
+        // The case: the thesis's waypoint 3 at Falcon z = 0.14 puts
+        // leg 1 at 69.5°, 4° from the stop.
+        let (leg, deg, clearance) = joint_clearance([-0.045, 0.01, 0.14]).unwrap();
+        assert_eq!(leg, 1);
+        assert!(
+            (deg - 69.5).abs() < 0.05 && clearance < JOINT_MARGIN_DEG,
+            "{deg}"
+        );
+        // The workspace's centre is far from both stops.
+        assert!(joint_clearance([0.0, 0.0, 0.12]).unwrap().2 > 30.0);
     }
 }

@@ -522,6 +522,22 @@ pub fn validate(p: &Profile) -> Result<(), Invalid> {
                     ),
                 );
             }
+            if let Ok((leg, deg, clearance)) = falcon_reach::joint_clearance(q)
+                && clearance < falcon_reach::JOINT_MARGIN_DEG
+            {
+                let (lo, hi) = falcon_reach::joint_limits_deg();
+                return bad(
+                    format!("path.waypoints_m[{i}]"),
+                    format!(
+                        "waypoint {} ({:.4}, {:.4}, {:.4}) m puts leg {leg}'s arm at {deg:.1}°, {clearance:.1}° from its stops ({lo:.1}° grip pushed in, {hi:.1}° pulled out; keep {:.0}° clear): move the waypoint inward or `[falcon] origin_m`",
+                        i + 1,
+                        w[0],
+                        w[1],
+                        w[2],
+                        falcon_reach::JOINT_MARGIN_DEG
+                    ),
+                );
+            }
         }
     }
     for (i, t) in p.triggers.iter().enumerate() {

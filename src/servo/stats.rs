@@ -157,8 +157,8 @@ impl LoopStats {
             self.dropped_telemetry
         ) + &self.link.map_or(String::new(), |l| {
             format!(
-                "; link: {} packets, {} replies, {} bad packets, {} missed replies, {} USB errors",
-                l.packets, l.replies, l.bad_packets, l.missed_replies, l.usb_errors
+                "; link: {} packets, {} replies, {} bad packets, {} missed replies, {} USB errors, {} saturated ticks",
+                l.packets, l.replies, l.bad_packets, l.missed_replies, l.usb_errors, l.saturated_ticks
             )
         })
     }

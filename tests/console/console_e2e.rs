@@ -251,7 +251,7 @@ fn fast_emulator_profile(dir: &Path) -> PathBuf {
     let text = std::fs::read_to_string(fast_profile()).unwrap();
     assert!(text.contains("kind = \"sim\""));
     let text = text.replace("kind = \"sim\"", "kind = \"falcon-emulator\"")
-        + "\n[falcon]\norigin_m = [0.0, 0.0, 0.16]\n\n[falcon.emulator]\nfirmware_loaded = true\nauto_home = true\n";
+        + "\n[falcon]\norigin_m = [0.0, 0.0, 0.15]\n\n[falcon.emulator]\nfirmware_loaded = true\nauto_home = true\n";
     let path = dir.join("console-fast-emulator.toml");
     std::fs::write(&path, text).unwrap();
     path

@@ -86,6 +86,15 @@ fn live_lines(app: &App, room: usize) -> Vec<Line<'_>> {
                     t.stats.dropped_telemetry, t.stats.missed_deadlines
                 ),
             ));
+            if let Some(l) = t.stats.link {
+                lines.push(row(
+                    "Link",
+                    format!(
+                        "{} missed replies; {} saturated ticks",
+                        l.missed_replies, l.saturated_ticks
+                    ),
+                ));
+            }
         }
         _ => {
             lines.push(row("Servo", "starting…"));

@@ -29,8 +29,9 @@
 //! The profile's frame (the thesis's): x along the stroke, y vertical and up,
 //! z towards the user. The axes agree; [`Frame`] only shifts the origin:
 //! `profile = falcon − origin`, with `origin` from the profile's
-//! `[falcon] origin_m` (default (0, 0, 0.16): the thesis's waypoints, at
-//! z = −6…−2 cm, land at Falcon z = 0.10…0.14).
+//! `[falcon] origin_m` (default (0, 0, 0.15): the thesis's waypoints, at
+//! z = −6…−2 cm, land at Falcon z = 0.09…0.13, every motor arm at least 8°
+//! from its stops).
 //!
 //! The geometry, the inverse kinematics and the frame live in the profile
 //! (`crate::profile::falcon_reach`), which checks waypoints against the
@@ -129,18 +130,25 @@ pub fn force_of_torques(j: &Mat3, tau: Vec3) -> Result<Vec3, KinematicsError> {
     Ok(mul_transposed(&inv, tau))
 }
 
-/// Motor commands for joint torques: −10000 per N·m, clamped to ±4095.
-pub fn motor_commands(tau: Vec3) -> [i16; 3] {
-    let mut out = [0i16; 3];
-    for (o, t) in out.iter_mut().zip(tau) {
-        let v = (-COMMAND_PER_NM * t).round();
-        *o = if v.is_finite() {
-            v.clamp(-f64::from(MAX_COMMAND), f64::from(MAX_COMMAND)) as i16
-        } else {
-            0
-        };
+/// Motor commands for joint torques: −10000 per N·m. When any command would
+/// exceed ±4095 all three are scaled by the same factor, so the torques keep
+/// their ratios and the force keeps its direction (clamping each motor on its
+/// own would bend it); the second value says whether that happened.
+pub fn motor_commands_scaled(tau: Vec3) -> ([i16; 3], bool) {
+    let raw = tau.map(|t| -COMMAND_PER_NM * t);
+    if raw.iter().any(|v| !v.is_finite()) {
+        return ([0; 3], false);
     }
-    out
+    let max = f64::from(MAX_COMMAND);
+    let peak = raw.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let scale = if peak > max { max / peak } else { 1.0 };
+    let out = raw.map(|v| (v * scale).round().clamp(-max, max) as i16);
+    (out, peak > max)
+}
+
+/// [`motor_commands_scaled`] without the saturation flag.
+pub fn motor_commands(tau: Vec3) -> [i16; 3] {
+    motor_commands_scaled(tau).0
 }
 
 /// The joint torques (N·m) that motor commands produce.
@@ -461,11 +469,76 @@ mod tests {
             (f[1] - 1.0).abs() < 0.01 && f[0].abs() < 0.01 && f[2].abs() < 0.01,
             "{f:?}"
         );
-        // Far beyond the device: every command clamps at ±4095.
-        let cmd = motor_commands(torques(&j, [0.0, 100.0, 0.0]));
+        // Far beyond the device: the largest command is ±4095, the rest scaled with it.
+        let (cmd, saturated) = motor_commands_scaled(torques(&j, [0.0, 100.0, 0.0]));
+        assert!(saturated);
         assert!(cmd.iter().all(|c| c.abs() <= MAX_COMMAND), "{cmd:?}");
         assert!(cmd.iter().any(|c| c.abs() == MAX_COMMAND), "{cmd:?}");
+        assert!(!motor_commands_scaled(torques(&j, [0.0, 1.0, 0.0])).1);
         assert_eq!(motor_commands([f64::NAN, 0.0, 0.0])[0], 0);
+    }
+
+    fn angle_deg(a: Vec3, b: Vec3) -> f64 {
+        let dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let n = |v: Vec3| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        (dot / (n(a) * n(b))).clamp(-1.0, 1.0).acos().to_degrees()
+    }
+
+    proptest::proptest! {
+        /// Anywhere in the workspace, any force up to 60 N: whenever a motor
+        /// saturates, the applied torques point along Jᵀ·F and the force they
+        /// make along F; no command ever exceeds ±4095.
+        #[test]
+        fn saturation_keeps_the_force_direction(
+            fx in 0.0f64..1.0, fy in 0.0f64..1.0, fz in 0.0f64..1.0,
+            dx in -1.0f64..1.0, dy in -1.0f64..1.0, dz in -1.0f64..1.0,
+            magnitude in 0.1f64..60.0,
+        ) {
+            let p = [
+                FALCON_MIN_M[0] + fx * (FALCON_MAX_M[0] - FALCON_MIN_M[0]),
+                FALCON_MIN_M[1] + fy * (FALCON_MAX_M[1] - FALCON_MIN_M[1]),
+                FALCON_MIN_M[2] + fz * (FALCON_MAX_M[2] - FALCON_MIN_M[2]),
+            ];
+            let n = (dx * dx + dy * dy + dz * dz).sqrt();
+            proptest::prop_assume!(n > 0.05);
+            let Ok(a) = inverse(p) else { return Ok(()) };
+            let j = jacobian(&a).unwrap();
+            let f = [dx / n * magnitude, dy / n * magnitude, dz / n * magnitude];
+            let tau = torques(&j, f);
+            let (cmd, saturated) = motor_commands_scaled(tau);
+            proptest::prop_assert!(cmd.iter().all(|c| c.abs() <= MAX_COMMAND), "{:?}", cmd);
+            let peak = tau.iter().fold(0.0f64, |m, t| m.max((COMMAND_PER_NM * t).abs()));
+            proptest::prop_assert_eq!(saturated, peak > f64::from(MAX_COMMAND));
+            if saturated {
+                proptest::prop_assert!(cmd.iter().any(|c| c.abs() == MAX_COMMAND), "{:?}", cmd);
+                let applied = torques_of_commands(cmd);
+                let t_err = angle_deg(applied, tau);
+                proptest::prop_assert!(t_err < 0.05, "torques bent by {}° at {:?}", t_err, p);
+                let f_applied = force_of_torques(&j, applied).unwrap();
+                let f_err = angle_deg(f_applied, f);
+                proptest::prop_assert!(f_err < 0.5, "force bent by {}° at {:?}", f_err, p);
+            }
+        }
+    }
+
+    #[test]
+    fn clamping_each_motor_alone_would_bend_the_force() {
+        // The case the scaling exists for: one motor far past the limit, the
+        // others not. Clamped one by one, the force would turn by degrees.
+        let a = inverse([0.0, 0.0, 0.11]).unwrap();
+        let j = jacobian(&a).unwrap();
+        let f = [20.0, 5.0, 0.0];
+        let tau = torques(&j, f);
+        let clamped = tau.map(|t| {
+            let m = f64::from(MAX_COMMAND);
+            -(-COMMAND_PER_NM * t).clamp(-m, m) / COMMAND_PER_NM
+        });
+        let bent = angle_deg(force_of_torques(&j, clamped).unwrap(), f);
+        assert!(bent > 1.0, "{bent}");
+        let (cmd, saturated) = motor_commands_scaled(tau);
+        assert!(saturated);
+        let kept = angle_deg(force_of_torques(&j, torques_of_commands(cmd)).unwrap(), f);
+        assert!(kept < 0.1, "{kept}");
     }
 
     #[test]
