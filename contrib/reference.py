@@ -146,7 +146,8 @@ def kept(p, width, a):
         E = np.bincount(band[inside], weights=p[inside], minlength=N)
         L = np.log10(np.maximum(E, FLOOR))
         if "cepstra" in a:
-            return fft.dct(L, type=2, norm="ortho")[: a["cepstra"]]
+            c = fft.dct(L, type=2, norm="ortho")[: a["cepstra"]]
+            return c[1:] if a.get("drop_level", False) else c
         return L if kind.startswith("log") else E
     if kind.startswith("log"):
         p = np.log10(np.maximum(p, FLOOR))

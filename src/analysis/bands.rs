@@ -23,7 +23,8 @@ impl BandFeatures {
         let n = b.count;
         let m = settings.cepstra.unwrap_or(0);
         let mut dct = Vec::with_capacity(m * n);
-        for j in 0..m {
+        // c_0 (the level) left out with `drop_level`.
+        for j in usize::from(settings.drop_level)..m {
             let s = if j == 0 {
                 (1.0 / n as f64).sqrt()
             } else {
@@ -332,6 +333,15 @@ mod tests {
                 &want,
                 &format!("cepstra {kind:?}"),
             );
+            // drop_level leaves out c_0 and keeps c_1..c_8.
+            s.drop_level = true;
+            let mut fx = FeatureExtractor::new(&s);
+            close(
+                fx.features(&t, &v).unwrap(),
+                &want[1..],
+                &format!("cepstra without c_0 {kind:?}"),
+            );
+            s.drop_level = false;
             // All 16 coefficients keep all the information: the DCT inverts.
             s.cepstra = Some(16);
             let mut fx = FeatureExtractor::new(&s);
@@ -342,6 +352,35 @@ mod tests {
                 "orthonormal"
             );
         }
+    }
+
+    #[test]
+    fn without_c0_the_cepstra_do_not_see_a_gain() {
+        let n = 1200;
+        let (t, v) = texture(n);
+        let mut s = timed(n, SpectrumKind::LogWelch);
+        s.welch_segment = Some(400);
+        s.bands = Some(Bands {
+            count: 16,
+            from: 50.0,
+            to: 4000.0,
+            scale: BandScale::Log,
+        });
+        s.cepstra = Some(9);
+        s.drop_level = true;
+        crate::profile::check_options(&s).unwrap();
+        let mut fx = FeatureExtractor::new(&s);
+        let quiet = fx.features(&t, &v).unwrap().to_vec();
+        let louder: Vec<f64> = v.iter().map(|x| 3.0 * x).collect();
+        let loud = fx.features(&t, &louder).unwrap().to_vec();
+        assert_eq!(quiet.len(), 8);
+        close(&loud, &quiet, "a gain of 3");
+        // With c_0 kept, the gain shows: c_0 moves by sqrt(N) log10(9).
+        s.drop_level = false;
+        let mut fx = FeatureExtractor::new(&s);
+        let mut c0 = |x: &[f64]| fx.features(&t, x).unwrap()[0];
+        let shift = c0(&louder) - c0(&v);
+        assert!((shift - 4.0 * 9f64.log10()).abs() < 1e-9, "{shift}");
     }
 
     #[test]

@@ -124,6 +124,13 @@ impl Model {
         if m.cepstra != p.cepstra {
             return differ("analysis.cepstra", json(&m.cepstra), json(&p.cepstra));
         }
+        if m.drop_level != p.drop_level {
+            return differ(
+                "analysis.drop_level",
+                json(&m.drop_level),
+                json(&p.drop_level),
+            );
+        }
         if m.bins != p.bins && m.band.is_none() && m.bands.is_none() {
             return differ("analysis.bins", json(&m.bins), json(&p.bins));
         }

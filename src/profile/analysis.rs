@@ -173,6 +173,11 @@ pub struct Analysis {
     /// band energies instead of the energies themselves (as MFCCs).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cepstra: Option<usize>,
+    /// Drop c_0, the cepstrum's level term (the mean log band energy), and
+    /// keep c_1..c_{cepstra-1}: a gain that drifts between trials moves
+    /// only c_0, so without it the features do not see the drift.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub drop_level: bool,
 
     // --- Sub-windows (issue 13 part 3) ---
     /// Cut the window into sub-windows `length` long every `hop` (axis
@@ -288,6 +293,7 @@ impl Default for Analysis {
             welch_overlap: None,
             bands: None,
             cepstra: None,
+            drop_level: false,
             windows: None,
         }
     }
@@ -415,7 +421,7 @@ impl Analysis {
     /// Features per channel.
     pub fn features_per_channel(&self) -> usize {
         if let Some(m) = self.cepstra {
-            return m;
+            return m - usize::from(self.drop_level);
         }
         if let Some(b) = self.bands {
             return b.count;
@@ -490,6 +496,12 @@ pub fn check_options(s: &Analysis) -> Result<(), (String, String)> {
 fn check_bands(s: &Analysis) -> Result<(), (String, String)> {
     let bad = |key: &str, reason: String| Err((format!("analysis.{key}"), reason));
     let Some(b) = s.bands else {
+        if s.drop_level {
+            return bad(
+                "drop_level",
+                "needs `bands` and `cepstra` (it drops the cepstra's c_0)".into(),
+            );
+        }
         if s.cepstra.is_some() {
             return bad(
                 "cepstra",
@@ -553,6 +565,22 @@ fn check_bands(s: &Analysis) -> Result<(), (String, String)> {
             "cepstra",
             format!("must be 1 to bands.count ({}), got {m}", b.count),
         );
+    }
+    match s.cepstra {
+        None if s.drop_level => {
+            return bad(
+                "drop_level",
+                "needs `cepstra` (it drops the cepstra's c_0)".into(),
+            );
+        }
+        Some(1) if s.drop_level => {
+            return bad(
+                "drop_level",
+                "needs cepstra >= 2: with cepstra = 1 only c_0 is kept, and it would be dropped"
+                    .into(),
+            );
+        }
+        _ => {}
     }
     Ok(())
 }
