@@ -267,6 +267,21 @@ impl Entry {
                 source,
             })
     }
+
+    /// The feature vectors of each sub-window of a kept scan
+    /// ([`Keep::Samples`]) under other analysis settings with the same
+    /// channels, in window order (the window alone without `windows`).
+    pub fn window_features_with(
+        &self,
+        ex: &mut FeatureExtractor,
+    ) -> Result<Vec<Vec<f64>>, DatasetError> {
+        let signals: Vec<&[f64]> = self.signals.iter().map(Vec::as_slice).collect();
+        ex.all_window_features(&self.axis, &signals)
+            .map_err(|source| DatasetError::Analysis {
+                file: self.file.clone(),
+                source,
+            })
+    }
 }
 
 /// A recording [`load`] left out, and why.

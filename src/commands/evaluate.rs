@@ -17,11 +17,11 @@ use clap::Args;
 use crate::classify::Model;
 use crate::dataset::meta_text;
 use crate::dataset::{self, Keep, Options, Unusable};
-use crate::evaluate::plan::{Dataset, Overrides, Plan, validate};
+use crate::evaluate::plan::{Dataset, Overrides, Plan, validate_with_votes};
 use crate::evaluate::sweep::{
     SimPlan, parse_sweep, resolve_key, simulated_dataset, sweep, sweep_simulated,
 };
-use crate::evaluate::{self, EvaluateError};
+use crate::evaluate::{self, EvaluateError, windows};
 use crate::profile::SplitMethod;
 use crate::support::{
     Failure, ProfileArg, bad, find_recordings, load_examples_on, load_profile, progress_bar,
@@ -126,12 +126,16 @@ fn holdout(
     if shuffle_seed.is_some() {
         eval.shuffle_seed = shuffle_seed;
     }
-    let split = evaluate::split(examples, &eval).map_err(|e| match e {
+    let not_enough = |e: EvaluateError| match e {
         EvaluateError::NotEnough { .. } => {
             bad(format!("{e}; cross-validate instead (--folds 5 or --loo)"))
         }
         e => bad(e),
-    })?;
+    };
+    if lp.profile.analysis.windows.is_some() {
+        return holdout_windows(&lp.profile, examples, &eval, json, not_enough);
+    }
+    let split = evaluate::split(examples, &eval).map_err(not_enough)?;
     let model = Model::train_adapting_k(
         &lp.profile.name,
         &lp.profile.analysis,
@@ -160,6 +164,63 @@ fn holdout(
         crate::outp!("{}", report.table());
     }
     Ok(())
+}
+
+/// The holdout with `[analysis] windows`: whole recordings on each side
+/// (the ones the split picks without windows), the model trained on every
+/// sub-window of the training recordings, each test recording classified
+/// by its sub-windows' vote; `--json` adds each one's votes (`windows`).
+fn holdout_windows(
+    profile: &crate::profile::Profile,
+    examples: Vec<crate::classify::TrainingExample>,
+    eval: &crate::profile::Evaluation,
+    json: bool,
+    not_enough: impl Fn(EvaluateError) -> Failure,
+) -> Result<(), Failure> {
+    let recs = windows::recordings_of(examples, None).map_err(bad)?;
+    let (train, test) = windows::split_recordings(&recs, eval).map_err(not_enough)?;
+    let model = Model::train_adapting_k(
+        &profile.name,
+        &profile.analysis,
+        &profile.classifier,
+        windows::window_examples(&train),
+    )
+    .map_err(bad)?;
+    if let Some(note) = model.k_notice() {
+        crate::errln!("note: {note}");
+    }
+    let report = windows::evaluate_recordings(&model, &test).map_err(bad)?;
+    if json {
+        crate::outln!("{}", serde_json::to_string(&report).map_err(runtime)?);
+    } else {
+        let used = train.iter().chain(&test);
+        crate::outln!(
+            "profile {}: k-NN k = {}, {} training and {} test recordings per class{}; {}, classified by the vote of their windows",
+            profile.name,
+            profile.classifier.k_text(),
+            eval.train_per_class,
+            eval.test_per_class,
+            eval.shuffle_seed
+                .map_or(" (file-name order)".into(), |s| format!(
+                    " (shuffled, seed {s})"
+                )),
+            recordings_and_windows(
+                train.len() + test.len(),
+                used.map(|r| r.windows.len()).sum()
+            )
+        );
+        crate::outp!("{}", report.report.table());
+    }
+    Ok(())
+}
+
+/// "40 recordings, 120 windows".
+fn recordings_and_windows(recordings: usize, windows: usize) -> String {
+    format!(
+        "{}, {}",
+        crate::classify::plural(recordings, "recording", "recordings"),
+        crate::classify::plural(windows, "window", "windows")
+    )
 }
 
 /// `hapticlab evaluate` with cross-validation, a sweep, or simulated data.
@@ -298,14 +359,26 @@ fn validated(
         d?
     };
     warn_skipped(&data.skipped);
+    // With sub-windows kept as features, the scans are windows.
+    let (n_recordings, n_scans) = data.counts();
+    let windows_held = if lp.profile.analysis.windows.is_some() && keep == Keep::Features {
+        format!(
+            ", {}",
+            crate::classify::plural(n_scans, "window", "windows")
+        )
+    } else {
+        String::new()
+    };
     let source = if args.simulate {
         format!(
-            "{} simulated recordings (seed {})",
-            data.scans.len(),
+            "{n_recordings} simulated recordings{windows_held} (seed {})",
             lp.profile.simulator.seed
         )
     } else {
-        crate::classify::plural(data.scans.len(), "recording", "recordings")
+        format!(
+            "{}{windows_held}",
+            crate::classify::plural(n_recordings, "recording", "recordings")
+        )
     };
     if let Some((_, key, _, values)) = &sweep_spec {
         let s = sweep(&lp.profile, &data, key, values, &plan, &|_| {})?;
@@ -328,16 +401,17 @@ fn validated(
         None => None,
     };
     let examples = data.examples(&lp.profile.analysis)?;
-    let report = validate(&lp.profile, examples, groups.as_deref(), &plan)?;
+    let validated = validate_with_votes(&lp.profile, examples, groups.as_deref(), &plan)?;
+    let report = &validated.report;
     let notice = report.k_notice();
     if let Some(n) = &notice {
         crate::errln!("note: {n}");
     }
     if json {
-        crate::outln!("{}", serde_json::to_string(&report).map_err(bad)?);
+        crate::outln!("{}", serde_json::to_string(&validated).map_err(bad)?);
     } else {
         crate::outln!(
-            "profile {}: k-NN k = {}{} ({:?}, {:?} votes{}), {}, {source}",
+            "profile {}: k-NN k = {}{} ({:?}, {:?} votes{}), {}, {source}{}",
             lp.profile.name,
             lp.profile.classifier.k_text(),
             if notice.is_some() {
@@ -353,6 +427,11 @@ fn validated(
                 ""
             },
             plan.describe(),
+            if validated.windows.is_some() {
+                ", each recording classified by the vote of its windows"
+            } else {
+                ""
+            },
         );
         crate::outp!("{}", report.table());
     }

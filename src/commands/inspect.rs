@@ -9,8 +9,10 @@
 //! `median + t · 1.4826 · MAD` (t = 3 by default; 1.4826 · MAD estimates a
 //! standard deviation robustly, so one wild scan cannot hide itself by
 //! inflating the spread), on the scale `d^(2/3)` where the skewed distances
-//! are close to symmetric ([`robust_threshold`]). [`outliers`] is pure; the
-//! command reads files.
+//! are close to symmetric ([`robust_threshold`]). With `[analysis]
+//! windows` the spread and thresholds are over sub-windows and a recording
+//! is an outlier when most of its sub-windows are. [`outliers`] is pure;
+//! the command reads files.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -271,7 +273,10 @@ pub fn run(a: InspectArgs) -> Result<(), Failure> {
         }
     }
     let examples = loaded.into_examples();
-    let (classes, outliers) = outliers(&examples, threshold);
+    let (mut classes, mut outliers) = outliers(&examples, threshold);
+    if lp.profile.analysis.windows.is_some() {
+        (classes, outliers) = by_recording(&examples, classes, outliers);
+    }
     let report = Inspection {
         files: files.len(),
         classes,
@@ -290,6 +295,46 @@ pub fn run(a: InspectArgs) -> Result<(), Failure> {
         crate::outp!("{}", report.text());
     }
     Ok(())
+}
+
+/// With `[analysis] windows` the statistics are over sub-windows (the
+/// examples, a recording's consecutive); this counts each class's
+/// recordings and keeps as outliers the recordings most of whose
+/// sub-windows are (the vote), each with its farthest flagged sub-window.
+fn by_recording(
+    examples: &[TrainingExample],
+    mut classes: Vec<ClassHealth>,
+    window_outliers: Vec<Outlier>,
+) -> (Vec<ClassHealth>, Vec<Outlier>) {
+    let mut windows: BTreeMap<&str, usize> = BTreeMap::new();
+    for e in examples {
+        *windows.entry(&e.file).or_default() += 1;
+    }
+    for c in &mut classes {
+        c.recordings = examples
+            .iter()
+            .enumerate()
+            .filter(|(i, e)| e.label == c.label && (*i == 0 || examples[i - 1].file != e.file))
+            .count();
+    }
+    let mut flagged: BTreeMap<String, Vec<Outlier>> = BTreeMap::new();
+    for o in window_outliers {
+        flagged.entry(o.file.clone()).or_default().push(o);
+    }
+    let mut out: Vec<Outlier> = flagged
+        .into_iter()
+        .filter(|(file, w)| 2 * w.len() > windows.get(file.as_str()).copied().unwrap_or(0))
+        .filter_map(|(_, w)| {
+            w.into_iter()
+                .max_by(|a, b| a.distance.total_cmp(&b.distance))
+        })
+        .collect();
+    out.sort_by(|a, b| {
+        a.label
+            .cmp(&b.label)
+            .then(b.distance.total_cmp(&a.distance))
+    });
+    (classes, out)
 }
 
 #[cfg(test)]
@@ -378,6 +423,34 @@ mod tests {
                 100.0 * flagged
             );
         }
+    }
+
+    /// A recording is an outlier when most of its sub-windows are; classes
+    /// count recordings, not sub-windows.
+    #[test]
+    fn with_windows_a_recording_is_an_outlier_by_the_vote_of_its_windows() {
+        let mut v = Vec::new();
+        for i in 0..20 {
+            let j = (i * 7 % 5) as f64 * 0.01;
+            for w in 0..3 {
+                let (a, b) = if i == 0 && w < 2 || i == 1 && w == 0 {
+                    (3.0, 0.0)
+                } else {
+                    (1.0 + j, 2.0 - j)
+                };
+                v.push(ex(&format!("a{i}"), "A", vec![a, b]));
+                v.push(ex(&format!("b{i}"), "B", vec![5.0 - j, 1.0 + j]));
+            }
+        }
+        // Each recording's windows consecutive, as the loader gives them.
+        v.sort_by(|x, y| x.file.cmp(&y.file));
+        let (health, out) = outliers(&v, 3.0);
+        assert_eq!(out.len(), 3, "{out:?}");
+        let (health, out) = by_recording(&v, health, out);
+        assert_eq!(out.len(), 1, "{out:?}");
+        assert_eq!(out[0].file, "a0");
+        assert_eq!(health[0].recordings, 20);
+        assert_eq!(health[1].recordings, 20);
     }
 
     #[test]

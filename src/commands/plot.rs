@@ -8,7 +8,8 @@
 //! - `confusion REPORT.json`: the confusion matrix of `evaluate --json` as a
 //!   grey heat map with the counts written in;
 //! - `features PATH… --per-class N`: the features of N recordings of each
-//!   class, one panel per class (Fig 4.3);
+//!   class, one panel per class (Fig 4.3); with `[analysis] windows`, each
+//!   recording's first sub-window;
 //! - `sweep SWEEP.json`: accuracy against the swept value from
 //!   `evaluate --sweep … --json`, with the spread across folds.
 //!
@@ -56,7 +57,7 @@ pub enum Figure {
         #[arg(value_name = "REPORT.json")]
         report: PathBuf,
     },
-    /// The features of N recordings per class (Fig 4.3).
+    /// The features of N recordings per class (Fig 4.3); with `[analysis] windows`, each one's first window.
     Features {
         #[command(flatten)]
         profile: ProfileArg,
@@ -273,7 +274,13 @@ impl Data {
                     let _ = writeln!(std::io::stderr(), "warning: {skipped}");
                 }
                 let mut classes: Vec<(String, Vec<Vec<f64>>)> = Vec::new();
-                for e in loaded.entries {
+                // With `[analysis] windows`, each recording's first
+                // sub-window stands for it (one line per recording).
+                for e in loaded
+                    .entries
+                    .into_iter()
+                    .filter(|e| e.window.unwrap_or(0) == 0)
+                {
                     let i = match classes.iter().position(|(l, _)| *l == e.label) {
                         Some(i) => i,
                         None => {

@@ -317,8 +317,12 @@ pub fn evaluation_plan(lp: &LoadedProfile, examples: &[TrainingExample]) -> (Pla
     let mut plan = Plan::new(&lp.profile, &Overrides::default());
     plan.threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let mut counts: std::collections::BTreeMap<&str, usize> = std::collections::BTreeMap::new();
-    for e in examples {
-        *counts.entry(e.label.as_str()).or_default() += 1;
+    // Recordings, not sub-windows: with `[analysis] windows` a recording's
+    // examples are consecutive and share its file.
+    for (i, e) in examples.iter().enumerate() {
+        if i == 0 || examples[i - 1].file != e.file {
+            *counts.entry(e.label.as_str()).or_default() += 1;
+        }
     }
     let Some((label, fewest)) =
         counts
@@ -330,6 +334,7 @@ pub fn evaluation_plan(lp: &LoadedProfile, examples: &[TrainingExample]) -> (Pla
     else {
         return (plan, None);
     };
+    let recordings: usize = counts.values().sum();
     let e = &lp.profile.evaluation;
     let why = match plan.method {
         SplitMethod::Holdout if fewest < e.train_per_class + e.test_per_class => format!(
@@ -338,11 +343,11 @@ pub fn evaluation_plan(lp: &LoadedProfile, examples: &[TrainingExample]) -> (Pla
             e.train_per_class,
             e.test_per_class
         ),
-        SplitMethod::KFold if plan.group_by.is_none() && plan.folds > examples.len() => format!(
+        SplitMethod::KFold if plan.group_by.is_none() && plan.folds > recordings => format!(
             "{}-fold cross-validation needs at least {}, there are {}",
             plan.folds,
             crate::classify::plural(plan.folds, "recording", "recordings"),
-            examples.len()
+            recordings
         ),
         _ => return (plan, None),
     };

@@ -3,12 +3,18 @@
 //! validation asked for ([`Plan`]: holdout, k-fold, leave-one-out, grouped
 //! folds; from the profile's `[evaluation]` and the command's
 //! [`Overrides`]), and [`validate`], which runs it into a [`CvReport`].
+//! With `[analysis] windows`, [`validate`] splits by recording and
+//! classifies each test recording by its sub-windows' vote
+//! ([`super::windows`]); [`validate_with_votes`] also hands back the votes.
 //! Like the rest of `evaluate`, this never prints and knows no front end.
 
 use std::path::PathBuf;
 
+use serde::Serialize;
+
 use super::EvaluateError;
 use super::cv::{self, CvReport};
+use super::windows::{self as win, RecordingVote};
 use crate::analysis::FeatureExtractor;
 use crate::classify::TrainingExample;
 use crate::dataset::Unusable;
@@ -86,7 +92,9 @@ impl Dataset {
 
     /// The feature vectors under `analysis`: the kept ones when it is the
     /// analysis they were made under, else extracted again from the kept
-    /// columns (whose channels must be `analysis`'s).
+    /// columns (whose channels must be `analysis`'s). With `[analysis]
+    /// windows`, one per sub-window, a recording's consecutive (as
+    /// [`dataset::load`] gives them).
     pub fn examples(&self, analysis: &Analysis) -> Result<Vec<TrainingExample>, EvaluateError> {
         if self.keep == Keep::Features {
             if *analysis != self.analysis {
@@ -95,6 +103,19 @@ impl Dataset {
             return Ok(self.scans.iter().map(Entry::example).collect());
         }
         let mut fx = FeatureExtractor::try_new(analysis).map_err(bad)?;
+        if analysis.windows.is_some() {
+            let mut out = Vec::new();
+            for s in &self.scans {
+                for features in s.window_features_with(&mut fx)? {
+                    out.push(TrainingExample {
+                        file: s.file.clone(),
+                        label: s.label.clone(),
+                        features,
+                    });
+                }
+            }
+            return Ok(out);
+        }
         self.scans
             .iter()
             .map(|s| {
@@ -105,6 +126,19 @@ impl Dataset {
                 })
             })
             .collect()
+    }
+
+    /// The recordings held (each counted once, however many sub-windows it
+    /// has) and the feature vectors (one per sub-window with `[analysis]
+    /// windows` and [`Keep::Features`], else one per recording).
+    pub fn counts(&self) -> (usize, usize) {
+        let recordings = self
+            .scans
+            .iter()
+            .enumerate()
+            .filter(|(i, s)| *i == 0 || self.scans[i - 1].file != s.file)
+            .count();
+        (recordings, self.scans.len())
     }
 
     /// Each scan's value of a metadata key; a scan without it is an error.
@@ -182,8 +216,87 @@ impl Plan {
     }
 }
 
-/// Validate `profile`'s classifier on `examples` as `plan` says.
+/// A validation's report and, with `[analysis] windows`, each test
+/// recording's sub-window votes (in test order). Its JSON is the
+/// [`CvReport`]'s, plus `windows` when there are sub-windows.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Validated {
+    #[serde(flatten)]
+    pub report: CvReport,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub windows: Option<Vec<RecordingVote>>,
+}
+
+/// Validate `profile`'s classifier on `examples` as `plan` says. With
+/// `[analysis] windows` the examples are sub-windows ([`Dataset::examples`])
+/// and `groups` holds one value per example or per recording: every split
+/// is made over recordings and each test recording is classified by its
+/// sub-windows' vote, as [`validate_with_votes`] does.
 pub fn validate(
+    profile: &Profile,
+    examples: Vec<TrainingExample>,
+    groups: Option<&[String]>,
+    plan: &Plan,
+) -> Result<CvReport, EvaluateError> {
+    validate_with_votes(profile, examples, groups, plan).map(|v| v.report)
+}
+
+/// [`validate`], with the sub-window votes of each test recording when the
+/// profile cuts recordings into sub-windows.
+pub fn validate_with_votes(
+    profile: &Profile,
+    examples: Vec<TrainingExample>,
+    groups: Option<&[String]>,
+    plan: &Plan,
+) -> Result<Validated, EvaluateError> {
+    if profile.analysis.windows.is_some() {
+        return validate_windows(profile, examples, groups, plan);
+    }
+    validate_plain(profile, examples, groups, plan).map(|report| Validated {
+        report,
+        windows: None,
+    })
+}
+
+/// Every method over recordings, never over sub-windows: the splits of
+/// [`win::split_recordings`] and [`win::recording_folds`], then
+/// [`win::cross_validate_recordings`].
+fn validate_windows(
+    profile: &Profile,
+    examples: Vec<TrainingExample>,
+    groups: Option<&[String]>,
+    plan: &Plan,
+) -> Result<Validated, EvaluateError> {
+    let recs = win::recordings_of(examples, groups)?;
+    let (recs, folds, method, threads) = if plan.method == SplitMethod::Holdout {
+        let mut eval = profile.evaluation.clone();
+        eval.shuffle_seed = plan.holdout_shuffle;
+        let (mut all, test) = win::split_recordings(&recs, &eval)?;
+        let n_train = all.len();
+        all.extend(test);
+        let folds = vec![(n_train..all.len()).collect()];
+        (all, folds, "holdout".to_string(), 1)
+    } else {
+        let folds = win::recording_folds(&recs, plan.method, plan.folds, plan.seed)?;
+        (recs, folds, plan.describe(), plan.threads)
+    };
+    let r = win::cross_validate_recordings(
+        &recs,
+        &folds,
+        &profile.name,
+        &profile.analysis,
+        &profile.classifier,
+        &method,
+        plan.seed,
+        threads,
+    )?;
+    Ok(Validated {
+        report: r.report,
+        windows: Some(r.windows),
+    })
+}
+
+fn validate_plain(
     profile: &Profile,
     examples: Vec<TrainingExample>,
     groups: Option<&[String]>,

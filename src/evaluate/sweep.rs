@@ -441,7 +441,8 @@ fn point(value: &toml::Value, r: &CvReport, data: &Dataset) -> SweepPoint {
         macro_f1: r.macro_f1,
         k: r.folds.iter().map(|f| f.k).collect(),
         k_notice: r.k_notice(),
-        recordings: data.scans.len(),
+        // Recordings, not sub-windows.
+        recordings: data.counts().0,
         incomplete: data.skipped.len(),
         error: None,
     }

@@ -50,6 +50,53 @@ pub fn recordings(entries: &[Entry], group_by: Option<&str>) -> Vec<WindowedReco
     out
 }
 
+/// The recordings of examples as [`crate::dataset`] gives them under
+/// `[analysis] windows` (one per sub-window, a recording's consecutive and
+/// named by its file), in the same order. `groups`, when given, holds the
+/// `group_by` value of each example or of each recording; a recording's
+/// sub-windows share their recording's value. Any other count of groups is
+/// an error.
+pub fn recordings_of(
+    examples: Vec<TrainingExample>,
+    groups: Option<&[String]>,
+) -> Result<Vec<WindowedRecording>, EvaluateError> {
+    let n_examples = examples.len();
+    let mut out: Vec<WindowedRecording> = Vec::new();
+    let mut first_example = Vec::new();
+    for (i, e) in examples.into_iter().enumerate() {
+        match out.last_mut() {
+            Some(r) if r.file == e.file => r.windows.push(e.features),
+            _ => {
+                first_example.push(i);
+                out.push(WindowedRecording {
+                    file: e.file,
+                    label: e.label,
+                    group: None,
+                    windows: vec![e.features],
+                });
+            }
+        }
+    }
+    if let Some(g) = groups {
+        let pick: Vec<usize> = if g.len() == n_examples {
+            first_example
+        } else if g.len() == out.len() {
+            (0..out.len()).collect()
+        } else {
+            return Err(EvaluateError::Input(format!(
+                "{} group values for {} recordings ({} windows)",
+                g.len(),
+                out.len(),
+                n_examples
+            )));
+        };
+        for (r, i) in out.iter_mut().zip(pick) {
+            r.group = Some(g[i].clone());
+        }
+    }
+    Ok(out)
+}
+
 /// One training example per sub-window of each recording, recording by
 /// recording, each named by its recording's file.
 pub fn window_examples<'a>(
@@ -498,6 +545,44 @@ mod thesis_tests {
         assert_eq!(recs.len(), files.len());
         assert!(recs.iter().all(|r| r.windows.len() == 3));
         (profile, recs)
+    }
+
+    /// A sweep over an `[analysis]` key keeps the samples and extracts
+    /// again: with windows, the same sub-window examples as loading the
+    /// features, and `validate` votes over them by recording.
+    #[test]
+    fn kept_samples_give_the_loaded_sub_windows_and_validate_votes_by_recording() {
+        use crate::evaluate::plan::{Dataset, Overrides, Plan, validate_with_votes};
+        let (profile, recs) = thesis_windows();
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("recordings/thesis-sim");
+        let a = &profile.analysis;
+        let samples =
+            Dataset::load(std::slice::from_ref(&dir), a, dataset::Keep::Samples, 2).unwrap();
+        let features = Dataset::load(&[dir], a, dataset::Keep::Features, 2).unwrap();
+        assert_eq!(samples.counts(), (recs.len(), recs.len()));
+        assert_eq!(features.counts(), (recs.len(), 3 * recs.len()));
+        let from_samples = samples.examples(a).unwrap();
+        assert_eq!(from_samples, features.examples(a).unwrap());
+        assert_eq!(from_samples, window_examples(&recs));
+        // Groups given per recording or per sub-window: the same folds.
+        let plan = Plan::new(
+            &profile,
+            &Overrides {
+                folds: Some(4),
+                group_by: Some("seed".into()),
+                ..Overrides::default()
+            },
+        );
+        let per_rec = samples.groups("seed").unwrap();
+        let per_window = features.groups("seed").unwrap();
+        let one =
+            validate_with_votes(&profile, from_samples.clone(), Some(&per_rec), &plan).unwrap();
+        let two =
+            validate_with_votes(&profile, from_samples.clone(), Some(&per_window), &plan).unwrap();
+        assert_eq!(one, two);
+        assert_eq!(one.report.report.tested(), recs.len());
+        assert_eq!(one.windows.as_ref().map(Vec::len), Some(recs.len()));
+        assert!(validate_with_votes(&profile, from_samples, Some(&per_rec[1..]), &plan).is_err());
     }
 
     #[test]

@@ -7,6 +7,7 @@ mod common;
 
 mod cli;
 mod doctor;
+mod evaluate_windows;
 mod falcon_emulator;
 mod faults;
 mod first_session;
