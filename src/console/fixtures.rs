@@ -57,6 +57,7 @@ pub fn scan_view(with_prediction: bool) -> ScanView {
                     })
                     .collect(),
             },
+            windows: None,
             left_out: false,
         }));
     }
