@@ -55,6 +55,9 @@ pub struct Estimate {
     t0: f64,
     /// Samples the vote last saw.
     seen: usize,
+    /// Sub-windows classified once the scan ended and the vote was
+    /// finished (the vote is spent then).
+    finished: usize,
     /// Each sub-window's `[start, end]` along the axis.
     pub sub_windows: Vec<[f64; 2]>,
     /// The analysis axis, for its unit.
@@ -104,6 +107,7 @@ impl Estimate {
             sources,
             t0: first.t_s,
             seen: 0,
+            finished: 0,
             sub_windows: a.sub_windows(),
             axis: a.axis.clone(),
             current: None,
@@ -116,7 +120,7 @@ impl Estimate {
 
     /// One more sample of the scan (a telemetry frame with `scanning` set).
     pub fn push(&mut self, t: &Telemetry) {
-        if self.vote.is_none() {
+        if self.vote.is_none() || !self.running {
             return;
         }
         for (col, s) in self.columns.iter_mut().zip(&self.sources) {
@@ -135,7 +139,9 @@ impl Estimate {
 
     /// Sub-windows completed and classified so far.
     pub fn completed(&self) -> usize {
-        self.vote.as_ref().map_or(0, LiveVote::completed)
+        self.vote
+            .as_ref()
+            .map_or(self.finished, LiveVote::completed)
     }
 
     /// Samples gathered so far.
@@ -144,19 +150,33 @@ impl Estimate {
     }
 
     /// Once a frame: classify the sub-windows completed since the last
-    /// call. Whether the vote changed.
+    /// call; once the scan has ended, the ones still open (the last ends
+    /// with the stroke), so the vote covers every sub-window. Whether the
+    /// vote changed.
     pub fn update(&mut self) -> bool {
         let n = self.samples();
-        if n == self.seen || self.error.is_some() {
+        if self.error.is_some() || (self.running && n == self.seen) {
             return false;
         }
         self.seen = n;
-        let Some(vote) = self.vote.as_mut() else {
-            return false;
+        let (axis, signals) = match self.columns.split_first() {
+            Some((axis, signals)) if !axis.is_empty() => (axis, signals),
+            _ => return false,
         };
-        let (axis, signals) = self.columns.split_first().expect("the axis is a column");
         let signals: Vec<&[f64]> = signals.iter().map(Vec::as_slice).collect();
-        match vote.update(axis, &signals) {
+        let done = if self.running {
+            let Some(vote) = self.vote.as_mut() else {
+                return false;
+            };
+            vote.update(axis, &signals)
+        } else {
+            let Some(vote) = self.vote.take() else {
+                return false;
+            };
+            self.finished = self.windows();
+            vote.finish(axis, &signals).map(Some)
+        };
+        match done {
             Ok(Some(p)) => {
                 self.current = Some(p);
                 true
@@ -171,14 +191,4 @@ impl Estimate {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn every_recorder_column_has_its_telemetry_value() {
-        for c in crate::recorder::COLUMNS {
-            assert!(source(c).is_some(), "{c}");
-        }
-        assert_eq!(source("pac"), None);
-    }
-}
+mod tests;
