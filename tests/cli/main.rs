@@ -6,6 +6,7 @@
 mod common;
 
 mod cli;
+mod console_windows;
 mod doctor;
 mod falcon_emulator;
 mod faults;
