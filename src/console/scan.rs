@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 use crate::analysis::FeatureExtractor;
 use crate::classify::{Model, Prediction, RecordingPrediction};
+use crate::profile::{Analysis, SpectrumKind};
 use crate::recording::Recording;
 
 /// Points kept of the trace for drawing (a scan has ~9000 samples).
@@ -35,7 +36,13 @@ pub struct ScanView {
     /// The feature vector (of the first sub-window when the analysis cuts
     /// several), or why there is none.
     pub features: Result<Vec<f64>, String>,
+    /// The first DFT bin kept (from `bins` or `band`).
     pub first_bin: usize,
+    /// What each feature is, for labels.
+    pub names: FeatureNames,
+    /// The channels whose features follow one another (`channel`, then
+    /// `channels`), each `features.len() / channels.len()` long.
+    pub channels: Vec<String>,
     /// Each sub-window's feature vector, in window order, when the analysis
     /// has `[analysis] windows` (`None` without): what a model that votes
     /// over sub-windows classifies.
@@ -44,6 +51,44 @@ pub struct ScanView {
     pub prediction: Option<Result<PredictionView, String>>,
     /// Stored into the dataset (its final path), or still unsaved.
     pub stored: Option<PathBuf>,
+}
+
+/// What a scan's features are, channel by channel (the Spectrum panel's
+/// labels).
+#[derive(Debug, Clone, PartialEq)]
+pub enum FeatureNames {
+    /// DFT bins from `first_bin` on; `value` says what a bin holds.
+    Bins { value: &'static str },
+    /// Band energies: band `i` from `edges[i]` to `edges[i + 1]`, in `unit`.
+    Bands {
+        edges: Vec<f64>,
+        unit: &'static str,
+        value: &'static str,
+    },
+    /// Cepstral coefficients `c0, c1, …` of the log band energies.
+    Cepstra,
+}
+
+impl FeatureNames {
+    /// The names of an analysis's features.
+    pub fn of(s: &Analysis) -> FeatureNames {
+        let log = s.spectrum.is_log();
+        match s.bands {
+            Some(_) if s.cepstra.is_some() => FeatureNames::Cepstra,
+            Some(b) => FeatureNames::Bands {
+                edges: b.edges(),
+                unit: s.frequency_unit(),
+                value: if log { "log10 energy" } else { "energy" },
+            },
+            None => FeatureNames::Bins {
+                value: match s.spectrum {
+                    SpectrumKind::Magnitude => "|X|",
+                    SpectrumKind::Power | SpectrumKind::Welch => "power",
+                    SpectrumKind::LogPower | SpectrumKind::LogWelch => "log10 power",
+                },
+            },
+        }
+    }
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -133,7 +178,9 @@ pub fn analyse(rec: &Recording, path: &Path, ex: &mut FeatureExtractor) -> ScanV
         trace,
         window: [s.window[0] * ascale, s.window[1] * ascale],
         features,
-        first_bin: s.bins[0],
+        first_bin: s.kept_bins()[0],
+        names: FeatureNames::of(&s),
+        channels: s.all_channels().map(str::to_string).collect(),
         windows,
         prediction: None,
         stored: None,
