@@ -69,10 +69,15 @@ fn titles(s: &ScanView, f: &[f64], per: usize, peak_i: usize) -> Vec<String> {
     let peak = f[peak_i];
     let several = s.channels.len() > 1;
     let (ch, k) = (peak_i / per, peak_i % per);
+    // With sub-windows the features shown are the first one's.
+    let sub = match &s.windows {
+        Some(Ok(w)) if w.len() > 1 => format!(", sub-window 1 of {}", w.len()),
+        _ => String::new(),
+    };
     let of = if several {
-        format!(" of {}", s.channels.join(", "))
+        format!(" of {}{sub}", s.channels.join(", "))
     } else {
-        String::new()
+        sub
     };
     // Which channel the peak is in, when there are several.
     let in_ch = if several {

@@ -469,3 +469,16 @@ fn bins_of_two_channels_name_the_channel_of_the_peak() {
         "{s}"
     );
 }
+
+#[test]
+fn with_sub_windows_the_spectrum_says_which_it_shows() {
+    let app = spectrum_under(|a| {
+        a.bins = [1, 24];
+        a.windows = Some(crate::profile::Windows {
+            length: 0.0147,
+            hop: 0.005,
+        });
+    });
+    let s = panel(Panel::Spectrum, &app, 100, 8);
+    assert!(s.contains("bins 1–24, sub-window 1 of 4"), "{s}");
+}
