@@ -65,8 +65,9 @@ pub enum FeatureNames {
         unit: &'static str,
         value: &'static str,
     },
-    /// Cepstral coefficients `c0, c1, …` of the log band energies.
-    Cepstra,
+    /// Cepstral coefficients `c<first>, …` of the log band energies
+    /// (`first` is 1 when the level term c0 is dropped).
+    Cepstra { first: usize },
 }
 
 impl FeatureNames {
@@ -74,7 +75,13 @@ impl FeatureNames {
     pub fn of(s: &Analysis) -> FeatureNames {
         let log = s.spectrum.is_log();
         match s.bands {
-            Some(_) if s.cepstra.is_some() => FeatureNames::Cepstra,
+            Some(_) if s.cepstra.is_some() => FeatureNames::Cepstra {
+                // Those kept are the last of the `cepstra` coefficients.
+                first: s
+                    .cepstra
+                    .unwrap_or(0)
+                    .saturating_sub(s.features_per_channel()),
+            },
             Some(b) => FeatureNames::Bands {
                 edges: b.edges(),
                 unit: s.frequency_unit(),

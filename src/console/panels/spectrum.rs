@@ -1,7 +1,7 @@
 //! The Spectrum panel: bars of the scan's features, every bar the same
 //! width, labelled by what they are — DFT bins (|X_k|, power or its log),
 //! band energies with their frequency range, or cepstral coefficients
-//! c0…; with several channels, each channel's features in turn, named
+//! (c0…, or c1… without the level term); with several channels, each channel's features in turn, named
 //! under their first bar. Bars rise from zero, or from the smallest
 //! feature when some are negative (log spectra, cepstra). The strongest
 //! bin or band is named in words.
@@ -49,7 +49,7 @@ fn value_text(names: &FeatureNames, v: f64) -> String {
         FeatureNames::Bins { value } | FeatureNames::Bands { value, .. } => {
             format!("{value} {v:.2e}")
         }
-        FeatureNames::Cepstra => format!("{v:.2}"),
+        FeatureNames::Cepstra { .. } => format!("{v:.2}"),
     }
 }
 
@@ -59,7 +59,7 @@ fn name(s: &ScanView, i: usize) -> String {
     match &s.names {
         FeatureNames::Bins { .. } => format!("{}", s.first_bin + i),
         FeatureNames::Bands { edges, .. } => short(edges[i]),
-        FeatureNames::Cepstra => format!("c{i}"),
+        FeatureNames::Cepstra { first } => format!("c{}", first + i),
     }
 }
 
@@ -115,12 +115,15 @@ fn titles(s: &ScanView, f: &[f64], per: usize, peak_i: usize) -> Vec<String> {
                 "Bands".into(),
             ]
         }
-        FeatureNames::Cepstra => vec![
-            format!("Cepstra: c0–c{} of the log band energies{of}", per - 1),
-            format!("Cepstra: c0–c{}{of}", per - 1),
-            format!("Cepstra: c0–c{}", per - 1),
-            "Cepstra".into(),
-        ],
+        FeatureNames::Cepstra { first } => {
+            let range = format!("c{first}–c{}", first + per - 1);
+            vec![
+                format!("Cepstra: {range} of the log band energies{of}"),
+                format!("Cepstra: {range}{of}"),
+                format!("Cepstra: {range}"),
+                "Cepstra".into(),
+            ]
+        }
     }
 }
 
@@ -236,7 +239,7 @@ fn render_view(s: &ScanView, area: Rect, buf: &mut Buffer) {
     } else {
         put(inner.x, name(s, 0));
     }
-    if !matches!(s.names, FeatureNames::Cepstra) {
+    if !matches!(s.names, FeatureNames::Cepstra { .. }) {
         put(
             left(peak_i / per_col),
             format!("^{}", name(s, peak_i % per)),
