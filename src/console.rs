@@ -17,6 +17,7 @@
 
 pub mod app;
 pub mod dataset;
+pub mod estimate;
 pub mod event;
 pub mod feed;
 #[doc(hidden)]
@@ -280,8 +281,8 @@ fn open_recording(app: &mut App, i: usize) {
         Ok(rec) => {
             let mut ex = FeatureExtractor::new(&lp.profile.analysis);
             let mut view = scan::analyse(&rec, &path, &mut ex);
-            if let (Some(m), Ok(f)) = (&model, &view.features) {
-                view.prediction = Some(scan::predict(m, f, &path));
+            if let Some(m) = &model {
+                view.prediction = scan::predict_view(m, &view);
             }
             r.player = Some(replay::Player::new(&rec));
             r.scan = Some(view);
@@ -435,9 +436,8 @@ pub fn execute(
                 None => app.last_scan.as_mut(),
             };
             if let (Some(m), Some(s)) = (model, target)
-                && let Ok(f) = &s.features
+                && let Some(p) = scan::predict_view(&m, s)
             {
-                let p = scan::predict(&m, f, &s.path);
                 let text = match &p {
                     Ok(pv) => format!("predicted {}", pv.prediction.label),
                     Err(e) => format!("no prediction: {e}"),

@@ -13,6 +13,8 @@
 //! did not match), so the final result never depends on when the updates
 //! came. Never prints; allocates only per completed sub-window.
 
+use std::borrow::Borrow;
+
 use crate::analysis::FeatureExtractor;
 use crate::classify::{ClassifyError, Model, RecordingPrediction, WindowVote, vote};
 
@@ -26,9 +28,11 @@ pub enum LiveError {
 }
 
 /// The running vote of a scan in progress (see the module documentation).
+/// `M` is the model, borrowed (`&Model`) or owned (`Model`), so a front end
+/// can keep a live vote beside the model it was started with.
 #[derive(Debug)]
-pub struct LiveVote<'m> {
-    model: &'m Model,
+pub struct LiveVote<M: Borrow<Model>> {
+    model: M,
     ex: FeatureExtractor,
     /// Per completed sub-window (in window order): its vote and the buffer
     /// length it was analysed on.
@@ -46,12 +50,12 @@ fn direction(axis: &[f64]) -> f64 {
     }
 }
 
-impl<'m> LiveVote<'m> {
+impl<M: Borrow<Model>> LiveVote<M> {
     /// A live vote for the model's analysis settings.
-    pub fn new(model: &'m Model) -> Result<Self, LiveError> {
+    pub fn new(model: M) -> Result<Self, LiveError> {
         Ok(LiveVote {
+            ex: FeatureExtractor::try_new(&model.borrow().analysis)?,
             model,
-            ex: FeatureExtractor::try_new(&model.analysis)?,
             done: Vec::new(),
             direction: Vec::new(),
         })
@@ -81,7 +85,7 @@ impl<'m> LiveVote<'m> {
         };
         let dir = direction(axis);
         let reached = dir * (last - origin);
-        let half = 0.5 * self.model.analysis.spacing;
+        let half = 0.5 * self.model.borrow().analysis.spacing;
         let before = self.done.len();
         while self.done.len() < self.windows() {
             let j = self.done.len();
@@ -101,7 +105,7 @@ impl<'m> LiveVote<'m> {
         dir: f64,
     ) -> Result<(), LiveError> {
         let f = self.ex.window_features(j, axis, signals)?;
-        let p = self.model.classify(f)?;
+        let p = self.model.borrow().classify(f)?;
         let v = WindowVote {
             window: j,
             label: p.label,
@@ -138,7 +142,7 @@ impl<'m> LiveVote<'m> {
     ) -> Result<RecordingPrediction, LiveError> {
         let dir = direction(axis);
         let origin = axis.first().copied().unwrap_or(0.0);
-        let half = 0.5 * self.model.analysis.spacing;
+        let half = 0.5 * self.model.borrow().analysis.spacing;
         for j in 0..self.done.len() {
             let [s, e] = self.ex.sub_windows()[j];
             let cut = self.done[j].1;

@@ -23,6 +23,7 @@ use crate::profile::{LoadedProfile, WORKSPACE_MAX_M, WORKSPACE_MIN_M, check_labe
 use crate::servo::Mode;
 
 use super::dataset::DatasetView;
+use super::estimate::Estimate;
 use super::feed::Feed;
 use super::form::{Form, FormKind, FormOutcome, Overlay};
 use super::keymap::{Key, KeyMap};
@@ -113,6 +114,9 @@ pub struct App {
     /// quitting now asks too.
     pub scan_saving: bool,
     pub last_scan: Option<ScanView>,
+    /// The live estimate of the scan running (or just ended, until its
+    /// file comes back), when the model votes over sub-windows.
+    pub estimate: Option<Estimate>,
     /// The last scan was left unstored by an earlier session: `w` stores
     /// it, but quitting does not ask about it again.
     pub last_scan_earlier: bool,
@@ -156,6 +160,7 @@ impl App {
             scan_running: false,
             scan_saving: false,
             last_scan: None,
+            estimate: None,
             last_scan_earlier: false,
             dataset: DatasetView {
                 dir: dataset,
@@ -203,6 +208,12 @@ impl App {
         } else {
             &self.live
         }
+    }
+
+    /// The live estimate the Prediction panel shows instead of the last
+    /// scan's prediction (none while a replay is open).
+    pub fn live_estimate(&self) -> Option<&Estimate> {
+        self.estimate.as_ref().filter(|_| self.replay.is_none())
     }
 
     /// The scan the analysis panels show.

@@ -287,9 +287,8 @@ impl Jobs {
                     let rec = recording::read(&path).ok();
                     let label = rec.as_ref().and_then(|r| r.label().map(str::to_string));
                     let predicted = match (&rec, &model) {
-                        (Some(r), Some(m)) => dataset::features_of(r, &path, &mut ex)
+                        (Some(r), Some(m)) => super::scan::predict_recording(m, r, &path, &mut ex)
                             .ok()
-                            .and_then(|f| super::scan::predict(m, &f, &path).ok())
                             .map(|p| p.prediction.label),
                         _ => None,
                     };

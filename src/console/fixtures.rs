@@ -19,8 +19,17 @@ use super::scan::{PredictionView, ScanView, analyse};
 
 /// A synthetic S2-like scan: a 90 mm stroke over a 4.24 mm period.
 pub fn scan_view(with_prediction: bool) -> ScanView {
-    let lp = LoadedProfile::thesis();
-    let mut ex = FeatureExtractor::new(&lp.profile.analysis);
+    let mut v = scan_view_under(&LoadedProfile::thesis().profile.analysis);
+    if with_prediction {
+        v.prediction = Some(Ok(prediction()));
+    }
+    v
+}
+
+/// The synthetic scan of [`scan_view`] analysed under `analysis` (its
+/// recording also has `fy_n`, the contact force over the corrugation).
+pub fn scan_view_under(analysis: &crate::profile::Analysis) -> ScanView {
+    let mut ex = FeatureExtractor::new(analysis);
     let n = 9000;
     let x: Vec<f64> = (0..n)
         .map(|i| -0.045 + 0.0897 * i as f64 / (n - 1) as f64)
@@ -30,37 +39,43 @@ pub fn scan_view(with_prediction: bool) -> ScanView {
         .map(|x| -0.0048 + 0.0004 * ((x + 0.045) * 2.0 * std::f64::consts::PI / 0.00424).sin())
         .collect();
     let t: Vec<f64> = (0..n).map(|i| i as f64 * 0.001).collect();
+    let fy: Vec<f64> = x
+        .iter()
+        .map(|x| -0.216 + 0.05 * ((x + 0.045) * 2.0 * std::f64::consts::PI / 0.00424).cos())
+        .collect();
     let rec = Recording {
         path: None,
         meta: vec![("label".into(), toml::Value::String("S2".into()))],
-        columns: vec!["t_s".into(), "x_m".into(), "y_m".into()],
-        data: vec![t, x, y],
+        columns: vec!["t_s".into(), "x_m".into(), "y_m".into(), "fy_n".into()],
+        data: vec![t, x, y, fy],
         trailer_samples: Some(n),
         torn_last_row: false,
     };
-    let mut v = analyse(&rec, Path::new("ds/.unsaved/scan-001.csv"), &mut ex);
-    if with_prediction {
-        v.prediction = Some(Ok(PredictionView {
-            prediction: Prediction {
-                label: "S2".into(),
-                votes: vec![
-                    ("S2".into(), 9),
-                    ("S3".into(), 1),
-                    ("S1".into(), 0),
-                    ("S4".into(), 0),
-                ],
-                neighbours: (0..10)
-                    .map(|i| Neighbour {
-                        file: format!("ds/S2/S2_{:03}.csv", i + 1),
-                        label: if i == 7 { "S3".into() } else { "S2".into() },
-                        distance: 1.0e-3 * (1.0 + i as f64 * 0.1),
-                    })
-                    .collect(),
-            },
-            left_out: false,
-        }));
+    analyse(&rec, Path::new("ds/.unsaved/scan-001.csv"), &mut ex)
+}
+
+/// The prediction the panel snapshots show: S2 by 9 votes of 10.
+fn prediction() -> PredictionView {
+    PredictionView {
+        prediction: Prediction {
+            label: "S2".into(),
+            votes: vec![
+                ("S2".into(), 9),
+                ("S3".into(), 1),
+                ("S1".into(), 0),
+                ("S4".into(), 0),
+            ],
+            neighbours: (0..10)
+                .map(|i| Neighbour {
+                    file: format!("ds/S2/S2_{:03}.csv", i + 1),
+                    label: if i == 7 { "S3".into() } else { "S2".into() },
+                    distance: 1.0e-3 * (1.0 + i as f64 * 0.1),
+                })
+                .collect(),
+        },
+        windows: None,
+        left_out: false,
     }
-    v
 }
 
 /// Telemetry at time `t_s` of a stroke along x over a corrugated surface.

@@ -181,6 +181,8 @@ impl Lab {
         for t in h.telemetry.try_iter() {
             app.on_telemetry(&t);
         }
+        // The live estimate: only the sub-windows completed this frame.
+        app.update_estimate();
         for e in h.events.try_iter() {
             if let servo::ServoEvent::MotionStopped { reason } = &e {
                 self.last_stop = Some(reason.clone());

@@ -8,7 +8,8 @@
 use std::path::{Path, PathBuf};
 
 use crate::analysis::FeatureExtractor;
-use crate::classify::{Model, Prediction};
+use crate::classify::{Model, Prediction, RecordingPrediction};
+use crate::profile::{Analysis, SpectrumKind};
 use crate::recording::Recording;
 
 /// Points kept of the trace for drawing (a scan has ~9000 samples).
@@ -32,20 +33,102 @@ pub struct ScanView {
     pub trace: Vec<(f64, f64)>,
     /// The analysis window in the same units.
     pub window: [f64; 2],
-    /// The feature bins (|X_k| for k = first_bin..), or why there are none.
+    /// The feature vector (of the first sub-window when the analysis cuts
+    /// several), or why there is none.
     pub features: Result<Vec<f64>, String>,
+    /// The first DFT bin kept (from `bins` or `band`).
     pub first_bin: usize,
+    /// What each feature is, for labels.
+    pub names: FeatureNames,
+    /// The channels whose features follow one another (`channel`, then
+    /// `channels`), each `features.len() / channels.len()` long.
+    pub channels: Vec<String>,
+    /// Each sub-window's feature vector, in window order, when the analysis
+    /// has `[analysis] windows` (`None` without): what a model that votes
+    /// over sub-windows classifies.
+    pub windows: Option<Result<Vec<Vec<f64>>, String>>,
     /// Set by `p`, or by the replay browser.
     pub prediction: Option<Result<PredictionView, String>>,
     /// Stored into the dataset (its final path), or still unsaved.
     pub stored: Option<PathBuf>,
 }
 
+/// What a scan's features are, channel by channel (the Spectrum panel's
+/// labels).
+#[derive(Debug, Clone, PartialEq)]
+pub enum FeatureNames {
+    /// DFT bins from `first_bin` on; `value` says what a bin holds.
+    Bins { value: &'static str },
+    /// Band energies: band `i` from `edges[i]` to `edges[i + 1]`, in `unit`.
+    Bands {
+        edges: Vec<f64>,
+        unit: &'static str,
+        value: &'static str,
+    },
+    /// Cepstral coefficients `c<first>, …` of the log band energies
+    /// (`first` is 1 when the level term c0 is dropped).
+    Cepstra { first: usize },
+}
+
+impl FeatureNames {
+    /// The names of an analysis's features.
+    pub fn of(s: &Analysis) -> FeatureNames {
+        let log = s.spectrum.is_log();
+        match s.bands {
+            Some(_) if s.cepstra.is_some() => FeatureNames::Cepstra {
+                // Those kept are the last of the `cepstra` coefficients.
+                first: s
+                    .cepstra
+                    .unwrap_or(0)
+                    .saturating_sub(s.features_per_channel()),
+            },
+            Some(b) => FeatureNames::Bands {
+                edges: b.edges(),
+                unit: s.frequency_unit(),
+                value: if log { "log10 energy" } else { "energy" },
+            },
+            None => FeatureNames::Bins {
+                value: match s.spectrum {
+                    SpectrumKind::Magnitude => "|X|",
+                    SpectrumKind::Power | SpectrumKind::Welch => "power",
+                    SpectrumKind::LogPower | SpectrumKind::LogWelch => "log10 power",
+                },
+            },
+        }
+    }
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub struct PredictionView {
+    /// The prediction. For a model that votes over sub-windows it is the
+    /// recording's vote in the shape `classify --json` gives it: the label
+    /// and, as votes, the sub-windows that chose each class; no neighbours
+    /// (they are per sub-window).
     pub prediction: Prediction,
+    /// The vote over sub-windows, with its tally and each sub-window's
+    /// outcome, when the model has `[analysis] windows`.
+    pub windows: Option<RecordingPrediction>,
     /// The recording was one of the training examples and was left out.
     pub left_out: bool,
+}
+
+impl PredictionView {
+    /// A recording's vote over its sub-windows, as the view holds it.
+    pub fn of_windows(p: RecordingPrediction, left_out: bool) -> PredictionView {
+        PredictionView {
+            prediction: Prediction {
+                label: p.label.clone(),
+                votes: p
+                    .tally
+                    .iter()
+                    .map(|t| (t.label.clone(), t.windows))
+                    .collect(),
+                neighbours: Vec::new(),
+            },
+            windows: Some(p),
+            left_out,
+        }
+    }
 }
 
 /// Display scale and unit of a column: metres as mm, the rest as is.
@@ -82,8 +165,13 @@ pub fn analyse(rec: &Recording, path: &Path, ex: &mut FeatureExtractor) -> ScanV
         .map(|j| (dir * (axis[j] - axis[0]) * ascale, signal[j] * sscale))
         .collect();
     // The features `train` and `classify` make: every channel the
-    // analysis reads, through the one loader's `features_of`.
+    // analysis reads, through the one loader's `features_of` (and
+    // `window_features_of` for each sub-window).
     let features = crate::dataset::features_of(rec, path, ex).map_err(|e| e.to_string());
+    let windows = s
+        .windows
+        .is_some()
+        .then(|| crate::dataset::window_features_of(rec, path, ex).map_err(|e| e.to_string()));
     let t = rec.column("t_s").unwrap_or(&[]);
     ScanView {
         path: path.to_path_buf(),
@@ -97,7 +185,10 @@ pub fn analyse(rec: &Recording, path: &Path, ex: &mut FeatureExtractor) -> ScanV
         trace,
         window: [s.window[0] * ascale, s.window[1] * ascale],
         features,
-        first_bin: s.bins[0],
+        first_bin: s.kept_bins()[0],
+        names: FeatureNames::of(&s),
+        channels: s.all_channels().map(str::to_string).collect(),
+        windows,
         prediction: None,
         stored: None,
     }
@@ -120,10 +211,12 @@ pub fn newest_unsaved(dataset: &Path, ex: &mut FeatureExtractor) -> Option<ScanV
     Some(analyse(&rec, &newest, ex))
 }
 
-/// Classify features with `model`; a recording that is one of the model's
-/// training examples is left out of it first (leave-one-out), so replaying
-/// a training set does not find each scan as its own nearest neighbour.
-pub fn predict(model: &Model, features: &[f64], file: &Path) -> Result<PredictionView, String> {
+/// The model to classify `file` with: `model` itself, or, when the
+/// recording is one of its training examples (every sub-window of it, with
+/// `[analysis] windows`), `model` trained again without it (leave-one-out),
+/// so replaying a training set does not find each scan as its own nearest
+/// neighbour. `Some` only in the second case.
+fn leaving_out(model: &Model, file: &Path) -> Result<Option<Model>, String> {
     let name = file.display().to_string();
     let canonical = std::fs::canonicalize(file).ok();
     let same = |f: &str| {
@@ -132,33 +225,92 @@ pub fn predict(model: &Model, features: &[f64], file: &Path) -> Result<Predictio
                 .as_ref()
                 .is_some_and(|c| std::fs::canonicalize(f).ok().as_ref() == Some(c))
     };
-    if model.examples.iter().any(|e| same(&e.file)) {
-        let rest: Vec<_> = model
-            .examples
-            .iter()
-            .filter(|e| !same(&e.file))
-            .cloned()
-            .collect();
-        // k as the profile asked, chosen again without this recording
-        // where the profile's k needed choosing: no leak of the test scan.
-        let reduced = Model::train_adapting_k(
-            &model.profile,
-            &model.analysis,
-            &model.asked_classifier(),
-            rest,
-        )
-        .map_err(|e| e.to_string())?;
-        let prediction = reduced.classify(features).map_err(|e| e.to_string())?;
-        return Ok(PredictionView {
-            prediction,
-            left_out: true,
-        });
+    if !model.examples.iter().any(|e| same(&e.file)) {
+        return Ok(None);
     }
-    let prediction = model.classify(features).map_err(|e| e.to_string())?;
+    let rest: Vec<_> = model
+        .examples
+        .iter()
+        .filter(|e| !same(&e.file))
+        .cloned()
+        .collect();
+    // k as the profile asked, chosen again without this recording where
+    // the profile's k needed choosing: no leak of the test scan.
+    Model::train_adapting_k(
+        &model.profile,
+        &model.analysis,
+        &model.asked_classifier(),
+        rest,
+    )
+    .map(Some)
+    .map_err(|e| e.to_string())
+}
+
+/// Classify features with `model` (leaving the recording out of it when it
+/// is one of its training examples, see [`leaving_out`]).
+pub fn predict(model: &Model, features: &[f64], file: &Path) -> Result<PredictionView, String> {
+    let reduced = leaving_out(model, file)?;
+    let prediction = reduced
+        .as_ref()
+        .unwrap_or(model)
+        .classify(features)
+        .map_err(|e| e.to_string())?;
     Ok(PredictionView {
         prediction,
-        left_out: false,
+        windows: None,
+        left_out: reduced.is_some(),
     })
+}
+
+/// Classify a recording by the vote of its sub-windows' feature vectors
+/// ([`Model::classify_windows`], as `classify` does), leaving it out of
+/// the model as [`predict`] does.
+pub fn predict_windows(
+    model: &Model,
+    windows: &[Vec<f64>],
+    file: &Path,
+) -> Result<PredictionView, String> {
+    let reduced = leaving_out(model, file)?;
+    let p = reduced
+        .as_ref()
+        .unwrap_or(model)
+        .classify_windows(windows)
+        .map_err(|e| e.to_string())?;
+    Ok(PredictionView::of_windows(p, reduced.is_some()))
+}
+
+/// Classify the scan on screen as `classify` would its recording: by the
+/// vote of its sub-windows when the model has `[analysis] windows`, else
+/// by its features. `None` when there is nothing to classify (the scan
+/// has no features; the view says why).
+pub fn predict_view(model: &Model, view: &ScanView) -> Option<Result<PredictionView, String>> {
+    if model.analysis.windows.is_some() {
+        return Some(match &view.windows {
+            Some(Ok(w)) => predict_windows(model, w, &view.path),
+            Some(Err(e)) => Err(e.clone()),
+            None => Err(
+                "the model votes over sub-windows but the profile has no [analysis] windows".into(),
+            ),
+        });
+    }
+    let f = view.features.as_ref().ok()?;
+    Some(predict(model, f, &view.path))
+}
+
+/// Classify a stored recording as [`predict_view`] does its view (for the
+/// replay browser's list): its sub-windows' vote or its features.
+pub fn predict_recording(
+    model: &Model,
+    rec: &Recording,
+    file: &Path,
+    ex: &mut FeatureExtractor,
+) -> Result<PredictionView, String> {
+    if model.analysis.windows.is_some() {
+        let w = crate::dataset::window_features_of(rec, file, ex).map_err(|e| e.to_string())?;
+        return predict_windows(model, &w, file);
+    }
+    let f = crate::dataset::features_of(rec, file, ex).map_err(|e| e.to_string())?;
+    predict(model, &f, file)
 }
 
 #[cfg(test)]

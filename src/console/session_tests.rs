@@ -398,3 +398,143 @@ fn a_whole_session_queue_train_predict_replay_quit() {
         insta::assert_snapshot!(name, find(name));
     }
 }
+
+/// The live lab, recording after each frame how many sub-windows the live
+/// estimate had classified while its scan ran.
+struct FollowedLab {
+    watched: WatchedLab,
+    followed: Rc<RefCell<Vec<usize>>>,
+}
+
+impl LabPort for FollowedLab {
+    fn drain(&mut self, app: &mut App) -> Vec<super::app::Action> {
+        let actions = self.watched.drain(app);
+        if let Some(e) = app.estimate.as_ref().filter(|e| e.running) {
+            self.followed.borrow_mut().push(e.completed());
+        }
+        actions
+    }
+    fn send(&self, c: Command) {
+        self.watched.send(c);
+    }
+    fn start_scan(&mut self, label: &str) -> PathBuf {
+        self.watched.start_scan(label)
+    }
+    fn mount(&mut self, texture: &str, app: &mut App) -> Result<(), String> {
+        self.watched.mount(texture, app)
+    }
+    fn texture(&self) -> Option<String> {
+        self.watched.texture()
+    }
+}
+
+/// With `[analysis] windows` and a trained model, a scan is followed live
+/// (the servo's telemetry, drained once a frame, feeding the vote) and ends
+/// predicted without a key: the stored recording's vote, as `classify`
+/// makes it.
+#[test]
+fn a_scan_under_sub_windows_is_followed_live_and_ends_predicted_as_classify_says() {
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path().join("ds");
+    let mut lp = LoadedProfile::load(Path::new("tests/data/console-fast.toml")).unwrap();
+    // Three 7.5 mm sub-windows every 3.6 mm of the 14.7 mm window.
+    lp.profile.analysis.bins = [1, 12];
+    lp.profile.analysis.windows = Some(crate::profile::Windows {
+        length: 0.0075,
+        hop: 0.0036,
+    });
+    assert_eq!(lp.profile.analysis.sub_windows().len(), 3);
+    // Scans to train on, simulated in virtual time.
+    let opts = crate::acquire::SimulateOptions {
+        out: ds.clone(),
+        per_class: 4,
+        seed: 7,
+        threads: 2,
+        gzip: false,
+        overwrite: false,
+    };
+    crate::acquire::simulate_dataset(&lp, &opts, &|_, _| {}).unwrap();
+    let keymap = KeyMap::from_settings(&lp.profile.console).unwrap();
+    let mut app = App::new(
+        lp.clone(),
+        keymap,
+        Source::Live {
+            backend: "sim".into(),
+        },
+        ds.clone(),
+    );
+    let lab = Lab::start(&lp, &ds, Some("S1")).unwrap();
+    app.mounted = lab.texture.clone();
+    refresh_dataset(&mut app);
+    assert_eq!(stored(&app, "S1"), 4);
+
+    let steps = vec![
+        until("the device homed", |a: &App| {
+            a.live.latest.is_some_and(|t| t.homed)
+        }),
+        keys("T"),
+        until("the model trained", |a: &App| {
+            a.model.is_some() && a.dataset.busy.is_none()
+        }),
+        keys("s"),
+        until("the scan ended and predicted from its file", |a: &App| {
+            !a.scan_busy()
+                && !a.scan_saving
+                && a.last_scan.as_ref().is_some_and(|s| s.prediction.is_some())
+        }),
+        // Store it under its label (the form's default).
+        keys("w\r"),
+        until("the scan stored", |a: &App| stored(a, "S1") == 5),
+        keys("q"),
+    ];
+    let script = Rc::new(RefCell::new(Script {
+        steps: steps.into(),
+        ..Script::default()
+    }));
+    let followed = Rc::new(RefCell::new(Vec::new()));
+    let mut lab = FollowedLab {
+        watched: WatchedLab {
+            lab,
+            script: script.clone(),
+        },
+        followed: followed.clone(),
+    };
+    let mut events = ScriptedKeys(script.clone());
+    let mut terminal = Terminal::new(TestBackend::new(120, 40)).unwrap();
+    let jobs = Jobs::default();
+    let ending = run_loop(
+        &mut terminal,
+        &mut app,
+        Some(&mut lab),
+        &mut events,
+        &jobs,
+        &Signals::unraised(),
+    );
+    lab.watched.lab.shutdown(&ending.stop_reason());
+    assert_eq!(ending, Ending::Quit);
+    assert!(
+        script.borrow().steps.is_empty(),
+        "the script ran to its end"
+    );
+
+    // Followed while it ran: frames saw the vote grow, never shrink.
+    let followed = followed.borrow();
+    assert!(!followed.is_empty(), "no frame saw the scan running");
+    assert!(followed.windows(2).all(|w| w[0] <= w[1]), "{followed:?}");
+    assert!(followed.iter().all(|&n| n <= 3), "{followed:?}");
+
+    // The prediction shown is `classify`'s for the stored file.
+    let model = app.model.as_ref().unwrap();
+    assert!(model.analysis.windows.is_some());
+    let s = app.last_scan.as_ref().unwrap();
+    let file = s.stored.clone().expect("stored");
+    let rec = crate::recording::read(&file).unwrap();
+    assert!(rec.is_complete());
+    let mut ex = crate::analysis::FeatureExtractor::new(&model.analysis);
+    let classify = model
+        .classify_windows(&crate::dataset::window_features_of(&rec, &file, &mut ex).unwrap())
+        .unwrap();
+    let shown = s.prediction.clone().unwrap().unwrap();
+    assert_eq!(shown.windows, Some(classify));
+    assert!(!shown.left_out);
+}

@@ -6,6 +6,7 @@
 mod common;
 
 mod cli;
+mod console_windows;
 mod doctor;
 mod evaluate_windows;
 mod falcon_emulator;

@@ -9,8 +9,9 @@ use crate::classify::plural;
 use crate::servo::{Mode, ServoEvent, Telemetry};
 
 use super::super::dataset::{JobResult, ModelInfo};
+use super::super::estimate::Estimate;
 use super::super::keymap::Key;
-use super::super::scan::{ScanView, predict};
+use super::super::scan::{ScanView, predict_view};
 use super::{Action, App};
 
 /// How near the typed target the glide's set-point must be to have
@@ -26,6 +27,7 @@ impl App {
             _ => {}
         }
         self.live.push(t);
+        self.gather(t);
         self.speed_scale = t.speed_scale;
         if let Some(g) = self.gliding_to {
             if t.mode != Mode::Target {
@@ -49,6 +51,41 @@ impl App {
         }
     }
 
+    /// A scan's sample for the live estimate: the first of a scan starts
+    /// one when the model votes over sub-windows; the first frame after
+    /// the scan ends it.
+    fn gather(&mut self, t: &Telemetry) {
+        let running = self.estimate.as_ref().is_some_and(|e| e.running);
+        match (t.scanning, running) {
+            (true, true) => {
+                if let Some(e) = self.estimate.as_mut() {
+                    e.push(t);
+                }
+            }
+            (true, false) => {
+                self.estimate = self
+                    .model
+                    .as_ref()
+                    .filter(|m| m.analysis.windows.is_some())
+                    .map(|m| Estimate::start(m, t));
+            }
+            (false, true) => {
+                if let Some(e) = self.estimate.as_mut() {
+                    e.running = false;
+                }
+            }
+            (false, false) => {}
+        }
+    }
+
+    /// Once a frame, after the telemetry: the live estimate classifies the
+    /// sub-windows completed since the last frame.
+    pub fn update_estimate(&mut self) {
+        if let Some(e) = self.estimate.as_mut() {
+            e.update();
+        }
+    }
+
     pub fn on_servo_event(&mut self, e: ServoEvent) {
         match e {
             ServoEvent::ScanStarted { path } => {
@@ -63,6 +100,9 @@ impl App {
                 self.scan_running = false;
                 // The recorder reports the file next (none without samples).
                 self.scan_saving = samples > 0;
+                if samples == 0 {
+                    self.estimate = None;
+                }
                 match aborted {
                     None => self.info(format!("scan complete: {samples} samples; analysing")),
                     Some(r) => {
@@ -102,16 +142,38 @@ impl App {
     }
 
     /// A scan the recorder finished writing, analysed.
-    pub fn on_scan_saved(&mut self, view: ScanView) -> Vec<Action> {
+    pub fn on_scan_saved(&mut self, mut view: ScanView) -> Vec<Action> {
         self.scan_running = false;
         self.scan_saving = false;
         self.last_scan_earlier = false;
         self.dataset.unsaved += 1;
         let complete = view.complete;
-        let analysed = match &view.features {
+        let mut analysed = match &view.features {
             Ok(_) => String::new(),
             Err(e) => format!(" — no features: {e}"),
         };
+        // A scan followed live ends with the stored recording's prediction,
+        // made as `p` (and `classify`) make it, not with the live vote.
+        if self.estimate.take().is_some()
+            && complete
+            && let Some(m) = &self.model
+            && let Some(p) = predict_view(m, &view)
+        {
+            analysed = match &p {
+                Ok(pv) => match &pv.windows {
+                    Some(w) => format!(
+                        ", predicted {} ({} of {} windows)",
+                        w.label,
+                        w.tally.first().map_or(0, |t| t.windows),
+                        w.windows.len()
+                    ),
+                    None => format!(", predicted {}", pv.prediction.label),
+                },
+                Err(e) => format!(" — no prediction: {e}"),
+            };
+            view.prediction = Some(p);
+        }
+        let predicted = view.prediction.is_some();
         self.last_scan = Some(view);
         if !complete {
             self.queue_left = 0;
@@ -121,9 +183,13 @@ impl App {
             return vec![];
         }
         if !self.queued_run {
+            let predicts = if predicted {
+                String::new()
+            } else {
+                format!("{} predicts, ", self.key_name(Key::Predict))
+            };
             self.info(format!(
-                "scan complete{analysed}: {} predicts, {} stores it",
-                self.key_name(Key::Predict),
+                "scan complete{analysed}: {predicts}{} stores it",
                 self.key_name(Key::Store)
             ));
             return vec![];
@@ -275,9 +341,8 @@ impl App {
                     // The recording already open was analysed before there was a model.
                     if let Some(s) = self.replay.as_mut().and_then(|r| r.scan.as_mut())
                         && s.prediction.is_none()
-                        && let Ok(f) = &s.features
                     {
-                        s.prediction = Some(predict(&m, f, &s.path));
+                        s.prediction = predict_view(&m, s);
                     }
                     self.model = Some(*m);
                 }

@@ -1,6 +1,10 @@
-//! The Spectrum panel: bars of the feature bins (|X_k| of the window's DFT)
-//! of the scan on screen, every bar the same width, with the strongest bin
-//! named in words.
+//! The Spectrum panel: bars of the scan's features, every bar the same
+//! width, labelled by what they are — DFT bins (|X_k|, power or its log),
+//! band energies with their frequency range, or cepstral coefficients
+//! (c0…, or c1… without the level term); with several channels, each channel's features in turn, named
+//! under their first bar. Bars rise from zero, or from the smallest
+//! feature when some are negative (log spectra, cepstra). The strongest
+//! bin or band is named in words.
 
 use ratatui::buffer::Buffer;
 use ratatui::layout::Rect;
@@ -9,17 +13,130 @@ use ratatui::widgets::{Paragraph, Widget, Wrap};
 
 use super::{fit_title, frame};
 use crate::console::app::App;
+use crate::console::scan::{FeatureNames, ScanView};
 
 /// Eighth blocks, from empty to full.
 const EIGHTHS: [&str; 9] = [" ", "▁", "▂", "▃", "▄", "▅", "▆", "▇", "█"];
 
-pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
-    let Some(s) = app.scan() else {
-        Paragraph::new("no scan yet")
-            .block(frame("Spectrum"))
-            .render(area, buf);
-        return;
+/// A number in at most three significant digits, no trailing zeros.
+fn short(v: f64) -> String {
+    let a = v.abs();
+    let digits = if a >= 100.0 {
+        0
+    } else if a >= 10.0 {
+        1
+    } else if a >= 1.0 {
+        2
+    } else {
+        3
     };
+    let t = format!("{v:.digits$}");
+    if t.contains('.') {
+        t.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        t
+    }
+}
+
+/// A value as the title shows it: logs plainly, the rest in exponent form.
+fn value_text(names: &FeatureNames, v: f64) -> String {
+    match names {
+        FeatureNames::Bins { value, .. } | FeatureNames::Bands { value, .. }
+            if value.starts_with("log") =>
+        {
+            format!("{value} {v:.2}")
+        }
+        FeatureNames::Bins { value } | FeatureNames::Bands { value, .. } => {
+            format!("{value} {v:.2e}")
+        }
+        FeatureNames::Cepstra { .. } => format!("{v:.2}"),
+    }
+}
+
+/// Feature `i` of a channel, as the axis row names it: the bin number, the
+/// band's lower edge, or `c<i>`.
+fn name(s: &ScanView, i: usize) -> String {
+    match &s.names {
+        FeatureNames::Bins { .. } => format!("{}", s.first_bin + i),
+        FeatureNames::Bands { edges, .. } => short(edges[i]),
+        FeatureNames::Cepstra { first } => format!("c{}", first + i),
+    }
+}
+
+/// The titles, longest first, for features `f` of `per` values a channel
+/// whose largest is feature `peak_i`.
+fn titles(s: &ScanView, f: &[f64], per: usize, peak_i: usize) -> Vec<String> {
+    let peak = f[peak_i];
+    let several = s.channels.len() > 1;
+    let (ch, k) = (peak_i / per, peak_i % per);
+    // With sub-windows the features shown are the first one's.
+    let sub = match &s.windows {
+        Some(Ok(w)) if w.len() > 1 => format!(", sub-window 1 of {}", w.len()),
+        _ => String::new(),
+    };
+    let of = if several {
+        format!(" of {}{sub}", s.channels.join(", "))
+    } else {
+        sub
+    };
+    // Which channel the peak is in, when there are several.
+    let in_ch = if several {
+        format!("{} ", s.channels[ch])
+    } else {
+        String::new()
+    };
+    match &s.names {
+        FeatureNames::Bins { .. } => {
+            let (first, last, pb) = (s.first_bin, s.first_bin + per - 1, s.first_bin + k);
+            vec![
+                format!(
+                    "Spectrum: peak {in_ch}bin {pb} ({}), bins {first}–{last}{of}",
+                    value_text(&s.names, peak)
+                ),
+                format!("Spectrum: peak {in_ch}bin {pb}, bins {first}–{last}"),
+                format!("Spectrum: peak {in_ch}bin {pb}"),
+                "Spectrum".into(),
+            ]
+        }
+        FeatureNames::Bands { edges, unit, .. } => {
+            let band = format!("{}–{} {unit}", short(edges[k]), short(edges[k + 1]));
+            let all = format!(
+                "{per} bands {}–{} {unit}",
+                short(edges[0]),
+                short(edges[per])
+            );
+            vec![
+                format!(
+                    "Bands: peak {in_ch}{band} ({}), {all}{of}",
+                    value_text(&s.names, peak)
+                ),
+                format!("Bands: peak {in_ch}{band}, {all}"),
+                format!("Bands: peak {in_ch}{band}"),
+                "Bands".into(),
+            ]
+        }
+        FeatureNames::Cepstra { first } => {
+            let range = format!("c{first}–c{}", first + per - 1);
+            vec![
+                format!("Cepstra: {range} of the log band energies{of}"),
+                format!("Cepstra: {range}{of}"),
+                format!("Cepstra: {range}"),
+                "Cepstra".into(),
+            ]
+        }
+    }
+}
+
+pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
+    match app.scan() {
+        Some(s) => render_view(s, area, buf),
+        None => Paragraph::new("no scan yet")
+            .block(frame("Spectrum"))
+            .render(area, buf),
+    }
+}
+
+fn render_view(s: &ScanView, area: Rect, buf: &mut Buffer) {
     let f = match &s.features {
         Ok(f) if !f.is_empty() => f,
         Ok(_) => {
@@ -36,50 +153,58 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
             return;
         }
     };
+    let n = f.len();
+    // Features per channel (all of them in one when they do not split).
+    let channels = s.channels.len().max(1);
+    let (channels, per) = if n % channels == 0 {
+        (channels, n / channels)
+    } else {
+        (1, n)
+    };
+    if let FeatureNames::Bands { edges, .. } = &s.names
+        && edges.len() != per + 1
+    {
+        // Band edges that do not fit the features: number them instead.
+        let mut plain = s.clone();
+        plain.names = FeatureNames::Bins { value: "value" };
+        plain.first_bin = 0;
+        return render_view(&plain, area, buf);
+    }
     let (peak_i, peak) = f
         .iter()
         .copied()
         .enumerate()
         .fold((0, f64::MIN), |a, (i, v)| if v > a.1 { (i, v) } else { a });
-    let last = s.first_bin + f.len() - 1;
-    let peak_bin = s.first_bin + peak_i;
-    let title = fit_title(
-        &[
-            format!(
-                "Spectrum: peak bin {peak_bin} (|X| {peak:.2e}), bins {}–{last}",
-                s.first_bin
-            ),
-            format!("Spectrum: peak bin {peak_bin}, bins {}–{last}", s.first_bin),
-            format!("Spectrum: peak bin {peak_bin}"),
-            "Spectrum".into(),
-        ],
-        area.width,
-    );
+    let title = fit_title(&titles(s, f, per, peak_i), area.width);
     let block = frame(&title);
     let inner = block.inner(area);
     block.render(area, buf);
     if inner.height < 2 || inner.width < 4 {
         return;
     }
-    // Bars over all but the last row, which carries the bin numbers.
+    // Bars over all but the last row, which carries the labels.
     let rows = inner.height - 1;
     let cols = usize::from(inner.width);
-    let n = f.len();
-    // Every bar the same width: whole columns per bin, or (max of) several
-    // bins per column when there are more bins than columns.
+    // Every bar the same width: whole columns per feature, or (max of)
+    // several features per column when there are more than columns.
     let per_col = n.div_ceil(cols).max(1);
     let bars = n.div_ceil(per_col);
     let width = (cols / bars).max(1);
     let left = |b: usize| inner.x + (b * width) as u16;
     // A gap between bars when they are wide enough.
     let drawn = if width > 2 { width - 1 } else { width } as u16;
-    let top = if peak > 0.0 { peak } else { 1.0 };
+    // From zero, or from the smallest value when some are negative.
+    let low = f.iter().copied().fold(f64::INFINITY, f64::min);
+    let base = if low < 0.0 { low } else { 0.0 };
+    let span = if peak > base { peak - base } else { 1.0 };
     for b in 0..bars {
         let v = f[b * per_col..((b + 1) * per_col).min(n)]
             .iter()
             .copied()
-            .fold(0.0, f64::max);
-        let eighths = ((v / top) * f64::from(rows) * 8.0).round().max(0.0) as u32;
+            .fold(f64::NEG_INFINITY, f64::max);
+        let eighths = (((v - base) / span) * f64::from(rows) * 8.0)
+            .round()
+            .max(0.0) as u32;
         let x0 = left(b);
         for r in 0..rows {
             let level = eighths.saturating_sub(u32::from(r) * 8).min(8) as usize;
@@ -89,7 +214,8 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
             }
         }
     }
-    // Bin numbers under the first bar, the last bar and the peak.
+    // Labels: the first feature's name (each channel's, with several),
+    // the last's at the end, and the peak's.
     let axis_y = inner.y + rows;
     let mut put = |x: u16, text: String| {
         let len = text.chars().count() as u16;
@@ -97,9 +223,26 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
             Line::raw(text).render(Rect::new(x, axis_y, len, 1), buf);
         }
     };
-    put(inner.x, format!("{}", s.first_bin));
-    let last_text = format!("{last}");
+    let last_text = match &s.names {
+        FeatureNames::Bands { edges, .. } => short(edges[per]),
+        _ => name(s, per - 1),
+    };
     let end = left(bars - 1) + drawn;
-    put(end.saturating_sub(last_text.len() as u16), last_text);
-    put(left(peak_i / per_col), format!("^{peak_bin}"));
+    put(
+        end.saturating_sub(last_text.chars().count() as u16),
+        last_text,
+    );
+    if channels > 1 {
+        for (c, ch) in s.channels.iter().enumerate() {
+            put(left(c * per / per_col), format!("{ch} {}", name(s, 0)));
+        }
+    } else {
+        put(inner.x, name(s, 0));
+    }
+    if !matches!(s.names, FeatureNames::Cepstra { .. }) {
+        put(
+            left(peak_i / per_col),
+            format!("^{}", name(s, peak_i % per)),
+        );
+    }
 }

@@ -365,3 +365,120 @@ fn every_spectrum_bin_is_drawn_the_same_width() {
         }
     }
 }
+
+/// The thesis's analysis with the changes `f` makes, its synthetic scan on
+/// screen.
+fn spectrum_under(f: impl Fn(&mut crate::profile::Analysis)) -> App {
+    let mut a = crate::profile::LoadedProfile::thesis().profile.analysis;
+    f(&mut a);
+    let mut app = fixtures::app(80, 24);
+    app.last_scan = Some(fixtures::scan_view_under(&a));
+    app
+}
+
+#[test]
+fn a_log_spectrum_rises_from_its_smallest_value() {
+    use crate::profile::SpectrumKind;
+    let app = spectrum_under(|a| a.spectrum = SpectrumKind::LogPower);
+    let f = app.last_scan.as_ref().unwrap().features.clone().unwrap();
+    assert!(f.iter().all(|v| *v < 0.0), "log10 of a small power: {f:?}");
+    let s = panel(Panel::Spectrum, &app, 104, 10);
+    assert!(s.contains("Spectrum: peak bin 7 (log10 power -"), "{s}");
+    // Two columns a bin: the peak's bar full height, the smallest's empty.
+    let top: Vec<char> = s.lines().nth(1).unwrap().chars().collect();
+    let bottom: Vec<char> = s.lines().nth(7).unwrap().chars().collect();
+    let (lo, _) = f.iter().enumerate().fold(
+        (0, f64::MAX),
+        |a, (i, v)| if *v < a.1 { (i, *v) } else { a },
+    );
+    assert_eq!(top[1 + 2 * 6], '█', "bin 7 is the peak:\n{s}");
+    assert_eq!(
+        bottom[1 + 2 * lo],
+        ' ',
+        "the smallest bin is the floor:\n{s}"
+    );
+    assert!(bottom.iter().filter(|c| **c == '█').count() > 20, "{s}");
+}
+
+#[test]
+fn bands_are_labelled_with_their_range() {
+    use crate::profile::{BandScale, Bands, SpectrumKind};
+    let app = spectrum_under(|a| {
+        a.spectrum = SpectrumKind::LogPower;
+        a.bands = Some(Bands {
+            count: 8,
+            from: 0.05,
+            to: 1.5,
+            scale: BandScale::Log,
+        });
+    });
+    let s = panel(Panel::Spectrum, &app, 90, 10);
+    // S2's 4.24 mm period is 0.236 cycles/mm: in the band from
+    // 0.05 · 30^(3/8) = 0.179 to 0.05 · 30^(4/8) = 0.274.
+    assert!(
+        s.contains("Bands: peak 0.179–0.274 cycles/mm (log10 energy"),
+        "{s}"
+    );
+    assert!(s.contains("8 bands 0.05–1.5 cycles/mm"), "{s}");
+    insta::assert_snapshot!(s);
+}
+
+#[test]
+fn cepstra_of_two_channels_are_named_per_channel() {
+    use crate::profile::{BandScale, Bands, SpectrumKind};
+    let app = spectrum_under(|a| {
+        a.spectrum = SpectrumKind::Power;
+        a.channels = vec!["fy_n".into()];
+        a.bands = Some(Bands {
+            count: 8,
+            from: 0.05,
+            to: 1.5,
+            scale: BandScale::Log,
+        });
+        a.cepstra = Some(6);
+    });
+    let scan = app.last_scan.as_ref().unwrap();
+    assert_eq!(scan.features.as_ref().unwrap().len(), 12);
+    let s = panel(Panel::Spectrum, &app, 80, 10);
+    assert!(
+        s.contains("Cepstra: c0–c5 of the log band energies of y_m, fy_n"),
+        "{s}"
+    );
+    let axis = s.lines().nth(8).unwrap();
+    assert!(
+        axis.contains("y_m c0") && axis.contains("fy_n c0") && axis.contains("c5"),
+        "{s}"
+    );
+    insta::assert_snapshot!(s);
+}
+
+#[test]
+fn bins_of_two_channels_name_the_channel_of_the_peak() {
+    let app = spectrum_under(|a| {
+        a.bins = [1, 24];
+        a.channels = vec!["fy_n".into()];
+    });
+    let s = panel(Panel::Spectrum, &app, 120, 10);
+    assert!(
+        s.contains("Spectrum: peak fy_n bin 7 (|X|") && s.contains("bins 1–24 of y_m, fy_n"),
+        "{s}"
+    );
+    let axis = s.lines().nth(8).unwrap();
+    assert!(
+        axis.contains("y_m 1") && axis.contains("fy_n 1") && axis.contains("24"),
+        "{s}"
+    );
+}
+
+#[test]
+fn with_sub_windows_the_spectrum_says_which_it_shows() {
+    let app = spectrum_under(|a| {
+        a.bins = [1, 24];
+        a.windows = Some(crate::profile::Windows {
+            length: 0.0147,
+            hop: 0.005,
+        });
+    });
+    let s = panel(Panel::Spectrum, &app, 100, 8);
+    assert!(s.contains("bins 1–24, sub-window 1 of 4"), "{s}");
+}
