@@ -175,24 +175,9 @@ pub fn evaluate(model: &Model, test: &[TrainingExample]) -> Result<Report, Evalu
     if test.is_empty() {
         return Err(EvaluateError::NoTest);
     }
-    let mut labels: Vec<String> = model
-        .labels
-        .iter()
-        .chain(test.iter().map(|t| &t.label))
-        .cloned()
-        .collect();
-    labels.sort();
-    labels.dedup();
-    let index = |label: &str| labels.binary_search_by(|l| l.as_str().cmp(label));
-
-    let mut confusion = vec![vec![0usize; labels.len()]; labels.len()];
     let mut predictions = Vec::with_capacity(test.len());
     for ex in test {
         let p = model.classify(&ex.features)?;
-        // Both labels are in `labels` by construction.
-        if let (Ok(t), Ok(c)) = (index(&ex.label), index(&p.label)) {
-            confusion[t][c] += 1;
-        }
         predictions.push(PredictionRow {
             file: ex.file.clone(),
             label: ex.label.clone(),
@@ -200,17 +185,44 @@ pub fn evaluate(model: &Model, test: &[TrainingExample]) -> Result<Report, Evalu
             votes: p.votes,
         });
     }
+    let train = model.examples.iter().map(|e| e.file.clone()).collect();
+    Ok(count(&model.labels, train, predictions))
+}
+
+/// The report of a test: the labels (the model's and the tested ones,
+/// sorted), the confusion matrix, accuracy and per-class rates counted from
+/// `predictions` (one row per tested file, in the order tested).
+pub(crate) fn count(
+    model_labels: &[String],
+    train: Vec<String>,
+    predictions: Vec<PredictionRow>,
+) -> Report {
+    let mut labels: Vec<String> = model_labels
+        .iter()
+        .chain(predictions.iter().map(|p| &p.label))
+        .cloned()
+        .collect();
+    labels.sort();
+    labels.dedup();
+    let index = |label: &str| labels.binary_search_by(|l| l.as_str().cmp(label));
+    let mut confusion = vec![vec![0usize; labels.len()]; labels.len()];
+    for p in &predictions {
+        // Both labels are in `labels` by construction.
+        if let (Ok(t), Ok(c)) = (index(&p.label), index(&p.predicted)) {
+            confusion[t][c] += 1;
+        }
+    }
     let correct: usize = (0..labels.len()).map(|i| confusion[i][i]).sum();
     let per_class = class_rates(&labels, &confusion);
-    Ok(Report {
-        accuracy: correct as f64 / test.len() as f64,
+    Report {
+        accuracy: correct as f64 / predictions.len() as f64,
         confusion,
         per_class,
-        train: model.examples.iter().map(|e| e.file.clone()).collect(),
-        test: test.iter().map(|e| e.file.clone()).collect(),
+        train,
+        test: predictions.iter().map(|p| p.file.clone()).collect(),
         predictions,
         labels,
-    })
+    }
 }
 
 /// SR and ER of each class (row) of a confusion matrix; NaN for a class

@@ -325,7 +325,7 @@ pub fn cross_validate(
     seed: u64,
     threads: usize,
 ) -> Result<CvReport, EvaluateError> {
-    let run = |test_idx: &Vec<usize>| -> Result<(Report, usize, Option<KFallback>), EvaluateError> {
+    let run = |test_idx: &Vec<usize>| -> FoldRun<Report> {
         let mut is_test = vec![false; examples.len()];
         for &i in test_idx {
             is_test[i] = true;
@@ -344,9 +344,26 @@ pub fn cross_validate(
             model.k_fallback,
         ))
     };
+    let runs = run_folds(folds, threads, run)
+        .into_iter()
+        .collect::<Result<Vec<_>, _>>()?;
+    let labels: Vec<String> = examples.iter().map(|e| e.label.clone()).collect();
+    let train = examples.iter().map(|e| e.file.clone()).collect();
+    Ok(pool(labels, train, runs, method, seed))
+}
+
+/// One fold's outcome: its report, the k it used, and why k was lowered.
+pub(super) type FoldRun<R> = Result<(R, usize, Option<KFallback>), EvaluateError>;
+
+/// `run` on every fold, on up to `threads` threads; the results in fold
+/// order, whatever the number of threads.
+pub(super) fn run_folds<R: Send>(
+    folds: &Folds,
+    threads: usize,
+    run: impl Fn(&Vec<usize>) -> FoldRun<R> + Sync,
+) -> Vec<FoldRun<R>> {
     let threads = threads.clamp(1, folds.len().max(1));
-    type FoldRun = Result<(Report, usize, Option<KFallback>), EvaluateError>;
-    let mut results: Vec<Option<FoldRun>> = (0..folds.len()).map(|_| None).collect();
+    let mut results: Vec<Option<FoldRun<R>>> = (0..folds.len()).map(|_| None).collect();
     std::thread::scope(|s| {
         let chunks = results.chunks_mut(folds.len().div_ceil(threads).max(1));
         let mut start = 0;
@@ -361,16 +378,29 @@ pub fn cross_validate(
             });
         }
     });
+    results
+        .into_iter()
+        .map(|r| r.expect("every fold ran"))
+        .collect()
+}
 
-    let mut labels: Vec<String> = examples.iter().map(|e| e.label.clone()).collect();
+/// The folds' reports pooled into one: the confusion counts summed over
+/// `labels` (every example's label, in any order), the tested files and
+/// predictions fold by fold, the per-fold accuracies' mean and spread.
+pub(super) fn pool(
+    mut labels: Vec<String>,
+    train: Vec<String>,
+    runs: Vec<(Report, usize, Option<KFallback>)>,
+    method: &str,
+    seed: u64,
+) -> CvReport {
     labels.sort();
     labels.dedup();
     let mut confusion = vec![vec![0usize; labels.len()]; labels.len()];
     let mut predictions = Vec::new();
     let mut test = Vec::new();
     let mut fold_results = Vec::new();
-    for r in results {
-        let (report, k, k_fallback) = r.expect("every fold ran")?;
+    for (report, k, k_fallback) in runs {
         for (i, li) in report.labels.iter().enumerate() {
             for (j, lj) in report.labels.iter().enumerate() {
                 let (Ok(a), Ok(b)) = (labels.binary_search(li), labels.binary_search(lj)) else {
@@ -396,11 +426,11 @@ pub fn cross_validate(
     let macro_f1 = present.iter().sum::<f64>() / present.len().max(1) as f64;
     let accs: Vec<f64> = fold_results.iter().map(|f| f.accuracy).collect();
     let (accuracy_mean, accuracy_std) = mean_std(&accs);
-    Ok(CvReport {
+    CvReport {
         report: Report {
             accuracy: correct as f64 / tested.max(1) as f64,
             per_class,
-            train: examples.iter().map(|e| e.file.clone()).collect(),
+            train,
             test,
             predictions,
             labels,
@@ -413,7 +443,7 @@ pub fn cross_validate(
         accuracy_std,
         macro_f1,
         f1,
-    })
+    }
 }
 
 /// A cross-validation's report is a [`Report`] (pooled over the folds) with

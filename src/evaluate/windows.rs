@@ -12,9 +12,9 @@
 
 use serde::Serialize;
 
-use super::cv::{CvReport, FoldResult, Folds, f1_scores, make_folds, mean_std};
-use super::{EvaluateError, PredictionRow, Report, class_rates};
-use crate::classify::{KFallback, Model, RecordingPrediction, TrainingExample};
+use super::cv::{CvReport, FoldRun, Folds, make_folds, pool, run_folds};
+use super::{EvaluateError, PredictionRow, Report, count};
+use crate::classify::{Model, RecordingPrediction, TrainingExample};
 use crate::dataset::Entry;
 use crate::profile::{Analysis, Classifier, Evaluation, SplitMethod};
 
@@ -209,23 +209,10 @@ pub fn evaluate_recordings(
     if test.is_empty() {
         return Err(EvaluateError::NoTest);
     }
-    let mut labels: Vec<String> = model
-        .labels
-        .iter()
-        .chain(test.iter().map(|t| &t.label))
-        .cloned()
-        .collect();
-    labels.sort();
-    labels.dedup();
-    let index = |label: &str| labels.binary_search_by(|l| l.as_str().cmp(label));
-    let mut confusion = vec![vec![0usize; labels.len()]; labels.len()];
     let mut predictions = Vec::with_capacity(test.len());
     let mut windows = Vec::with_capacity(test.len());
     for r in test {
         let p = model.classify_windows(&r.windows)?;
-        if let (Ok(t), Ok(c)) = (index(&r.label), index(&p.label)) {
-            confusion[t][c] += 1;
-        }
         predictions.push(PredictionRow {
             file: r.file.clone(),
             label: r.label.clone(),
@@ -242,20 +229,11 @@ pub fn evaluate_recordings(
             prediction: p,
         });
     }
-    let correct: usize = (0..labels.len()).map(|i| confusion[i][i]).sum();
-    let per_class = class_rates(&labels, &confusion);
+    // One training file per recording, not per sub-window.
     let mut train: Vec<String> = model.examples.iter().map(|e| e.file.clone()).collect();
     train.dedup();
     Ok(WindowReport {
-        report: Report {
-            accuracy: correct as f64 / test.len() as f64,
-            confusion,
-            per_class,
-            train,
-            test: test.iter().map(|r| r.file.clone()).collect(),
-            predictions,
-            labels,
-        },
+        report: count(&model.labels, train, predictions),
         windows,
     })
 }
@@ -284,8 +262,7 @@ pub fn cross_validate_recordings(
     seed: u64,
     threads: usize,
 ) -> Result<WindowCvReport, EvaluateError> {
-    type FoldRun = Result<(WindowReport, usize, Option<KFallback>), EvaluateError>;
-    let run = |test_idx: &Vec<usize>| -> FoldRun {
+    let run = |test_idx: &Vec<usize>| -> FoldRun<WindowReport> {
         let mut is_test = vec![false; recs.len()];
         for &i in test_idx {
             is_test[i] = true;
@@ -304,74 +281,17 @@ pub fn cross_validate_recordings(
             model.k_fallback,
         ))
     };
-    let threads = threads.clamp(1, folds.len().max(1));
-    let mut results: Vec<Option<FoldRun>> = (0..folds.len()).map(|_| None).collect();
-    std::thread::scope(|s| {
-        let mut start = 0;
-        for chunk in results.chunks_mut(folds.len().div_ceil(threads).max(1)) {
-            let first = start;
-            start += chunk.len();
-            let run = &run;
-            s.spawn(move || {
-                for (j, slot) in chunk.iter_mut().enumerate() {
-                    *slot = Some(run(&folds[first + j]));
-                }
-            });
-        }
-    });
-    let mut labels: Vec<String> = recs.iter().map(|r| r.label.clone()).collect();
-    labels.sort();
-    labels.dedup();
-    let mut confusion = vec![vec![0usize; labels.len()]; labels.len()];
-    let (mut predictions, mut test, mut fold_results, mut windows) =
-        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    for r in results {
-        let (wr, k, k_fallback) = r.expect("every fold ran")?;
-        let report = wr.report;
-        for (i, li) in report.labels.iter().enumerate() {
-            for (j, lj) in report.labels.iter().enumerate() {
-                if let (Ok(a), Ok(b)) = (labels.binary_search(li), labels.binary_search(lj)) {
-                    confusion[a][b] += report.confusion[i][j];
-                }
-            }
-        }
-        fold_results.push(FoldResult {
-            tested: report.tested(),
-            accuracy: report.accuracy,
-            k,
-            k_fallback,
-        });
-        test.extend(report.test);
-        predictions.extend(report.predictions);
+    let mut windows = Vec::new();
+    let mut runs = Vec::with_capacity(folds.len());
+    for r in run_folds(folds, threads, run) {
+        let (wr, k, k_fallback) = r?;
         windows.extend(wr.windows);
+        runs.push((wr.report, k, k_fallback));
     }
-    let tested: usize = confusion.iter().flatten().sum();
-    let correct: usize = (0..labels.len()).map(|i| confusion[i][i]).sum();
-    let per_class = class_rates(&labels, &confusion);
-    let f1 = f1_scores(&confusion);
-    let present: Vec<f64> = f1.iter().copied().filter(|v| v.is_finite()).collect();
-    let macro_f1 = present.iter().sum::<f64>() / present.len().max(1) as f64;
-    let accs: Vec<f64> = fold_results.iter().map(|f| f.accuracy).collect();
-    let (accuracy_mean, accuracy_std) = mean_std(&accs);
+    let labels: Vec<String> = recs.iter().map(|r| r.label.clone()).collect();
+    let train = recs.iter().map(|r| r.file.clone()).collect();
     Ok(WindowCvReport {
-        report: CvReport {
-            report: Report {
-                labels,
-                confusion,
-                accuracy: correct as f64 / tested.max(1) as f64,
-                per_class,
-                train: recs.iter().map(|r| r.file.clone()).collect(),
-                test,
-                predictions,
-            },
-            method: method.to_string(),
-            seed,
-            folds: fold_results,
-            accuracy_mean,
-            accuracy_std,
-            macro_f1,
-            f1,
-        },
+        report: pool(labels, train, runs, method, seed),
         windows,
     })
 }
