@@ -1,7 +1,6 @@
 //! `hapticlab classify`: recordings named by a trained model, one line (or
 //! a JSON row) each, with the votes and the nearest neighbour.
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use clap::Args;
@@ -58,18 +57,32 @@ fn classify(
     let mut rows = Vec::new();
     for f in &files {
         let rec = recording::read(f).map_err(DatasetError::from)?;
-        if !rec.is_complete() {
-            let _ = writeln!(
-                std::io::stderr(),
-                "warning: {}: incomplete scan, classified anyway",
-                f.display()
-            );
-        }
+        // An incomplete scan is classified when its samples cover the
+        // analysis; when they do not, one error says both things.
+        let incomplete = (!rec.is_complete()).then(|| {
+            format!(
+                "incomplete scan: {}",
+                rec.aborted().unwrap_or("no end marker")
+            )
+        });
+        let in_context = |e: Failure| match (&incomplete, e) {
+            (Some(why), Failure::BadInput(m)) => bad(format!("{m} ({why})")),
+            (_, e) => e,
+        };
+        let warn_incomplete = || {
+            if let Some(why) = &incomplete {
+                crate::errln!("warning: {}: {why}; classified anyway", f.display());
+            }
+        };
         if model.analysis.windows.is_some() {
-            rows.push(classify_by_windows(&model, &rec, f, &mut ex, json)?);
+            rows.push(classify_by_windows(&model, &rec, f, &mut ex, json).map_err(in_context)?);
+            warn_incomplete();
             continue;
         }
-        let feats = dataset::features_of(&rec, f, &mut ex)?;
+        let feats = dataset::features_of(&rec, f, &mut ex)
+            .map_err(Failure::from)
+            .map_err(in_context)?;
+        warn_incomplete();
         let p = model.classify(&feats).map_err(bad)?;
         if !json {
             let votes: Vec<String> = p.votes.iter().map(|(l, v)| format!("{l}:{v}")).collect();

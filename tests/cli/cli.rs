@@ -774,6 +774,53 @@ fn incomplete_recordings_are_skipped_with_a_warning() {
     assert!(!used.contains(&p(&cut)));
 }
 
+/// `classify` of an aborted scan: classified (with a warning) when its
+/// samples cover the window; one error naming both the window and the abort
+/// when they do not — never a warning followed by an error.
+#[test]
+fn classify_says_why_an_aborted_scan_cannot_be_classified() {
+    let dir = TempDir::new().unwrap();
+    let data = dir.path().join("D");
+    simulate(&data, 3, 10);
+    let model = dir.path().join("m.json");
+    assert_ok(&run(&["train", p(&data), "--out", p(&model)]));
+    // The trailer dropped: every sample is there.
+    let whole = data.join("S2").join("S2_001.csv");
+    let text = fs::read_to_string(&whole).unwrap();
+    let kept: Vec<&str> = text
+        .lines()
+        .filter(|l| !l.starts_with("# end samples"))
+        .collect();
+    fs::write(&whole, kept.join("\n") + "\n").unwrap();
+    let r = run(&["classify", "--model", p(&model), p(&whole)]);
+    assert_ok(&r);
+    assert!(r.stdout.contains("S2"), "{r:?}");
+    assert!(
+        r.stderr.contains("incomplete scan") && r.stderr.contains("classified anyway"),
+        "{r:?}"
+    );
+    // Cut after 300 rows, before the probe reaches the window.
+    let short = data.join("S3").join("S3_001.csv");
+    let (lines, line) = lines_and_row(&short, 300);
+    fs::write(&short, lines[..line].join("\n") + "\n").unwrap();
+    // (The model's note on k comes first: 3 scans per texture.)
+    let r = run(&["classify", "--model", p(&model), p(&short)]);
+    assert_eq!(r.code, Some(2), "{r:?}");
+    assert!(!r.stderr.contains("warning"), "{r:?}");
+    let msg = r
+        .stderr
+        .lines()
+        .last()
+        .and_then(|l| l.strip_prefix("hapticlab: error: "))
+        .unwrap_or_else(|| panic!("no error line last: {r:?}"));
+    assert!(
+        msg.starts_with(p(&short))
+            && msg.contains("window needs")
+            && msg.contains("incomplete scan"),
+        "{msg}"
+    );
+}
+
 // ---------------------------------------------------------------- runtime failures
 
 #[test]

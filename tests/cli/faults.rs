@@ -649,7 +649,9 @@ fn a_full_disk_is_a_clear_error_and_earlier_recordings_are_untouched() {
         "{msg}"
     );
     // The scan stopped when the write failed (at the second block of 250
-    // samples), not at the end of its 3000-sample stroke.
+    // samples), not at the end of its 3000-sample stroke. The lower bound is
+    // the first block: how many ticks ran before the writer thread saw the
+    // failure depends on scheduling (499 was seen on a busy machine).
     let ticks: usize = r
         .stdout
         .lines()
@@ -657,7 +659,7 @@ fn a_full_disk_is_a_clear_error_and_earlier_recordings_are_untouched() {
         .and_then(|l| l.split(' ').next())
         .and_then(|n| n.parse().ok())
         .unwrap_or_else(|| panic!("no loop line: {r:?}"));
-    assert!((500..2000).contains(&ticks), "{ticks} ticks: {r:?}");
+    assert!((250..2000).contains(&ticks), "{ticks} ticks: {r:?}");
     // The new recording is cut back to whole rows and reads as incomplete.
     let len = std::fs::metadata(&file).unwrap().len();
     assert!(len <= limit, "{len} bytes");
