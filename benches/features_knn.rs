@@ -75,7 +75,7 @@ fn bench(c: &mut Criterion) {
     };
     let mut ax = FeatureExtractor::new(&hapticlab::profile::Analysis {
         bins: [1, 1024],
-        ..audio
+        ..audio.clone()
     });
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     let t: Vec<f64> = (0..5 * 44100).map(|j| j as f64 / 44100.0).collect();
@@ -86,6 +86,29 @@ fn bench(c: &mut Criterion) {
     c.bench_function(
         "features (5 s at 44.1 kHz, 0.5 s window, log-Welch 2048)",
         |b| b.iter(|| ax.features(black_box(&t), black_box(&pac)).unwrap()[0]),
+    );
+    // The whole clip cut into 0.5 s sub-windows with half-window hops (19
+    // of them), each a log-Welch of 2048-point segments: what `classify`
+    // and `evaluate` compute per recording with `windows` (issue 13: < 5 ms).
+    let mut wx = FeatureExtractor::new(&hapticlab::profile::Analysis {
+        window: [0.0, 4.99],
+        windows: Some(hapticlab::profile::Windows {
+            length: 0.5,
+            hop: 0.25,
+        }),
+        bins: [1, 1024],
+        ..audio
+    });
+    assert_eq!(wx.sub_windows().len(), 18);
+    c.bench_function(
+        "features (5 s at 44.1 kHz, all 0.5 s sub-windows, hop 0.25 s, log-Welch 2048)",
+        |b| {
+            b.iter(|| {
+                wx.all_window_features(black_box(&t), &[black_box(&pac)])
+                    .unwrap()
+                    .len()
+            })
+        },
     );
     c.bench_function("features + k-NN query", |b| {
         b.iter(|| {

@@ -231,6 +231,19 @@ pub struct FeatureExtractor {
     has_spectrum: bool,
     /// Every sub-window's `[start, end]` (the window alone without `windows`).
     sub_windows: Vec<[f64; 2]>,
+    /// Set while [`FeatureExtractor::all_window_features`] runs over samples
+    /// checked finite with the axis in order.
+    in_order: bool,
+}
+
+/// Whether every value is finite and the axis never decreases: then each
+/// sub-window can find its own samples by binary search.
+fn sub_windows_may_search(axis: &[f64], signals: &[&[f64]]) -> bool {
+    axis.first().is_some_and(|a| a.is_finite())
+        && axis.windows(2).all(|w| w[0] <= w[1] && w[1].is_finite())
+        && signals
+            .iter()
+            .all(|s| s.len() == axis.len() && s.iter().all(|v| v.is_finite()))
 }
 
 impl fmt::Debug for FeatureExtractor {
@@ -286,6 +299,7 @@ impl FeatureExtractor {
             bands,
             has_spectrum: false,
             sub_windows: settings.sub_windows(),
+            in_order: false,
         })
     }
 
@@ -328,8 +342,13 @@ impl FeatureExtractor {
     }
 
     fn transform(&mut self, axis: &[f64], signal: &[f64]) -> Result<(), AnalysisError> {
-        self.resampler
-            .run(&self.settings.axis, axis, signal, &mut self.resampled)?;
+        if self.in_order {
+            self.resampler
+                .run_in_order(&self.settings.axis, axis, signal, &mut self.resampled)?;
+        } else {
+            self.resampler
+                .run(&self.settings.axis, axis, signal, &mut self.resampled)?;
+        }
         self.detrended.copy_from_slice(&self.resampled);
         detrend(self.settings.detrend, &mut self.detrended);
         self.spectrum.compute(&self.detrended, &mut self.values);
@@ -401,9 +420,15 @@ impl FeatureExtractor {
         axis: &[f64],
         signals: &[&[f64]],
     ) -> Result<Vec<Vec<f64>>, AnalysisError> {
-        (0..self.sub_windows.len())
+        // One pass decides whether the sub-windows may each visit only
+        // their own samples (see `Resampler::run_in_order`); otherwise each
+        // goes over the whole recording, as a single window does.
+        self.in_order = sub_windows_may_search(axis, signals) && self.sub_windows.len() > 1;
+        let all = (0..self.sub_windows.len())
             .map(|j| self.window_features(j, axis, signals).map(<[f64]>::to_vec))
-            .collect()
+            .collect();
+        self.in_order = false;
+        all
     }
 
     /// The last window resampled (by [`Self::resample`] or
@@ -508,6 +533,74 @@ mod tests {
         // The extractor's own window is back at the first sub-window.
         let first = fx.features_of_channels(&x, &[&y]).unwrap().to_vec();
         assert_eq!(first, all[0]);
+    }
+
+    /// Sub-windows that find their samples by binary search give, to the
+    /// bit, what a single window over the whole recording gives: on a
+    /// jittered time axis with samples exactly on bin edges, and on an axis
+    /// that runs backwards (no search then).
+    #[test]
+    fn sub_windows_searched_or_not_match_a_single_window_exactly() {
+        let mut a = Analysis {
+            axis: "t_s".into(),
+            channel: "f".into(),
+            window: [0.0, 0.999],
+            spacing: 0.001,
+            spectrum: crate::profile::SpectrumKind::LogWelch,
+            welch_segment: Some(64),
+            bins: [1, 32],
+            ..thesis()
+        };
+        a.windows = Some(crate::profile::Windows {
+            length: 0.25,
+            hop: 0.125,
+        });
+        let mut rng = 12345u64;
+        let mut jitter = || {
+            rng = rng
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((rng >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.0004
+        };
+        // Every third sample sits exactly half-way between grid points.
+        let t: Vec<f64> = (0..1500)
+            .map(|j| {
+                let base = j as f64 * 0.0007;
+                if j % 3 == 0 {
+                    base + 0.0005
+                } else {
+                    base + jitter().abs() * 0.1
+                }
+            })
+            .scan(f64::NEG_INFINITY, |last, v: f64| {
+                *last = v.max(*last);
+                Some(*last)
+            })
+            .collect();
+        let y: Vec<f64> = t
+            .iter()
+            .map(|t| (t * 900.0).sin() + (t * 71.0).cos())
+            .collect();
+        for backwards in [false, true] {
+            let (t, y): (Vec<f64>, Vec<f64>) = if backwards {
+                (t.iter().map(|v| -v).collect(), y.clone())
+            } else {
+                (t.clone(), y.clone())
+            };
+            let mut fx = FeatureExtractor::new(&a);
+            let all = fx.all_window_features(&t, &[&y]).unwrap();
+            assert_eq!(all.len(), a.sub_windows().len());
+            for (j, [s, e]) in a.sub_windows().into_iter().enumerate() {
+                let mut one = a.clone();
+                one.windows = None;
+                one.window = [s, e];
+                let want = FeatureExtractor::new(&one)
+                    .features_of_channels(&t, &[&y])
+                    .unwrap()
+                    .to_vec();
+                assert_eq!(all[j], want, "sub-window {j}, backwards {backwards}");
+            }
+        }
     }
 
     #[test]

@@ -64,16 +64,29 @@ impl MagnitudeSpectrum {
 
     /// `x` has `n` values, `out` has `n/2 + 1`.
     pub(crate) fn compute(&mut self, x: &[f64], out: &mut [f64]) {
+        self.transform(x, out.len());
+        for (o, b) in out.iter_mut().zip(&self.buffer) {
+            *o = b.norm();
+        }
+    }
+
+    /// `|X_k|²`, as [`Self::compute`] squared but without the square root
+    /// (`hypot`) that a power spectrum would undo.
+    pub(crate) fn compute_squared(&mut self, x: &[f64], out: &mut [f64]) {
+        self.transform(x, out.len());
+        for (o, b) in out.iter_mut().zip(&self.buffer) {
+            *o = b.norm_sqr();
+        }
+    }
+
+    fn transform(&mut self, x: &[f64], out_len: usize) {
         debug_assert_eq!(x.len(), self.buffer.len());
-        debug_assert_eq!(out.len(), self.buffer.len() / 2 + 1);
+        debug_assert_eq!(out_len, self.buffer.len() / 2 + 1);
         for (b, &v) in self.buffer.iter_mut().zip(x) {
             *b = Complex::new(v, 0.0);
         }
         self.fft
             .process_with_scratch(&mut self.buffer, &mut self.scratch);
-        for (o, b) in out.iter_mut().zip(&self.buffer) {
-            *o = b.norm();
-        }
     }
 }
 
@@ -178,9 +191,9 @@ impl Spectrum {
                     for ((o, &v), w) in self.segment.iter_mut().zip(seg).zip(&self.weights) {
                         *o = (v - mean) * w;
                     }
-                    self.magnitude.compute(&self.segment, &mut self.one);
-                    for (k, (o, a)) in out.iter_mut().zip(&self.one).enumerate() {
-                        *o += a * a * self.power_scale(k);
+                    self.magnitude.compute_squared(&self.segment, &mut self.one);
+                    for (k, (o, a2)) in out.iter_mut().zip(&self.one).enumerate() {
+                        *o += a2 * self.power_scale(k);
                     }
                 }
                 let inv = 1.0 / count.max(1) as f64;
@@ -193,10 +206,12 @@ impl Spectrum {
                 for ((o, &v), w) in self.segment.iter_mut().zip(x).zip(&self.weights) {
                     *o = v * w;
                 }
-                self.magnitude.compute(&self.segment, out);
-                if kind != SpectrumKind::Magnitude {
+                if kind == SpectrumKind::Magnitude {
+                    self.magnitude.compute(&self.segment, out);
+                } else {
+                    self.magnitude.compute_squared(&self.segment, out);
                     for (k, o) in out.iter_mut().enumerate() {
-                        *o = *o * *o * self.power_scale(k);
+                        *o *= self.power_scale(k);
                         if kind == SpectrumKind::LogPower {
                             *o = o.max(LOG_FLOOR).log10();
                         }
