@@ -126,7 +126,9 @@ impl Resampler {
         for (&a, &v) in near_axis.iter().zip(near_signal) {
             // One flag for the whole loop keeps it branch-light; the rare
             // failure is located afterwards.
-            finite &= a.is_finite() & v.is_finite();
+            // (Checked by the caller when in order; the flag costs a
+            // little in this loop, which is the whole of it.)
+            finite &= in_order || (a.is_finite() & v.is_finite());
             let u = (direction * (a - origin) - self.start) * inv_spacing;
             // Nearest grid point: bin i holds u in [i − ½, i + ½). The cast
             // truncates, which is the floor here since u + ½ ≥ 0.
@@ -164,9 +166,15 @@ impl Resampler {
             if c > 0 {
                 first.get_or_insert(i);
                 last_bin = i;
-                let c = f64::from(c);
-                self.centroid_u.push(self.sum_u[i] / c);
-                self.centroid_v.push(self.sum_v[i] / c);
+                // One sample is its own centroid (x / 1 is x: no division).
+                if c == 1 {
+                    self.centroid_u.push(self.sum_u[i]);
+                    self.centroid_v.push(self.sum_v[i]);
+                } else {
+                    let c = f64::from(c);
+                    self.centroid_u.push(self.sum_u[i] / c);
+                    self.centroid_v.push(self.sum_v[i] / c);
+                }
             }
         }
         let filled = self.centroid_u.len();

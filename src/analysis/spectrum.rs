@@ -100,6 +100,13 @@ pub fn taper_weights(taper: Taper, m: usize) -> Vec<f64> {
     }
 }
 
+/// `c_k / Σ w_j²` of bin `k` of an `m`-point DFT (`c_k` = 2 for bins with a
+/// mirror image).
+fn power_scale(m: usize, weight_energy: f64, k: usize) -> f64 {
+    let mirrored = k > 0 && !(m.is_multiple_of(2) && k == m / 2);
+    (if mirrored { 2.0 } else { 1.0 }) / weight_energy
+}
+
 /// A window's one-sided spectrum (`m/2 + 1` values, `m` the DFT length) of
 /// the kind the settings name:
 /// - magnitude: `|X_k|` of the tapered window (unnormalised, the thesis's);
@@ -119,6 +126,8 @@ pub(crate) struct Spectrum {
     step: usize,
     weights: Vec<f64>,
     weight_energy: f64,
+    /// [`power_scale`] of every bin, made once.
+    scales: Vec<f64>,
     magnitude: MagnitudeSpectrum,
     segment: Vec<f64>,
     one: Vec<f64>,
@@ -147,6 +156,9 @@ impl Spectrum {
             step,
             weights,
             weight_energy,
+            scales: (0..m / 2 + 1)
+                .map(|k| power_scale(m, weight_energy, k))
+                .collect(),
             magnitude: MagnitudeSpectrum::new(m),
             segment: vec![0.0; m],
             one: vec![0.0; m / 2 + 1],
@@ -170,8 +182,7 @@ impl Spectrum {
     }
 
     fn power_scale(&self, k: usize) -> f64 {
-        let mirrored = k > 0 && !(self.m.is_multiple_of(2) && k == self.m / 2);
-        (if mirrored { 2.0 } else { 1.0 }) / self.weight_energy
+        power_scale(self.m, self.weight_energy, k)
     }
 
     /// `x` is the (detrended) window, `out` has [`Self::len`] values.
@@ -192,8 +203,8 @@ impl Spectrum {
                         *o = (v - mean) * w;
                     }
                     self.magnitude.compute_squared(&self.segment, &mut self.one);
-                    for (k, (o, a2)) in out.iter_mut().zip(&self.one).enumerate() {
-                        *o += a2 * self.power_scale(k);
+                    for ((o, a2), scale) in out.iter_mut().zip(&self.one).zip(&self.scales) {
+                        *o += a2 * scale;
                     }
                 }
                 let inv = 1.0 / count.max(1) as f64;
