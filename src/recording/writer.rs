@@ -418,9 +418,15 @@ fn write_toml_string(out: &mut String, s: &str) {
     out.push('"');
 }
 
+/// Text up to this size is gzipped by Zopfli; larger text (an imported
+/// audio clip: a 10 s, 44.1 kHz clip is 6.9 MB) by deflate at its best
+/// level, ten times faster there for 7 % more bytes.
+const ZOPFLI_MAX_BYTES: usize = 4 << 20;
+
 /// Replace a finished recording `X.csv` by `X.csv.gz` (gzip by Zopfli: a
-/// fifth smaller than `gzip -9`, slower to write, as fast to read), through a
-/// temporary file, so neither is ever half-written.
+/// fifth smaller than `gzip -9`, slower to write, as fast to read; above
+/// [`ZOPFLI_MAX_BYTES`] of text, `gzip -9`), through a temporary file, so
+/// neither is ever half-written. The same text always gives the same bytes.
 /// For archiving datasets; live scans are written plain, so that an
 /// interrupted scan stays readable. Not fsynced: see [`sync_folder`].
 pub fn compress(path: &Path) -> Result<PathBuf, RecordingError> {
@@ -441,7 +447,14 @@ pub fn compress(path: &Path) -> Result<PathBuf, RecordingError> {
             iteration_count: std::num::NonZeroU64::new(1).expect("non-zero"),
             ..zopfli::Options::default()
         };
-        zopfli::compress(options, zopfli::Format::Gzip, &bytes[..], &mut out)?;
+        if bytes.len() <= ZOPFLI_MAX_BYTES {
+            zopfli::compress(options, zopfli::Format::Gzip, &bytes[..], &mut out)?;
+        } else {
+            // No name and no time in the header: the output is the text's alone.
+            let mut gz = flate2::write::GzEncoder::new(&mut out, flate2::Compression::best());
+            gz.write_all(&bytes)?;
+            gz.finish()?;
+        }
         out.flush()?;
         fs::rename(&tmp, &gz)?;
         fs::remove_file(path)

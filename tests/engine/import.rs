@@ -399,6 +399,43 @@ fn threads_give_byte_identical_output() {
 }
 
 #[test]
+fn a_recording_too_large_for_zopfli_gzips_the_same_on_any_thread_count() {
+    // 400,000 samples at 44.1 kHz: about 6 MB of text, past Zopfli's limit.
+    let dir = tempfile::tempdir().unwrap();
+    let samples: Vec<i16> = (0..400_000i64)
+        .map(|i| ((i * 7919) % 30000 - 15000) as i16)
+        .collect();
+    let d: Vec<u8> = samples.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let big = dir.path().join("big.wav");
+    std::fs::write(&big, wav(1, 1, 44100, 16, &d)).unwrap();
+    let small = dir.path().join("small.wav");
+    std::fs::write(&small, wav(1, 1, 44100, 16, &d[..2000])).unwrap();
+    let mut bytes = Vec::new();
+    for threads in [1, 2] {
+        let out = dir.path().join(format!("out{threads}"));
+        let mut a = args(&[&big, &small], &out);
+        a.label = Some("S1".into());
+        a.gzip = true;
+        a.threads = Some(threads);
+        let w = run(&a).unwrap();
+        let rec = recording::read(&w[0]).unwrap();
+        assert!(rec.is_complete());
+        let back: Vec<f64> = samples.iter().map(|&v| f64::from(v)).collect();
+        assert_eq!(rec.column("ch1").unwrap(), back);
+        bytes.push(std::fs::read(&w[0]).unwrap());
+    }
+    let mut text = Vec::new();
+    std::io::Read::read_to_end(&mut flate2::read::GzDecoder::new(&bytes[0][..]), &mut text)
+        .unwrap();
+    assert!(
+        text.len() > 4 << 20,
+        "{} bytes of text: under Zopfli's limit",
+        text.len()
+    );
+    assert!(bytes[0] == bytes[1], "--threads 2 differs from --threads 1");
+}
+
+#[test]
 fn a_bad_input_among_many_on_several_threads_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let mut files = mixed_inputs(dir.path());
