@@ -24,7 +24,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use clap::Args;
 
-use crate::recording::{Digits, RecordingWriter, time_decimals};
+use crate::recording::{Digits, RecordingError, RecordingWriter, time_decimals};
 use crate::support::Failure;
 
 #[derive(Debug, Args, Clone, Default)]
@@ -448,8 +448,14 @@ pub fn write_recording(
     columns.extend(imp.names.iter().map(String::as_str));
     let mut digits = vec![imp.time_digits];
     digits.extend(imp.channel_digits.iter().copied());
-    let mut w = RecordingWriter::create_with_digits(path, &meta, &columns, &digits)
-        .map_err(|e| Failure::BadInput(format!("{}: {e}", path.display())))?;
+    let mut w =
+        RecordingWriter::create_with_digits(path, &meta, &columns, &digits).map_err(|e| {
+            match e {
+                // A folder that cannot be made or written is no fault of the input.
+                RecordingError::Io { .. } => Failure::Runtime(e.to_string()),
+                _ => Failure::BadInput(format!("{}: {e}", path.display())),
+            }
+        })?;
     w.defer_sync();
     let mut row = vec![0.0; columns.len()];
     for (i, &t) in imp.time.iter().enumerate() {

@@ -460,6 +460,14 @@ fn a_bad_input_among_many_on_several_threads_writes_nothing() {
     std::fs::create_dir(&out).unwrap();
     run(&a).unwrap_err();
     assert_eq!(std::fs::read_dir(&out).unwrap().count(), 0);
+    // An --out that cannot be a folder is a runtime failure, not bad input.
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, "").unwrap();
+    let mut a = args(&refs[..1], &file);
+    a.label = Some("S3".into());
+    let e = run(&a).unwrap_err();
+    assert_eq!(e.exit_code(), 1, "{}", e.message());
+    assert!(e.message().contains("a-file"), "{}", e.message());
 }
 
 const CSV_MAPPINGS: [&str; 4] = [
