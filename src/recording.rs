@@ -41,7 +41,7 @@ mod reader;
 mod writer;
 pub use label::check_label;
 use reader::{Select, gunzip, parse_text};
-pub use writer::{RecordingWriter, compress, decimals_for, sync_folder};
+pub use writer::{Digits, RecordingWriter, compress, decimals_for, sync_folder, time_decimals};
 
 #[derive(Debug, thiserror::Error)]
 pub enum RecordingError {

@@ -12,6 +12,7 @@ mod evaluate_windows;
 mod falcon_emulator;
 mod faults;
 mod first_session;
+mod import;
 mod plot;
 mod sweep_simulated;
 mod validation;

@@ -209,6 +209,267 @@ fn wav_16_and_24_bit_integer_and_float_round_trip() {
     );
 }
 
+/// The rows of a written recording (the lines that are not comments, after the header).
+fn rows_of(text: &str) -> Vec<&str> {
+    text.lines()
+        .filter(|l| !l.starts_with('#'))
+        .skip(1)
+        .collect()
+}
+
+#[test]
+fn integer_samples_stay_integers() {
+    let dir = tempfile::tempdir().unwrap();
+    let s16: [i16; 6] = [-228, 0, 32767, -32768, 1, -1];
+    let d: Vec<u8> = s16.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let f = dir.path().join("tap.wav");
+    std::fs::write(&f, wav(1, 1, 44100, 16, &d)).unwrap();
+    let mut a = args(&[&f], &dir.path().join("out"));
+    a.label = Some("S1".into());
+    let w = run(&a).unwrap();
+    let text = std::fs::read_to_string(&w[0]).unwrap();
+    let samples: Vec<&str> = rows_of(&text)
+        .iter()
+        .map(|r| r.split_once(',').unwrap().1)
+        .collect();
+    assert_eq!(
+        samples,
+        ["-228", "0", "32767", "-32768", "1", "-1"],
+        "{text}"
+    );
+    let rec = recording::read(&w[0]).unwrap();
+    let back: Vec<f64> = s16.iter().map(|&v| f64::from(v)).collect();
+    assert_eq!(rec.column("ch1").unwrap(), back);
+}
+
+/// Every written `t_s` of a WAV at `rate` is within 1 % of a sample period
+/// of i / rate, as the text says it and as the reader reads it.
+fn check_time_precision(rate: u32, samples: usize) {
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("long.wav");
+    std::fs::write(&f, wav(1, 1, rate, 16, &vec![0u8; samples * 2])).unwrap();
+    let mut a = args(&[&f], &dir.path().join("out"));
+    a.label = Some("S1".into());
+    let w = run(&a).unwrap();
+    let text = std::fs::read_to_string(&w[0]).unwrap();
+    let period = 1.0 / f64::from(rate);
+    let rows = rows_of(&text);
+    assert_eq!(rows.len(), samples);
+    for (i, row) in rows.iter().enumerate() {
+        let t: f64 = row.split_once(',').unwrap().0.parse().unwrap();
+        let err = (t - i as f64 / f64::from(rate)).abs();
+        assert!(
+            err <= 0.01 * period,
+            "{rate} Hz, sample {i}: t_s {t} is off by {:.2} % of a period",
+            100.0 * err / period
+        );
+    }
+    let read = recording::read(&w[0]).unwrap();
+    for (i, t) in read.column("t_s").unwrap().iter().enumerate() {
+        assert!(
+            (t - i as f64 / f64::from(rate)).abs() <= 0.01 * period,
+            "read back, sample {i}"
+        );
+    }
+}
+
+#[test]
+fn t_s_is_within_a_percent_of_a_period_at_44_1_khz() {
+    // Six decimals were off by up to 2.2 % here.
+    check_time_precision(44_100, 100_000);
+}
+
+#[test]
+fn t_s_is_within_a_percent_of_a_period_at_200_khz() {
+    check_time_precision(200_000, 100_000);
+}
+
+#[test]
+fn gzip_output_reads_back_identical_samples() {
+    let dir = tempfile::tempdir().unwrap();
+    // Float samples that need every digit, and CSV values of every kind.
+    let sf: Vec<f32> = (0..500).map(|i| ((i as f32) * 0.37).sin() / 3.0).collect();
+    let d: Vec<u8> = sf.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let ff = dir.path().join("float.wav");
+    std::fs::write(&ff, wav(3, 1, 48000, 32, &d)).unwrap();
+    let s64: Vec<f64> = (0..300)
+        .map(|i| (f64::from(i) * 0.1).exp() * 1e-9)
+        .collect();
+    let d: Vec<u8> = s64.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let fd = dir.path().join("double.wav");
+    std::fs::write(&fd, wav(3, 1, 20000, 64, &d)).unwrap();
+    let fc = dir.path().join("rig.csv");
+    std::fs::write(&fc, "t,acc\n0.0,0.1\n0.001,-3.141592653589793\n0.002,1e-9\n0.0035,123456789012.5\n0.004,-0.000\n").unwrap();
+    let out = dir.path().join("out");
+    let mut a = args(&[&ff, &fd], &out);
+    a.label = Some("S2".into());
+    a.gzip = true;
+    let w = run(&a).unwrap();
+    assert_eq!(
+        w,
+        [out.join("S2/float.csv.gz"), out.join("S2/double.csv.gz")]
+    );
+    assert!(!out.join("S2/float.csv").exists());
+    let back: Vec<f32> = recording::read(&w[0])
+        .unwrap()
+        .column("ch1")
+        .unwrap()
+        .iter()
+        .map(|&v| v as f32)
+        .collect();
+    assert_eq!(back, sf);
+    assert_eq!(recording::read(&w[1]).unwrap().column("ch1").unwrap(), s64);
+    let mut a = args(&[&fc], &out);
+    a.label = Some("S2".into());
+    a.time_column = Some("t".into());
+    a.gzip = true;
+    let w = run(&a).unwrap();
+    let rec = recording::read(&w[0]).unwrap();
+    assert_eq!(
+        rec.column("t_s").unwrap(),
+        [0.0, 0.001, 0.002, 0.0035, 0.004]
+    );
+    assert_eq!(
+        rec.column("acc").unwrap(),
+        [0.1, -std::f64::consts::PI, 1e-9, 123456789012.5, -0.0]
+    );
+}
+
+/// Two WAVs and two CSVs of a few thousand samples each.
+fn mixed_inputs(dir: &Path) -> Vec<std::path::PathBuf> {
+    let mut files = Vec::new();
+    for (k, rate) in [8000u32, 44100].into_iter().enumerate() {
+        let d: Vec<u8> = (0..3000)
+            .flat_map(|i: i32| ((i * 37 + k as i32 * 11) % 4000 - 2000).to_le_bytes()[..2].to_vec())
+            .collect();
+        let f = dir.join(format!("clip{k}.wav"));
+        std::fs::write(&f, wav(1, 1, rate, 16, &d)).unwrap();
+        files.push(f);
+    }
+    for k in 0..2 {
+        let mut text = String::from("a,b\n");
+        for i in 0..2000 {
+            text.push_str(&format!(
+                "{},{}\n",
+                f64::from(i) * 0.013 + f64::from(k),
+                (f64::from(i) / 7.0).cos()
+            ));
+        }
+        let f = dir.join(format!("trial{k}.csv"));
+        std::fs::write(&f, text).unwrap();
+        files.push(f);
+    }
+    files
+}
+
+#[test]
+fn threads_give_byte_identical_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = mixed_inputs(dir.path());
+    let refs: Vec<&Path> = files.iter().map(|f| f.as_path()).collect();
+    let mut outputs = Vec::new();
+    for (threads, gzip) in [(1, false), (4, false), (1, true), (3, true)] {
+        let out = dir.path().join(format!("out-{threads}-{gzip}"));
+        let mut a = args(&refs, &out);
+        a.label = Some("S3".into());
+        a.rate = Some(2500.0);
+        a.threads = Some(threads);
+        a.gzip = gzip;
+        let w = run(&a).unwrap();
+        assert_eq!(w.len(), 4);
+        let names: Vec<_> = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, ["S3"], "no staging folder left behind");
+        outputs.push(
+            w.iter()
+                .map(|p| std::fs::read(p).unwrap())
+                .collect::<Vec<_>>(),
+        );
+    }
+    assert!(
+        outputs[0] == outputs[1],
+        "--threads 4 differs from --threads 1"
+    );
+    assert!(
+        outputs[2] == outputs[3],
+        "--gzip --threads 3 differs from --threads 1"
+    );
+}
+
+#[test]
+fn a_recording_too_large_for_zopfli_gzips_the_same_on_any_thread_count() {
+    // 400,000 samples at 44.1 kHz: about 6 MB of text, past Zopfli's limit.
+    let dir = tempfile::tempdir().unwrap();
+    let samples: Vec<i16> = (0..400_000i64)
+        .map(|i| ((i * 7919) % 30000 - 15000) as i16)
+        .collect();
+    let d: Vec<u8> = samples.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let big = dir.path().join("big.wav");
+    std::fs::write(&big, wav(1, 1, 44100, 16, &d)).unwrap();
+    let small = dir.path().join("small.wav");
+    std::fs::write(&small, wav(1, 1, 44100, 16, &d[..2000])).unwrap();
+    let mut bytes = Vec::new();
+    for threads in [1, 2] {
+        let out = dir.path().join(format!("out{threads}"));
+        let mut a = args(&[&big, &small], &out);
+        a.label = Some("S1".into());
+        a.gzip = true;
+        a.threads = Some(threads);
+        let w = run(&a).unwrap();
+        let rec = recording::read(&w[0]).unwrap();
+        assert!(rec.is_complete());
+        let back: Vec<f64> = samples.iter().map(|&v| f64::from(v)).collect();
+        assert_eq!(rec.column("ch1").unwrap(), back);
+        bytes.push(std::fs::read(&w[0]).unwrap());
+    }
+    let mut text = Vec::new();
+    std::io::Read::read_to_end(&mut flate2::read::GzDecoder::new(&bytes[0][..]), &mut text)
+        .unwrap();
+    assert!(
+        text.len() > 4 << 20,
+        "{} bytes of text: under Zopfli's limit",
+        text.len()
+    );
+    assert!(bytes[0] == bytes[1], "--threads 2 differs from --threads 1");
+}
+
+#[test]
+fn a_bad_input_among_many_on_several_threads_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut files = mixed_inputs(dir.path());
+    let broken = dir.path().join("broken.wav");
+    std::fs::write(&broken, b"RIFF....WAVE").unwrap();
+    files.insert(2, broken);
+    let refs: Vec<&Path> = files.iter().map(|f| f.as_path()).collect();
+    let out = dir.path().join("out");
+    let mut a = args(&refs, &out);
+    a.label = Some("S3".into());
+    a.rate = Some(2500.0);
+    a.threads = Some(3);
+    let e = run(&a).unwrap_err();
+    assert_eq!(e.exit_code(), 2);
+    assert!(
+        e.message().contains("broken.wav: not a WAV file"),
+        "{}",
+        e.message()
+    );
+    assert!(!out.exists(), "nothing written");
+    // Into a folder that was there: it is left as it was.
+    std::fs::create_dir(&out).unwrap();
+    run(&a).unwrap_err();
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 0);
+    // An --out that cannot be a folder is a runtime failure, not bad input.
+    let file = dir.path().join("a-file");
+    std::fs::write(&file, "").unwrap();
+    let mut a = args(&refs[..1], &file);
+    a.label = Some("S3".into());
+    let e = run(&a).unwrap_err();
+    assert_eq!(e.exit_code(), 1, "{}", e.message());
+    assert!(e.message().contains("a-file"), "{}", e.message());
+}
+
 const CSV_MAPPINGS: [&str; 4] = [
     "--time-column t --label-column texture",
     "--rate 1000 --label S1",
