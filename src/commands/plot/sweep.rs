@@ -215,7 +215,7 @@ impl SweepFigure {
         let hi = scores.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let shade = |a: f64| {
             let frac = if hi > lo { (a - lo) / (hi - lo) } else { 0.5 };
-            (255.0 * (1.0 - 0.8 * frac)) as u8
+            (235.0 - 190.0 * frac) as u8
         };
         let title = format!(
             "Accuracy over {} × {} ({})",
