@@ -596,3 +596,110 @@ pub fn sweep_grid_simulated(
         }),
     ))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn swept(key: &str, n: i64) -> Swept {
+        Swept {
+            key: key.into(),
+            values: (1..=n).map(toml::Value::Integer).collect(),
+        }
+    }
+
+    fn at(accuracy: Option<f64>) -> SweepPoint {
+        let values = vec!["v".to_string()];
+        match accuracy {
+            Some(a) => SweepPoint {
+                accuracy: a,
+                ..not_evaluated(values, String::new(), 1, 0)
+            }
+            .tap_evaluated(),
+            None => not_evaluated(values, "refused".into(), 1, 0),
+        }
+    }
+
+    impl SweepPoint {
+        fn tap_evaluated(mut self) -> SweepPoint {
+            self.evaluated = true;
+            self.reason = None;
+            self.error = None;
+            self
+        }
+    }
+
+    fn best_of(accuracies: &[Option<f64>]) -> Vec<bool> {
+        let mut points: Vec<SweepPoint> = accuracies.iter().map(|a| at(*a)).collect();
+        mark_best(&mut points);
+        points.iter().map(|p| p.best).collect()
+    }
+
+    #[test]
+    fn combinations_come_row_by_row() {
+        let c = combinations(&[swept("a", 2), swept("b", 3)]);
+        assert_eq!(
+            c,
+            [[0, 0], [0, 1], [0, 2], [1, 0], [1, 1], [1, 2]].map(Vec::from)
+        );
+        assert_eq!(
+            combinations(&[swept("a", 2), swept("b", 2), swept("c", 2)]).len(),
+            8
+        );
+    }
+
+    #[test]
+    fn the_best_is_the_top_accuracy_unless_every_point_ties() {
+        assert_eq!(
+            best_of(&[Some(0.5), Some(0.9), Some(0.7)]),
+            [false, true, false]
+        );
+        assert_eq!(
+            best_of(&[Some(0.9), Some(0.5), Some(0.9)]),
+            [true, false, true]
+        );
+        assert_eq!(best_of(&[Some(0.9), Some(0.9)]), [false, false]);
+        assert_eq!(best_of(&[Some(0.9)]), [false]);
+        assert_eq!(best_of(&[None, None]), [false, false]);
+        // A point not evaluated ranks below every evaluated one.
+        assert_eq!(best_of(&[Some(0.9), None]), [true, false]);
+    }
+
+    #[test]
+    fn the_verdict_names_the_best_or_says_none() {
+        let sweep = |acc: &[Option<f64>]| {
+            let points = acc.iter().map(|a| at(*a)).collect();
+            Sweep::new(vec!["k".into()], "3-fold".into(), points, None).table()
+        };
+        assert!(sweep(&[Some(0.5), Some(0.9)]).contains("best: k = v (90.0 %), 3-fold"));
+        assert!(sweep(&[Some(0.9), Some(0.9)]).contains("no best: every value gives 90.0 %"));
+        let none = sweep(&[None, None]);
+        assert!(none.contains("no value could be evaluated"), "{none}");
+        assert!(none.contains("not evaluated: refused"), "{none}");
+    }
+
+    #[test]
+    fn a_key_swept_twice_or_too_many_points_is_refused() {
+        let p = LoadedProfile::thesis().profile;
+        assert!(resolve_all(&p, &[swept("k", 2), swept("classifier.k", 2)]).is_err());
+        assert!(resolve_all(&p, &[swept("k", 200), swept("spacing", 200)]).is_err());
+        assert!(resolve_all(&p, &[]).is_err());
+        let k = resolve_all(&p, &[swept("k", 2), swept("taper", 2)]).unwrap();
+        assert_eq!(k[1].name(), "analysis.taper");
+    }
+
+    #[test]
+    fn a_grid_point_is_validated_with_all_its_keys_set() {
+        let p = LoadedProfile::thesis().profile;
+        let spectrum = resolve_key(&p, "spectrum").unwrap();
+        let bins = resolve_key(&p, "bins").unwrap();
+        let welch = toml::Value::String("welch".into());
+        let few: toml::Value = toml::from_str::<toml::Table>("v = [1, 12]").unwrap()["v"].clone();
+        // Alone, Welch is refused beside the thesis's 49 bins…
+        let e = profile_with(&p, &[(&spectrum, &welch)]).unwrap_err();
+        assert!(e.starts_with("analysis.bins"), "{e}");
+        // …together with bins it allows, the point is valid.
+        let q = profile_with(&p, &[(&spectrum, &welch), (&bins, &few)]).unwrap();
+        assert_eq!(q.analysis.bins, [1, 12]);
+    }
+}

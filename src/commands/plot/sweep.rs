@@ -308,19 +308,25 @@ impl SweepFigure {
                 .map_err(fail)?;
             }
         }
+        let any_best = self.points.iter().any(|p| p.best);
         let scale = if scores.is_empty() {
             "no point was evaluated".to_string()
-        } else if hi > lo {
-            format!(
-                "accuracy (%) pooled over the folds; grey from {:.1} % (lightest) to {:.1} % (darkest); * best (outlined)",
-                100.0 * lo,
-                100.0 * hi
-            )
         } else {
-            format!(
-                "accuracy (%) pooled over the folds; every evaluated point gives {:.1} % (no best)",
-                100.0 * hi
-            )
+            let greys = if hi > lo {
+                format!(
+                    "grey from {:.1} % (lightest) to {:.1} % (darkest)",
+                    100.0 * lo,
+                    100.0 * hi
+                )
+            } else {
+                format!("every evaluated point gives {:.1} %", 100.0 * hi)
+            };
+            let best = if any_best {
+                "* best (outlined)"
+            } else {
+                "no best: every point ties"
+            };
+            format!("accuracy (%) pooled over the folds; {greys}; {best}")
         };
         foot.draw(&Text::new(
             scale,

@@ -162,7 +162,15 @@ impl Sweep {
         for (i, r) in reasons.iter().enumerate() {
             out.push_str(&format!("({}) not evaluated: {r}\n", i + 1));
         }
-        out
+        let mut notes: Vec<&str> = Vec::new();
+        for n in self.points.iter().filter_map(|p| p.k_notice.as_deref()) {
+            if !notes.contains(&n) {
+                notes.push(n);
+                out.push_str(&format!("note: {n}\n"));
+            }
+        }
+        // No padding after the last column.
+        out.lines().map(|l| format!("{}\n", l.trim_end())).collect()
     }
 
     /// The best point(s), or why there is none.
