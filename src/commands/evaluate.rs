@@ -15,7 +15,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use crate::classify::Model;
-use crate::dataset::{self, Keep, Options, Unusable};
+use crate::dataset::{self, Keep, Options, Unusable, meta_text};
 use crate::evaluate::plan::{Dataset, Overrides, Plan, validate_with_votes};
 use crate::evaluate::sweep::{
     SimPlan, Sweep, Swept, resolve_all, simulated_dataset, sweep_grid, sweep_grid_simulated,
@@ -304,12 +304,23 @@ fn validated(
     }
     let n_textures = lp.profile.textures.len();
     if keys.iter().any(|k| k.needs_simulation()) {
-        let points = crate::evaluate::sweep::combinations(&swept).len();
+        let combos = crate::evaluate::sweep::combinations(&swept);
+        let points = combos.len();
+        // `path.speed_m_per_s = 0.4, k = 1 (3/4)`.
+        let naming = |i: usize| {
+            let set: Vec<String> = keys
+                .iter()
+                .zip(&swept)
+                .zip(&combos[i])
+                .map(|((k, w), &j)| format!("{} = {}", k.name(), meta_text(&w.values[j])))
+                .collect();
+            format!("{} ({}/{points})", set.join(", "), i + 1)
+        };
         let per_value = sim.per_class * n_textures;
         let pb = progress_bar((per_value * points) as u64, "simulating");
         let s = sweep_grid_simulated(&lp, &swept, &plan, sim, &|i, done, _| {
             if done == 1 {
-                pb.set_message(format!("point {} of {points}", i + 1));
+                pb.set_message(naming(i));
             }
             pb.set_position((i * per_value + done) as u64);
         })?;
