@@ -11,6 +11,7 @@
 //! or a [`crate::evaluate::sweep::Sweep`].
 
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use clap::Args;
 
@@ -317,12 +318,24 @@ fn validated(
             format!("{} ({}/{points})", set.join(", "), i + 1)
         };
         let per_value = sim.per_class * n_textures;
-        let pb = progress_bar((per_value * points) as u64, "simulating");
+        // One dataset per combination of the recording keys' values.
+        let datasets: usize = keys
+            .iter()
+            .zip(&swept)
+            .filter(|(k, _)| k.needs_simulation())
+            .map(|(_, w)| w.values.len())
+            .product();
+        let pb = progress_bar((per_value * datasets) as u64, "simulating");
+        // The point whose dataset is being simulated (+1), and how many
+        // datasets were started.
+        let (current, started) = (AtomicUsize::new(0), AtomicUsize::new(0));
         let s = sweep_grid_simulated(&lp, &swept, &plan, sim, &|i, done, _| {
-            if done == 1 {
+            if current.swap(i + 1, Ordering::Relaxed) != i + 1 {
+                started.fetch_add(1, Ordering::Relaxed);
                 pb.set_message(naming(i));
             }
-            pb.set_position((i * per_value + done) as u64);
+            let before = started.load(Ordering::Relaxed).saturating_sub(1);
+            pb.set_position((before * per_value + done) as u64);
         })?;
         pb.finish_and_clear();
         let source = format!(

@@ -494,11 +494,11 @@ pub fn sweep_simulated(
 /// Evaluate every combination of keys among which some change the
 /// recordings (the path's speed, the controller's stiffness, a simulator
 /// setting): each combination's values of those keys simulate their own
-/// dataset ([`simulated_dataset`], same seed for every one; consecutive
-/// points that share them share it), then the point validates as `plan`
-/// says. A point the profile refuses, or whose recordings the analysis
-/// cannot use (a path so fast the window has gaps), is reported with its
-/// reason and the sweep goes on. `progress` hears (point index, scans done
+/// dataset ([`simulated_dataset`], same seed for every one; the points
+/// that share them share it), then the point validates as `plan` says. A
+/// point the profile refuses, or whose recordings the analysis cannot use
+/// (a path so fast the window has gaps), is reported with its reason and
+/// the sweep goes on. `progress` hears (point index, scans done
 /// in its dataset, scans per dataset).
 pub fn sweep_grid_simulated(
     lp: &LoadedProfile,
@@ -517,15 +517,27 @@ pub fn sweep_grid_simulated(
     };
     let replan = keys.iter().any(|k| k.table == "evaluation");
     let mut made: Option<(Vec<String>, Dataset)> = None;
-    let mut points = Vec::new();
+    let combos = combinations(swept);
+    // Evaluated grouped by the recording keys' values, so each of their
+    // combinations is simulated once whatever the keys' order; reported
+    // in the grid's order.
+    let mut order: Vec<usize> = (0..combos.len()).collect();
+    order.sort_by_key(|&i| {
+        keys.iter()
+            .zip(&combos[i])
+            .filter(|(k, _)| k.needs_simulation())
+            .map(|(_, &j)| j)
+            .collect::<Vec<_>>()
+    });
+    let mut points: Vec<Option<SweepPoint>> = vec![None; combos.len()];
     let mut cache = Vec::new();
-    for (i, combo) in combinations(swept).iter().enumerate() {
-        let set = point_set(&keys, swept, combo);
+    for i in order {
+        let set = point_set(&keys, swept, &combos[i]);
         let values = texts(&set);
         let p = match profile_with(&lp.profile, &set) {
             Ok(p) => p,
             Err(reason) => {
-                points.push(not_evaluated(values, reason, 0, 0));
+                points[i] = Some(not_evaluated(values, reason, 0, 0));
                 continue;
             }
         };
@@ -578,7 +590,7 @@ pub fn sweep_grid_simulated(
             None if data.scans.is_empty() => Err(bad("no simulated scan finished")),
             None => validate_point(&lp_v.profile, data, &mut cache, plan, replan),
         };
-        points.push(match result {
+        points[i] = Some(match result {
             Ok(r) => evaluated(values, &r, data),
             Err(e) if e.is_bad_input() => {
                 not_evaluated(values, e.to_string(), data.counts().0, incomplete)
@@ -589,7 +601,7 @@ pub fn sweep_grid_simulated(
     Ok(Sweep::new(
         keys.iter().map(SweepKey::name).collect(),
         plan.describe(),
-        points,
+        points.into_iter().flatten().collect(),
         Some(SimulatedInfo {
             per_class: sim.per_class,
             seed: lp.profile.simulator.seed,

@@ -332,6 +332,16 @@ fn a_simulated_grid_reports_a_path_too_fast_and_goes_on() {
         assert!(!p.evaluated && p.accuracy.is_nan(), "{p:?}");
         assert!(p.reason.as_deref().unwrap().contains("spacing"), "{p:?}");
     }
+    // The keys in the other order: the same points (each speed simulated
+    // once, the same seed), the grid transposed.
+    let swapped = [swept[1].clone(), swept[0].clone()];
+    let t = sweep_grid_simulated(&lp, &swapped, &plan, sim, &|_, _, _| {}).unwrap();
+    for (i, p) in s.points.iter().enumerate() {
+        let q = &t.points[(i % 2) * 2 + i / 2];
+        assert_eq!(q.values, [p.values[1].clone(), p.values[0].clone()]);
+        assert_eq!(q.evaluated, p.evaluated);
+        assert_eq!(q.accuracy.to_bits(), p.accuracy.to_bits(), "{p:?} {q:?}");
+    }
     let table = s.table();
     assert!(
         table.contains("path.speed_m_per_s \\ classifier.k"),
