@@ -60,7 +60,7 @@ pub enum Command {
     Classify(classify::ClassifyArgs),
     /// Train and test on a split of the recordings; print the confusion matrix (Table 4.1).
     #[command(
-        after_help = "Examples:\n  hapticlab evaluate recordings/thesis-sim --json > report.json\n  hapticlab evaluate recordings/thesis-sim --folds 10 --seed 1\n  hapticlab evaluate recordings/lab --folds 5 --group-by session\n  hapticlab evaluate recordings/thesis-sim --folds 10 --sweep k=1..15\n  hapticlab evaluate --profile thesis --simulate --folds 5 --sweep controller.stiffness_n_per_m[1]=90..540:90"
+        after_help = "Examples:\n  hapticlab evaluate recordings/thesis-sim --json > report.json\n  hapticlab evaluate recordings/thesis-sim --folds 10 --seed 1\n  hapticlab evaluate recordings/lab --folds 5 --group-by session\n  hapticlab evaluate recordings/thesis-sim --folds 10 --sweep k=1..15\n  hapticlab evaluate recordings/thesis-sim --folds 5 --sweep spectrum=magnitude,welch   # welch: not evaluated, with the reason\n  hapticlab evaluate recordings/thesis-sim --folds 5 --sweep 'bins=[1,1],[1,2]' --sweep k=1,10   # a grid\n  hapticlab evaluate --profile thesis --simulate --folds 5 --sweep controller.stiffness_n_per_m[1]=90..540:90"
     )]
     Evaluate(evaluate::EvaluateArgs),
     /// Play recordings back through the console's dashboard (1×, 4×, 16×, single steps).
@@ -88,7 +88,7 @@ pub enum Command {
     Import(crate::import::ImportArgs),
     /// Draw figures (PNG or SVG): a trace and its spectrum, a confusion matrix, features per class, a sweep.
     #[command(
-        after_help = "Examples:\n  hapticlab plot trace recordings/thesis-sim/S2/S2_001.csv.gz --out s2.png\n  hapticlab evaluate recordings/thesis-sim --folds 10 --json > r.json && hapticlab plot confusion r.json --out confusion.svg\n  hapticlab plot features recordings/thesis-sim --per-class 5 --out features.png\n  hapticlab evaluate recordings/thesis-sim --folds 5 --sweep k=1..15 --json > s.json && hapticlab plot sweep s.json --out sweep.png"
+        after_help = "Examples:\n  hapticlab plot trace recordings/thesis-sim/S2/S2_001.csv.gz --out s2.png\n  hapticlab evaluate recordings/thesis-sim --folds 10 --json > r.json && hapticlab plot confusion r.json --out confusion.svg\n  hapticlab plot features recordings/thesis-sim --per-class 5 --out features.png\n  hapticlab evaluate recordings/thesis-sim --folds 5 --sweep k=1..15 --json > s.json && hapticlab plot sweep s.json --out sweep.png\n  hapticlab evaluate recordings/thesis-sim --folds 5 --sweep 'bins=[1,1],[1,2]' --sweep k=1,10 --json > g.json && hapticlab plot sweep g.json --out grid.svg"
     )]
     Plot(plot::PlotArgs),
     /// Check profiles: parse and validate every value.

@@ -11,15 +11,15 @@
 //! or a [`crate::evaluate::sweep::Sweep`].
 
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 use clap::Args;
 
 use crate::classify::Model;
-use crate::dataset::meta_text;
-use crate::dataset::{self, Keep, Options, Unusable};
+use crate::dataset::{self, Keep, Options, Unusable, meta_text};
 use crate::evaluate::plan::{Dataset, Overrides, Plan, validate_with_votes};
 use crate::evaluate::sweep::{
-    SimPlan, parse_sweep, resolve_key, simulated_dataset, sweep, sweep_simulated,
+    SimPlan, Sweep, Swept, resolve_all, simulated_dataset, sweep_grid, sweep_grid_simulated,
 };
 use crate::evaluate::{self, EvaluateError, windows};
 use crate::profile::SplitMethod;
@@ -64,9 +64,9 @@ pub struct ValidationArgs {
     /// Seed of the folds' shuffle (default: the profile's evaluation.shuffle_seed, else 0).
     #[arg(long, value_name = "S")]
     pub seed: Option<u64>,
-    /// Evaluate once per value of a profile key: `k=1..15`, `k=1..15:2`, `metric=euclidean,cosine`, `spacing=0.0002,0.0003`, `spectrum=magnitude,welch`; with --simulate also `controller.stiffness_n_per_m[1]=90..540:90`, `path.speed_m_per_s=0.005..0.03:0.005`.
+    /// Evaluate once per value of a profile key: `k=1..15`, `k=1..15:2`, `metric=euclidean,cosine`, `spacing=0.0002,0.0003`, `spectrum=magnitude,welch`; with --simulate also `controller.stiffness_n_per_m[1]=90..540:90`, `path.speed_m_per_s=0.005..0.03:0.005`. Repeat for a grid of every combination (two keys print as a matrix). A value the profile refuses is listed as not evaluated, with the reason, and the sweep goes on (exit 2 only when nothing could be evaluated).
     #[arg(long, value_name = "KEY=VALUES")]
-    pub sweep: Option<String>,
+    pub sweep: Vec<String>,
     /// Worker threads for the folds and the reading (default: the number of cores).
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
@@ -95,7 +95,7 @@ impl ValidationArgs {
         self.folds.is_some()
             || self.loo
             || self.group_by.is_some()
-            || self.sweep.is_some()
+            || !self.sweep.is_empty()
             || self.simulate
             || self.per_class.is_some()
     }
@@ -237,13 +237,15 @@ fn validated(
         args.seed = shuffle_seed;
     }
     let plan = Plan::new(&lp.profile, &args.overrides());
-    let sweep_spec = match &args.sweep {
-        Some(spec) => {
-            let (key, values) = parse_sweep(spec)?;
-            let k = resolve_key(&lp.profile, &key)?;
-            Some((spec, key, k, values))
-        }
-        None => None,
+    let swept = args
+        .sweep
+        .iter()
+        .map(|spec| Swept::parse(spec))
+        .collect::<Result<Vec<_>, _>>()?;
+    let keys = if swept.is_empty() {
+        Vec::new()
+    } else {
+        resolve_all(&lp.profile, &swept)?
     };
     match (args.simulate, paths.is_empty()) {
         (true, false) => {
@@ -258,8 +260,11 @@ fn validated(
         }
         _ => {}
     }
-    if let Some((spec, _, k, _)) = &sweep_spec
-        && k.needs_simulation()
+    if let Some((spec, k)) = args
+        .sweep
+        .iter()
+        .zip(&keys)
+        .find(|(_, k)| k.needs_simulation())
         && !args.simulate
     {
         return Err(bad(format!(
@@ -299,45 +304,52 @@ fn validated(
         )));
     }
     let n_textures = lp.profile.textures.len();
-    if let Some((_, key, k, values)) = &sweep_spec
-        && k.needs_simulation()
-    {
+    if keys.iter().any(|k| k.needs_simulation()) {
+        let combos = crate::evaluate::sweep::combinations(&swept);
+        let points = combos.len();
+        // `path.speed_m_per_s = 0.4, k = 1 (3/4)`.
+        let naming = |i: usize| {
+            let set: Vec<String> = keys
+                .iter()
+                .zip(&swept)
+                .zip(&combos[i])
+                .map(|((k, w), &j)| format!("{} = {}", k.name(), meta_text(&w.values[j])))
+                .collect();
+            format!("{} ({}/{points})", set.join(", "), i + 1)
+        };
         let per_value = sim.per_class * n_textures;
-        let pb = progress_bar((per_value * values.len()) as u64, "simulating");
-        let s = sweep_simulated(&lp, key, values, &plan, sim, &|i, done, _| {
-            if done == 1 {
-                pb.set_message(format!(
-                    "{} = {} ({}/{})",
-                    k.name(),
-                    meta_text(&values[i]),
-                    i + 1,
-                    values.len()
-                ));
+        // One dataset per combination of the recording keys' values.
+        let datasets: usize = keys
+            .iter()
+            .zip(&swept)
+            .filter(|(k, _)| k.needs_simulation())
+            .map(|(_, w)| w.values.len())
+            .product();
+        let pb = progress_bar((per_value * datasets) as u64, "simulating");
+        // The point whose dataset is being simulated (+1), and how many
+        // datasets were started.
+        let (current, started) = (AtomicUsize::new(0), AtomicUsize::new(0));
+        let s = sweep_grid_simulated(&lp, &swept, &plan, sim, &|i, done, _| {
+            if current.swap(i + 1, Ordering::Relaxed) != i + 1 {
+                started.fetch_add(1, Ordering::Relaxed);
+                pb.set_message(naming(i));
             }
-            pb.set_position((i * per_value + done) as u64);
+            let before = started.load(Ordering::Relaxed).saturating_sub(1);
+            pb.set_position((before * per_value + done) as u64);
         })?;
         pb.finish_and_clear();
-        if json {
-            crate::outln!("{}", serde_json::to_string(&s).map_err(bad)?);
-        } else {
-            crate::outln!(
-                "profile {}: sweeping {} over {} values, each on {} simulated scans per texture (seed {}), {}",
-                lp.profile.name,
-                s.key,
-                values.len(),
-                sim.per_class,
-                lp.profile.simulator.seed,
-                plan.describe(),
-            );
-            crate::outp!("{}", s.table());
-        }
-        return Ok(());
+        let source = format!(
+            "each on {} simulated scans per texture (seed {})",
+            sim.per_class, lp.profile.simulator.seed
+        );
+        return print_sweep(&lp.profile.name, &swept, &s, &source, &plan, json);
     }
     // Samples are kept only when a sweep extracts features again per value;
     // otherwise memory holds one feature vector per recording.
-    let keep = match &sweep_spec {
-        Some((_, _, k, _)) if k.table == "analysis" => Keep::Samples,
-        _ => Keep::Features,
+    let keep = if keys.iter().any(|k| k.table == "analysis") {
+        Keep::Samples
+    } else {
+        Keep::Features
     };
     let options = Options {
         keep,
@@ -380,21 +392,9 @@ fn validated(
             crate::classify::plural(n_recordings, "recording", "recordings")
         )
     };
-    if let Some((_, key, _, values)) = &sweep_spec {
-        let s = sweep(&lp.profile, &data, key, values, &plan, &|_| {})?;
-        if json {
-            crate::outln!("{}", serde_json::to_string(&s).map_err(bad)?);
-        } else {
-            crate::outln!(
-                "profile {}: sweeping {} over {} values, {}, {source}",
-                lp.profile.name,
-                s.key,
-                values.len(),
-                plan.describe(),
-            );
-            crate::outp!("{}", s.table());
-        }
-        return Ok(());
+    if !swept.is_empty() {
+        let s = sweep_grid(&lp.profile, &data, &swept, &plan, &|_| {})?;
+        return print_sweep(&lp.profile.name, &swept, &s, &source, &plan, json);
     }
     let groups = match &plan.group_by {
         Some(g) => Some(data.groups(g)?),
@@ -434,6 +434,51 @@ fn validated(
             },
         );
         crate::outp!("{}", report.table());
+    }
+    Ok(())
+}
+
+/// A sweep's table (or JSON), then the verdict on the exit code: 0 when at
+/// least one point was evaluated, 2 (bad input) when none could be.
+fn print_sweep(
+    profile: &str,
+    swept: &[Swept],
+    s: &Sweep,
+    source: &str,
+    plan: &Plan,
+    json: bool,
+) -> Result<(), Failure> {
+    if json {
+        crate::outln!("{}", serde_json::to_string(s).map_err(bad)?);
+    } else {
+        let over = match s.keys.len() {
+            1 => crate::classify::plural(s.points.len(), "value", "values"),
+            _ => {
+                let sizes: Vec<String> = swept.iter().map(|w| w.values.len().to_string()).collect();
+                format!(
+                    "{} ({})",
+                    crate::classify::plural(s.points.len(), "combination", "combinations"),
+                    sizes.join(" × ")
+                )
+            }
+        };
+        crate::outln!(
+            "profile {profile}: sweeping {} over {over}, {}, {source}",
+            s.key,
+            plan.describe(),
+        );
+        crate::outp!("{}", s.table());
+    }
+    if s.evaluated() == 0 {
+        return Err(bad(format!(
+            "--sweep {}: no {} could be evaluated (the reasons are listed above)",
+            s.key,
+            if s.keys.len() == 1 {
+                "value"
+            } else {
+                "combination"
+            }
+        )));
     }
     Ok(())
 }

@@ -11,7 +11,8 @@
 //!   class, one panel per class (Fig 4.3); with `[analysis] windows`, each
 //!   recording's first sub-window;
 //! - `sweep SWEEP.json`: accuracy against the swept value from
-//!   `evaluate --sweep … --json`, with the spread across folds.
+//!   `evaluate --sweep … --json`, with the spread across folds; a two-key
+//!   grid as a heat map (`plot/sweep.rs`).
 //!
 //! Everything is black, greys and line styles, so it prints in grey. This
 //! module reads its inputs and writes only the figure.
@@ -28,6 +29,9 @@ use crate::analysis::FeatureExtractor;
 use crate::dataset::{self, features_of, label_of};
 use crate::recording;
 use crate::support::{Failure, ProfileArg, load_profile};
+
+mod sweep;
+use sweep::SweepFigure;
 
 static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
@@ -66,7 +70,10 @@ pub enum Figure {
         #[arg(long, default_value_t = 5, value_name = "N")]
         per_class: usize,
     },
-    /// Accuracy against the swept value, from `evaluate --sweep … --json`.
+    /// Accuracy against the swept value from `evaluate --sweep … --json`; a two-key grid (two --sweep flags) as a heat map.
+    #[command(
+        after_help = "A one-key sweep is a line of the pooled accuracy against the value, with the spread across folds; a two-key grid is a heat map (rows the first --sweep's values, columns the second's, the best outlined, points not evaluated left white). Draw again from the JSON without evaluating again.\n\nExamples:\n  hapticlab evaluate recordings/thesis-sim --folds 5 --sweep k=1..15 --json > s.json && hapticlab plot sweep s.json --out sweep.png\n  hapticlab evaluate recordings/thesis-sim --folds 5 --sweep k=1,5,10 --sweep taper=none,hann --json > g.json && hapticlab plot sweep g.json --out grid.svg"
+    )]
     Sweep {
         #[arg(value_name = "SWEEP.json")]
         sweep: PathBuf,
@@ -177,11 +184,7 @@ enum Data {
         kind: String,
         first_bin: usize,
     },
-    Sweep {
-        key: String,
-        method: String,
-        points: Vec<(String, f64, f64)>,
-    },
+    Sweep(SweepFigure),
 }
 
 fn read_json(p: &Path) -> Result<serde_json::Value, Failure> {
@@ -302,34 +305,7 @@ impl Data {
                     first_bin: lp.profile.analysis.kept_bins()[0],
                 })
             }
-            Figure::Sweep { sweep } => {
-                let v = read_json(sweep)?;
-                let points = v["points"]
-                    .as_array()
-                    .ok_or_else(|| {
-                        bad(format!(
-                            "{}: no `points` (expected `evaluate --sweep … --json` output)",
-                            sweep.display()
-                        ))
-                    })?
-                    .iter()
-                    .map(|p| {
-                        (
-                            p["value"].as_str().unwrap_or("?").to_string(),
-                            p["accuracy"].as_f64().unwrap_or(f64::NAN),
-                            p["accuracy_std"].as_f64().unwrap_or(0.0),
-                        )
-                    })
-                    .collect::<Vec<_>>();
-                if points.is_empty() {
-                    return Err(bad(format!("{}: the sweep has no points", sweep.display())));
-                }
-                Ok(Data::Sweep {
-                    key: v["key"].as_str().unwrap_or("value").to_string(),
-                    method: v["method"].as_str().unwrap_or("").to_string(),
-                    points,
-                })
-            }
+            Figure::Sweep { sweep } => Ok(Data::Sweep(SweepFigure::load(sweep)?)),
         }
     }
 
@@ -576,88 +552,7 @@ impl Data {
                     }
                 }
             }
-            Data::Sweep {
-                key,
-                method,
-                points,
-            } => {
-                let n = points.len();
-                let title = format!("Accuracy against {key} ({method})");
-                let root = root.titled(&title, ("sans-serif", 20)).map_err(fail)?;
-                let mut c = ChartBuilder::on(&root)
-                    .margin(20)
-                    .x_label_area_size(50)
-                    .y_label_area_size(70)
-                    .build_cartesian_2d(-0.5..(n as f64 - 0.5), 0.0..100.0)
-                    .map_err(fail)?;
-                let names: Vec<String> = points.iter().map(|p| p.0.clone()).collect();
-                c.configure_mesh()
-                    .light_line_style(WHITE)
-                    .x_labels(n.min(30))
-                    .x_label_formatter(&move |x| {
-                        let i = x.round();
-                        if (x - i).abs() < 1e-6 && i >= 0.0 {
-                            names.get(i as usize).cloned().unwrap_or_default()
-                        } else {
-                            String::new()
-                        }
-                    })
-                    .x_desc(with_unit(key))
-                    .y_desc("accuracy (%)")
-                    .label_style(font)
-                    .draw()
-                    .map_err(fail)?;
-                // A value that could not be evaluated (NaN) is a cross on the axis.
-                let missing: Vec<usize> = (0..n).filter(|&i| !points[i].1.is_finite()).collect();
-                if !missing.is_empty() {
-                    c.draw_series(
-                        missing
-                            .iter()
-                            .map(|&i| Cross::new((i as f64, 0.0), 6, BLACK.stroke_width(2))),
-                    )
-                    .map_err(fail)?
-                    .label("not evaluated")
-                    .legend(|(x, y)| Cross::new((x + 10, y), 6, BLACK.stroke_width(2)));
-                }
-                let points: Vec<(usize, &(String, f64, f64))> = points
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, p)| p.1.is_finite())
-                    .collect();
-                c.draw_series(points.iter().map(|&(i, p)| {
-                    let sd = if p.2.is_finite() { p.2 } else { 0.0 };
-                    let (lo, hi) = (100.0 * (p.1 - sd), 100.0 * (p.1 + sd));
-                    PathElement::new(
-                        [(i as f64, lo.max(0.0)), (i as f64, hi.min(100.0))],
-                        GREYS[1].stroke_width(2),
-                    )
-                }))
-                .map_err(fail)?
-                .label("± sd across folds")
-                .legend(|(x, y)| {
-                    PathElement::new([(x + 10, y - 8), (x + 10, y + 8)], GREYS[1].stroke_width(2))
-                });
-                c.draw_series(LineSeries::new(
-                    points.iter().map(|&(i, p)| (i as f64, 100.0 * p.1)),
-                    BLACK.stroke_width(2),
-                ))
-                .map_err(fail)?
-                .label("pooled accuracy")
-                .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK.stroke_width(2)));
-                c.draw_series(
-                    points
-                        .iter()
-                        .map(|&(i, p)| Circle::new((i as f64, 100.0 * p.1), 4, BLACK.filled())),
-                )
-                .map_err(fail)?;
-                c.configure_series_labels()
-                    .position(SeriesLabelPosition::LowerRight)
-                    .background_style(WHITE.mix(0.9))
-                    .border_style(BLACK)
-                    .label_font(font)
-                    .draw()
-                    .map_err(fail)?;
-            }
+            Data::Sweep(sweep) => sweep.draw(root)?,
         }
         Ok(())
     }

@@ -168,6 +168,9 @@ pub struct Plan {
     /// recordings in file-name order (as plain `evaluate` does).
     pub holdout_shuffle: Option<u64>,
     pub threads: usize,
+    /// What the command line set, kept so a sweep of an `[evaluation]` key
+    /// can plan each point again ([`Plan::for_profile`]).
+    pub overrides: Overrides,
 }
 
 impl Plan {
@@ -191,6 +194,16 @@ impl Plan {
             threads: args
                 .threads
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+            overrides: args.clone(),
+        }
+    }
+
+    /// The same command line's plan under another profile (a sweep's
+    /// point, whose `[evaluation]` may differ).
+    pub fn for_profile(&self, p: &Profile) -> Plan {
+        Plan {
+            threads: self.threads,
+            ..Plan::new(p, &self.overrides)
         }
     }
 

@@ -1,22 +1,39 @@
-//! Parameter sweeps (`evaluate --sweep KEY=VALUES`): the thesis's section
-//! 4.3 parameter selection, one validation ([`super::plan::validate`]) per
-//! value of a profile key.
+//! Parameter sweeps (`evaluate --sweep KEY=VALUES`, repeated for a grid):
+//! the thesis's section 4.3 parameter selection, one validation
+//! ([`super::plan::validate`]) per value of a profile key, or per
+//! combination of the values of several keys (every one of them, the first
+//! key's values changing slowest).
 //!
 //! The recordings are read once ([`crate::dataset::load`], on every core)
 //! into a [`Dataset`] holding each one's feature vector and metadata, or,
 //! for a sweep over an `[analysis]` key, the columns the analysis reads, so
-//! features are extracted again per value without re-reading files. A
-//! sweep sets a key of the profile's `[analysis]`, `[classifier]` or
-//! `[evaluation]` table through
-//! TOML, so every key those tables accept can be swept and is validated as
-//! in a profile file. Keys that change the recordings themselves (the
+//! features are extracted again per point without re-reading files. A
+//! sweep sets keys of the profile's `[analysis]`, `[classifier]` or
+//! `[evaluation]` table through TOML ([`keys`]), so every key those tables
+//! accept can be swept and is validated as in a profile file, all of a
+//! point's keys together. Keys that change the recordings themselves (the
 //! path's speed, the controller's stiffness, any `[controller]`, `[path]`,
 //! `[simulator]` or `[device]` key) need a new dataset per value: with
 //! `--simulate`, each value simulates one in virtual time (in a temporary
 //! folder, same seed for every value) and evaluates it; over recordings on
 //! disk they are refused.
-
+//!
+//! A point the profile refuses (a value that makes another key invalid,
+//! `spectrum = "welch"` beside `bins` only the magnitude spectrum has), or
+//! whose recordings its analysis cannot use, is "not evaluated" with the
+//! reason, and the sweep goes on. The best point is the one with the
+//! highest pooled accuracy (each of them when several tie); when every
+//! point ties there is no best. The text tables are in [`table`].
+//!
 //! Like the rest of `evaluate`, this never prints and knows no front end.
+
+mod keys;
+mod table;
+
+pub use keys::{
+    ANALYSIS_TABLES, SIMULATION_TABLES, SweepKey, parse_sweep, profile_with, resolve_key, with_key,
+    with_resolved,
+};
 
 use serde::Serialize;
 
@@ -24,305 +41,100 @@ use super::EvaluateError;
 use super::cv::CvReport;
 use super::plan::{Dataset, Plan, validate};
 use crate::classify::TrainingExample;
-use crate::dataset::{self, Options, Skipped, Unusable, meta_text};
-use crate::profile::{Analysis, Profile};
+use crate::dataset::{self, Keep, Options, Skipped, Unusable, meta_text};
+use crate::profile::{Analysis, LoadedProfile, Profile};
 
 fn bad(m: impl std::fmt::Display) -> EvaluateError {
     EvaluateError::Input(m.to_string())
 }
 
-/// `KEY=VALUES` into the key and its values as TOML literals: `1..15`,
-/// `1..15:2`, `0.005..0.02:0.005` (a range, ends included), or a comma
-/// list (`euclidean,cosine`, `[0,1],[1,2]`).
-pub fn parse_sweep(spec: &str) -> Result<(String, Vec<toml::Value>), EvaluateError> {
-    let (key, values) = spec.split_once('=').ok_or_else(|| {
-        bad(format!(
-            "--sweep {spec:?}: expected KEY=VALUES, e.g. k=1..15"
-        ))
-    })?;
-    let key = key.trim().to_string();
-    if key.is_empty() {
-        return Err(bad(format!("--sweep {spec:?}: no key before `=`")));
-    }
-    let values = values.trim();
-    let mut out = Vec::new();
-    if let Some((a, b)) = values.split_once("..") {
-        out = parse_range(&key, values, a, b)?;
-    } else {
-        for item in split_top_level(values)
-            .iter()
-            .map(|s| s.trim())
-            .filter(|s| !s.is_empty())
-        {
-            let v = toml::from_str::<toml::Table>(&format!("v = {item}"))
-                .ok()
-                .and_then(|mut t| t.remove("v"))
-                .unwrap_or_else(|| toml::Value::String(item.to_string()));
-            out.push(v);
-        }
-    }
-    if out.is_empty() {
-        return Err(bad(format!("--sweep {key}: no values")));
-    }
-    Ok((key, out))
+/// The most points one sweep evaluates (all keys' values multiplied).
+pub const MAX_POINTS: usize = 10_000;
+
+/// One swept key and its values, as typed (`--sweep k=1..15`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Swept {
+    pub key: String,
+    pub values: Vec<toml::Value>,
 }
 
-/// `a..b` or `a..b:step`: whole numbers when all three are, else decimals
-/// rounded to the most decimals written (so 0.1 steps stay 0.1, 0.2, …).
-fn parse_range(
-    key: &str,
-    values: &str,
-    a: &str,
-    b: &str,
-) -> Result<Vec<toml::Value>, EvaluateError> {
-    let (b, step) = match b.split_once(':') {
-        Some((b, s)) => (b, s),
-        None => (b, "1"),
-    };
-    let (a, b, step) = (a.trim(), b.trim(), step.trim());
-    let not_range = || {
-        bad(format!(
-            "--sweep {key}: {values:?} is not a range like 1..15, 1..15:2 or 0.005..0.02:0.005"
-        ))
-    };
-    let too_long = || {
-        bad(format!(
-            "--sweep {key}: {values:?} is an empty or too long range (at most 10,000 values)"
-        ))
-    };
-    if let (Ok(a), Ok(b), Ok(step)) = (a.parse::<i64>(), b.parse::<i64>(), step.parse::<i64>()) {
-        if step <= 0 || b < a || (b - a) / step > 10_000 {
-            return Err(too_long());
-        }
-        return Ok((0..=(b - a) / step)
-            .map(|i| toml::Value::Integer(a + i * step))
-            .collect());
+impl Swept {
+    /// `KEY=VALUES`, as [`parse_sweep`] reads it.
+    pub fn parse(spec: &str) -> Result<Swept, EvaluateError> {
+        let (key, values) = parse_sweep(spec)?;
+        Ok(Swept { key, values })
     }
-    let decimals = [a, b, step]
-        .iter()
-        .map(|s| s.split_once('.').map_or(0, |(_, d)| d.len()))
-        .max()
-        .unwrap_or(0)
-        .min(15) as i32;
-    let num = |s: &str| {
-        s.parse::<f64>()
-            .ok()
-            .filter(|v| v.is_finite())
-            .ok_or_else(not_range)
-    };
-    let (a, b, step) = (num(a)?, num(b)?, num(step)?);
-    if step <= 0.0 || b < a || (b - a) / step > 10_000.0 {
-        return Err(too_long());
-    }
-    let scale = 10f64.powi(decimals);
-    let n = ((b - a) / step + 1e-9).floor() as usize;
-    Ok((0..=n)
-        .map(|i| toml::Value::Float(((a + i as f64 * step) * scale).round() / scale))
-        .collect())
 }
 
-/// Split at the commas outside brackets: `[0,1],[1,2]` is two values.
-fn split_top_level(s: &str) -> Vec<&str> {
-    let (mut depth, mut start, mut out) = (0i32, 0, Vec::new());
-    for (i, c) in s.char_indices() {
-        match c {
-            '[' => depth += 1,
-            ']' => depth -= 1,
-            ',' if depth == 0 => {
-                out.push(&s[start..i]);
-                start = i + 1;
-            }
-            _ => {}
-        }
+/// Every combination of the swept keys' values, as an index into each
+/// key's values; the first key's changes slowest, so a two-key grid comes
+/// row by row (rows the first key's values, columns the second's).
+pub fn combinations(swept: &[Swept]) -> Vec<Vec<usize>> {
+    let mut out = vec![Vec::new()];
+    for s in swept {
+        out = out
+            .into_iter()
+            .flat_map(|c: Vec<usize>| {
+                (0..s.values.len()).map(move |i| {
+                    let mut c = c.clone();
+                    c.push(i);
+                    c
+                })
+            })
+            .collect();
     }
-    out.push(&s[start..]);
     out
 }
 
-/// The tables a sweep sets without new recordings: their keys change how
-/// the recordings are analysed, classified or split.
-pub const ANALYSIS_TABLES: [&str; 3] = ["analysis", "classifier", "evaluation"];
-/// The tables whose keys change the recordings themselves: sweeping them
-/// needs a new simulated dataset per value (`evaluate --simulate`).
-pub const SIMULATION_TABLES: [&str; 4] = ["controller", "path", "simulator", "device"];
-
-/// A swept key, resolved against the profile: its table, its field, and
-/// for a 3-vector (`stiffness_n_per_m`, …) optionally one component.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct SweepKey {
-    pub table: String,
-    pub field: String,
-    /// 0, 1, 2 for x, y, z: written `stiffness_n_per_m[1]` or `stiffness_n_per_m.y`.
-    pub component: Option<usize>,
-}
-
-impl SweepKey {
-    /// Whether each value needs its own recordings (a simulated dataset).
-    pub fn needs_simulation(&self) -> bool {
-        SIMULATION_TABLES.contains(&self.table.as_str())
+/// The swept keys resolved against the profile. No key, the same key (or
+/// vector component) twice, or more than [`MAX_POINTS`] combinations is
+/// bad input.
+pub fn resolve_all(profile: &Profile, swept: &[Swept]) -> Result<Vec<SweepKey>, EvaluateError> {
+    if swept.is_empty() {
+        return Err(bad("--sweep: no key to sweep"));
     }
-    /// `table.field` or `table.field[i]`, as reports name it.
-    pub fn name(&self) -> String {
-        match self.component {
-            Some(i) => format!("{}.{}[{i}]", self.table, self.field),
-            None => format!("{}.{}", self.table, self.field),
-        }
-    }
-}
-
-/// Find `key` in the profile: `table.field` (`analysis.spacing`,
-/// `path.speed_m_per_s`), or a bare field looked up in `[analysis]`,
-/// `[classifier]`, `[evaluation]`, then `[controller]`, `[path]`,
-/// `[simulator]`, `[device]`; a 3-vector's component as `field[1]` or
-/// `field.y`.
-pub fn resolve_key(profile: &Profile, key: &str) -> Result<SweepKey, EvaluateError> {
-    let doc = toml::Table::try_from(profile).map_err(bad)?;
-    let unknown = || {
-        bad(format!(
-            "--sweep {key}: not a key of [analysis], [classifier] or [evaluation] (evaluated on the \
-             recordings) nor of [controller], [path], [simulator] or [device] (with --simulate); \
-             e.g. k, spacing, taper, controller.stiffness_n_per_m[1], path.speed_m_per_s"
-        ))
-    };
-    let mut rest = key.trim();
-    let mut component = None;
-    if let Some(open) = rest.strip_suffix(']').and_then(|r| r.rfind('[')) {
-        let idx = &rest[open + 1..rest.len() - 1];
-        component = Some(idx.trim().parse::<usize>().map_err(|_| {
-            bad(format!(
-                "--sweep {key}: `[{idx}]` is not a component index (0, 1 or 2)"
-            ))
-        })?);
-        rest = &rest[..open];
-    }
-    let (table, field) = match rest.split_once('.') {
-        Some((t, f)) if ANALYSIS_TABLES.contains(&t) || SIMULATION_TABLES.contains(&t) => {
-            (Some(t), f)
-        }
-        _ => (None, rest),
-    };
-    let field = match field.rsplit_once('.') {
-        Some((f, axis @ ("x" | "y" | "z"))) if component.is_none() => {
-            component = Some(["x", "y", "z"].iter().position(|a| *a == axis).unwrap_or(0));
-            f
-        }
-        Some(_) => return Err(unknown()),
-        None => field,
-    };
-    let has = |t: &str| {
-        doc.get(t)
-            .and_then(|v| v.as_table())
-            .is_some_and(|tab| tab.contains_key(field) || known_field(t, field))
-    };
-    let table = match table {
-        Some(t) if has(t) => t,
-        Some(_) => return Err(unknown()),
-        None => ANALYSIS_TABLES
-            .iter()
-            .chain(SIMULATION_TABLES.iter())
-            .find(|t| has(t))
-            .copied()
-            .ok_or_else(unknown)?,
-    };
-    if let Some(i) = component {
-        let len = doc
-            .get(table)
-            .and_then(|t| t.get(field))
-            .and_then(|v| v.as_array())
-            .map(Vec::len);
-        if len != Some(3) || i > 2 {
+    let keys = swept
+        .iter()
+        .map(|s| resolve_key(profile, &s.key))
+        .collect::<Result<Vec<_>, _>>()?;
+    for (i, k) in keys.iter().enumerate() {
+        let same = |o: &SweepKey| {
+            o.table == k.table
+                && o.field == k.field
+                && (o.component == k.component || o.component.is_none() || k.component.is_none())
+        };
+        if keys[..i].iter().any(same) {
             return Err(bad(format!(
-                "--sweep {key}: only a 3-vector such as controller.stiffness_n_per_m has components, [0] to [2] (x, y, z)"
+                "--sweep {}: this key is swept twice; give each key once (one --sweep per key of the grid)",
+                k.name()
             )));
         }
     }
-    Ok(SweepKey {
-        table: table.to_string(),
-        field: field.to_string(),
-        component,
-    })
-}
-
-/// The profile with `key` set to `value` (see [`resolve_key`]), validated
-/// as a profile file would be. A whole number where the profile holds a
-/// decimal is taken as that decimal.
-pub fn with_key(
-    profile: &Profile,
-    key: &str,
-    value: &toml::Value,
-) -> Result<Profile, EvaluateError> {
-    let k = resolve_key(profile, key)?;
-    with_resolved(profile, &k, value)
-}
-
-/// [`with_key`] for a key already resolved.
-pub fn with_resolved(
-    profile: &Profile,
-    k: &SweepKey,
-    value: &toml::Value,
-) -> Result<Profile, EvaluateError> {
-    let name = k.name();
-    let mut doc = toml::Table::try_from(profile).map_err(bad)?;
-    let as_like = |old: Option<&toml::Value>, v: &toml::Value| match (old, v) {
-        (Some(toml::Value::Float(_)), toml::Value::Integer(i)) => toml::Value::Float(*i as f64),
-        _ => v.clone(),
-    };
-    if let Some(tab) = doc.get_mut(&k.table).and_then(|v| v.as_table_mut()) {
-        match k.component {
-            Some(i) => {
-                if let Some(arr) = tab.get_mut(&k.field).and_then(|v| v.as_array_mut()) {
-                    let v = as_like(arr.get(i), value);
-                    if let Some(slot) = arr.get_mut(i) {
-                        *slot = v;
-                    }
-                }
-            }
-            None => {
-                let v = as_like(tab.get(&k.field), value);
-                tab.insert(k.field.clone(), v);
-            }
-        }
+    let n = swept
+        .iter()
+        .try_fold(1usize, |n, s| n.checked_mul(s.values.len()))
+        .filter(|&n| n <= MAX_POINTS);
+    if n.is_none() {
+        let sizes: Vec<String> = swept.iter().map(|s| s.values.len().to_string()).collect();
+        return Err(bad(format!(
+            "--sweep: {} combinations is too many (at most {MAX_POINTS}); sweep fewer values",
+            sizes.join(" × ")
+        )));
     }
-    let mut p: Profile = toml::Value::Table(doc)
-        .try_into()
-        .map_err(|e: toml::de::Error| {
-            bad(format!("--sweep {name} = {value}: {}", e.message().trim()))
-        })?;
-    // A window over the whole scan leg follows the swept path (unless the
-    // window itself is swept).
-    if !(k.table == "analysis" && k.field == "window") {
-        p.analysis.window_is_scan_leg = profile.analysis.window_is_scan_leg;
-    }
-    p.resolve_window();
-    p.validate()
-        .map_err(|v| bad(format!("--sweep {name} = {value}: {}: {}", v.key, v.reason)))?;
-    Ok(p)
-}
-
-/// Optional keys a table may lack (because they are at their default).
-fn known_field(table: &str, field: &str) -> bool {
-    match table {
-        "analysis" => [
-            "channels",
-            "taper",
-            "band",
-            "welch_segment",
-            "welch_overlap",
-            "detrend",
-            "spectrum",
-            "bins",
-        ]
-        .contains(&field),
-        "classifier" => ["metric", "weights", "standardize", "k_candidates"].contains(&field),
-        "evaluation" => ["shuffle_seed", "method", "folds", "group_by"].contains(&field),
-        "path" => ["transit_speed_m_per_s"].contains(&field),
-        _ => false,
-    }
+    Ok(keys)
 }
 
 #[derive(Debug, Clone, Serialize)]
 pub struct SweepPoint {
+    /// The swept value; in a grid, each key's value joined by ", ".
     pub value: String,
+    /// Each swept key's value, in the order of [`Sweep::keys`].
+    pub values: Vec<String>,
+    /// Whether this point was evaluated. When not, `reason` says why and
+    /// its numbers are NaN (`null` in JSON).
+    pub evaluated: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reason: Option<String>,
     pub accuracy: f64,
     pub accuracy_mean: f64,
     pub accuracy_std: f64,
@@ -338,11 +150,14 @@ pub struct SweepPoint {
     /// Simulated sweeps: scans that did not finish (left out).
     #[serde(skip_serializing_if = "is_zero")]
     pub incomplete: usize,
-    /// Simulated sweeps: why this value's dataset could not be evaluated
-    /// (e.g. a path so fast the window has gaps); its numbers are NaN
-    /// (`null` in JSON).
+    /// The same text as `reason`, under the name simulated sweeps first
+    /// gave it (kept for the scripts that read it).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
+    /// The best point: the highest pooled accuracy (each of them when
+    /// several tie). No point is best when every point ties.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub best: bool,
 }
 
 fn is_zero(n: &usize) -> bool {
@@ -351,12 +166,64 @@ fn is_zero(n: &usize) -> bool {
 
 #[derive(Debug, Clone, Serialize)]
 pub struct Sweep {
+    /// The swept key (as typed; simulated sweeps: `table.field`); in a
+    /// grid, the keys joined by " × ".
     pub key: String,
+    /// Each swept key, in the order given: a two-key grid's rows are the
+    /// first key's values, its columns the second's.
+    pub keys: Vec<String>,
     pub method: String,
+    /// One per combination, the first key's value changing slowest.
     pub points: Vec<SweepPoint>,
     /// Set when every value was evaluated on its own simulated dataset.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub simulated: Option<SimulatedInfo>,
+}
+
+impl Sweep {
+    fn new(
+        keys: Vec<String>,
+        method: String,
+        mut points: Vec<SweepPoint>,
+        simulated: Option<SimulatedInfo>,
+    ) -> Sweep {
+        mark_best(&mut points);
+        Sweep {
+            key: keys.join(" × "),
+            keys,
+            method,
+            points,
+            simulated,
+        }
+    }
+
+    /// How many points were evaluated.
+    pub fn evaluated(&self) -> usize {
+        self.points.iter().filter(|p| p.evaluated).count()
+    }
+
+    /// The best points (none when every point ties).
+    pub fn best(&self) -> impl Iterator<Item = &SweepPoint> {
+        self.points.iter().filter(|p| p.best)
+    }
+}
+
+/// Mark the points with the highest accuracy as best, unless every point
+/// ties: all evaluated with one accuracy, or none evaluated. A point not
+/// evaluated ranks below every evaluated one.
+fn mark_best(points: &mut [SweepPoint]) {
+    let top = points
+        .iter()
+        .filter(|p| p.evaluated)
+        .map(|p| p.accuracy)
+        .reduce(f64::max);
+    let Some(top) = top else { return };
+    if points.iter().all(|p| p.evaluated && p.accuracy == top) {
+        return;
+    }
+    for p in points {
+        p.best = p.evaluated && p.accuracy == top;
+    }
 }
 
 /// How a simulated sweep's datasets were made.
@@ -376,11 +243,6 @@ pub struct SimPlan {
     pub threads: usize,
 }
 
-/// A dataset simulated from `lp` in virtual time (`per_class` scans of
-/// every texture, seeded with the profile's `simulator.seed`), written to a
-/// temporary folder that is removed before this returns, and loaded for
-/// `analysis` as `options` say (its `threads` are `sim.threads`). File
-/// names are relative (`S2/S2_001.csv`), in the reasons for skipping too.
 /// `progress` hears (done, total) scans.
 pub fn simulated_dataset(
     lp: &crate::profile::LoadedProfile,
@@ -432,9 +294,29 @@ pub fn simulated_dataset(
     Ok(data)
 }
 
-fn point(value: &toml::Value, r: &CvReport, data: &Dataset) -> SweepPoint {
+/// The keys of one point and its values, as [`profile_with`] takes them.
+fn point_set<'a>(
+    keys: &'a [SweepKey],
+    swept: &'a [Swept],
+    combo: &[usize],
+) -> Vec<(&'a SweepKey, &'a toml::Value)> {
+    keys.iter()
+        .zip(swept)
+        .zip(combo)
+        .map(|((k, s), &i)| (k, &s.values[i]))
+        .collect()
+}
+
+fn texts(set: &[(&SweepKey, &toml::Value)]) -> Vec<String> {
+    set.iter().map(|(_, v)| meta_text(v)).collect()
+}
+
+fn evaluated(values: Vec<String>, r: &CvReport, data: &Dataset) -> SweepPoint {
     SweepPoint {
-        value: meta_text(value),
+        value: values.join(", "),
+        values,
+        evaluated: true,
+        reason: None,
         accuracy: r.report.accuracy,
         accuracy_mean: r.accuracy_mean,
         accuracy_std: r.accuracy_std,
@@ -445,11 +327,73 @@ fn point(value: &toml::Value, r: &CvReport, data: &Dataset) -> SweepPoint {
         recordings: data.counts().0,
         incomplete: data.skipped.len(),
         error: None,
+        best: false,
     }
 }
 
-/// Evaluate once per value; features are re-extracted only when the
-/// analysis changes. Every value is checked before the first is evaluated.
+fn not_evaluated(
+    values: Vec<String>,
+    reason: String,
+    recordings: usize,
+    incomplete: usize,
+) -> SweepPoint {
+    SweepPoint {
+        value: values.join(", "),
+        values,
+        evaluated: false,
+        reason: Some(reason.clone()),
+        accuracy: f64::NAN,
+        accuracy_mean: f64::NAN,
+        accuracy_std: f64::NAN,
+        macro_f1: f64::NAN,
+        k: Vec::new(),
+        k_notice: None,
+        recordings,
+        incomplete,
+        error: Some(reason),
+        best: false,
+    }
+}
+
+/// Features under `analysis`, extracted once per distinct analysis of the
+/// sweep (a grid meets the same one on every row).
+fn examples_for(
+    analysis: &Analysis,
+    data: &Dataset,
+    cache: &mut Vec<(Analysis, Vec<TrainingExample>)>,
+) -> Result<Vec<TrainingExample>, EvaluateError> {
+    if let Some((_, e)) = cache.iter().find(|(a, _)| a == analysis) {
+        return Ok(e.clone());
+    }
+    let e = data.examples(analysis)?;
+    cache.push((analysis.clone(), e.clone()));
+    Ok(e)
+}
+
+/// Validate one point's profile on `data`. With an `[evaluation]` key
+/// swept (`replan`), the plan is made again from the point's profile, so a
+/// swept `folds` or `method` takes effect (the command line's still win).
+fn validate_point(
+    p: &Profile,
+    data: &Dataset,
+    cache: &mut Vec<(Analysis, Vec<TrainingExample>)>,
+    plan: &Plan,
+    replan: bool,
+) -> Result<CvReport, EvaluateError> {
+    let plan = if replan {
+        plan.for_profile(p)
+    } else {
+        plan.clone()
+    };
+    let groups = match &plan.group_by {
+        Some(g) => Some(data.groups(g)?),
+        None => None,
+    };
+    let examples = examples_for(&p.analysis, data, cache)?;
+    validate(p, examples, groups.as_deref(), &plan)
+}
+
+/// Evaluate one key over its values (a one-key [`sweep_grid`]).
 pub fn sweep(
     profile: &Profile,
     data: &Dataset,
@@ -458,199 +402,316 @@ pub fn sweep(
     plan: &Plan,
     progress: &dyn Fn(usize),
 ) -> Result<Sweep, EvaluateError> {
-    let k = resolve_key(profile, key)?;
-    if k.needs_simulation() {
-        return Err(bad(format!(
-            "--sweep {key}: this key changes the recordings themselves; sweep it on simulated datasets (--simulate)"
-        )));
-    }
-    let profiles = values
-        .iter()
-        .map(|v| with_resolved(profile, &k, v))
-        .collect::<Result<Vec<_>, _>>()?;
-    let groups = match &plan.group_by {
-        Some(g) => Some(data.groups(g)?),
-        None => None,
-    };
-    let mut points = Vec::new();
-    let mut cached: Option<(Analysis, Vec<TrainingExample>)> = None;
-    for (i, (v, p)) in values.iter().zip(&profiles).enumerate() {
-        if p.analysis
-            .all_channels()
-            .ne(profile.analysis.all_channels())
-            || p.analysis.axis != profile.analysis.axis
-        {
-            return Err(bad(format!(
-                "--sweep {key}: sweeping the axis or the channels is not supported; evaluate once per channel"
-            )));
-        }
-        let examples = match &cached {
-            Some((a, e)) if *a == p.analysis => e.clone(),
-            _ => {
-                let e = data.examples(&p.analysis)?;
-                cached = Some((p.analysis.clone(), e.clone()));
-                e
-            }
-        };
-        let r = validate(p, examples, groups.as_deref(), plan)?;
-        points.push(point(v, &r, data));
-        progress(i + 1);
-    }
-    Ok(Sweep {
-        // As typed (`k`), like the sweeps before simulated ones.
+    let swept = [Swept {
         key: key.to_string(),
-        method: plan.describe(),
-        points,
-        simulated: None,
-    })
+        values: values.to_vec(),
+    }];
+    sweep_grid(profile, data, &swept, plan, progress)
 }
 
-/// Evaluate once per value of a key that changes the recordings (the path's
-/// speed, the controller's stiffness, a simulator setting): each value
-/// simulates its own dataset ([`simulated_dataset`], same seed for every
-/// value), then validates as `plan` says. Every value is checked before
-/// the first is simulated. `progress` hears (value index, scans done in
-/// this value, scans per value).
+/// Evaluate every combination of the swept keys' values on `data`;
+/// features are extracted again only for an analysis not met before. A
+/// point that cannot be evaluated (the profile refuses the combination, the
+/// analysis cannot use the recordings, the split cannot be made) is
+/// reported with its reason and the sweep goes on; an unknown key, a key
+/// swept twice, or a runtime failure stops it. `progress` hears the
+/// points done.
+pub fn sweep_grid(
+    profile: &Profile,
+    data: &Dataset,
+    swept: &[Swept],
+    plan: &Plan,
+    progress: &dyn Fn(usize),
+) -> Result<Sweep, EvaluateError> {
+    let keys = resolve_all(profile, swept)?;
+    if let Some(s) = swept
+        .iter()
+        .zip(&keys)
+        .find_map(|(s, k)| k.needs_simulation().then_some(s))
+    {
+        return Err(bad(format!(
+            "--sweep {}: this key changes the recordings themselves; sweep it on simulated datasets (--simulate)",
+            s.key
+        )));
+    }
+    // A missing group key is the whole sweep's error, not each point's.
+    if let Some(g) = &plan.group_by {
+        data.groups(g)?;
+    }
+    let (recordings, _) = data.counts();
+    let replan = keys.iter().any(|k| k.table == "evaluation");
+    let mut cache = Vec::new();
+    let mut points = Vec::new();
+    for (i, combo) in combinations(swept).iter().enumerate() {
+        let set = point_set(&keys, swept, combo);
+        let values = texts(&set);
+        let point = match profile_with(profile, &set) {
+            Err(reason) => not_evaluated(values, reason, recordings, data.skipped.len()),
+            Ok(p) => {
+                if p.analysis
+                    .all_channels()
+                    .ne(profile.analysis.all_channels())
+                    || p.analysis.axis != profile.analysis.axis
+                {
+                    return Err(bad(
+                        "--sweep: sweeping the axis or the channels is not supported; evaluate once per channel",
+                    ));
+                }
+                match validate_point(&p, data, &mut cache, plan, replan) {
+                    Ok(r) => evaluated(values, &r, data),
+                    Err(e) if e.is_bad_input() => {
+                        not_evaluated(values, e.to_string(), recordings, data.skipped.len())
+                    }
+                    Err(e) => return Err(e),
+                }
+            }
+        };
+        points.push(point);
+        progress(i + 1);
+    }
+    // As typed (`k`), like the sweeps before simulated ones.
+    let names = swept.iter().map(|s| s.key.clone()).collect();
+    Ok(Sweep::new(names, plan.describe(), points, None))
+}
+
+/// Evaluate one key that changes the recordings over its values (a one-key
+/// [`sweep_grid_simulated`]).
 pub fn sweep_simulated(
-    lp: &crate::profile::LoadedProfile,
+    lp: &LoadedProfile,
     key: &str,
     values: &[toml::Value],
     plan: &Plan,
     sim: SimPlan,
     progress: &(dyn Fn(usize, usize, usize) + Sync),
 ) -> Result<Sweep, EvaluateError> {
-    let k = resolve_key(&lp.profile, key)?;
-    let profiles = values
-        .iter()
-        .map(|v| with_resolved(&lp.profile, &k, v))
-        .collect::<Result<Vec<_>, _>>()?;
-    let mut points = Vec::new();
-    for (i, (v, p)) in values.iter().zip(profiles).enumerate() {
-        let lp_v = crate::profile::LoadedProfile {
+    let swept = [Swept {
+        key: key.to_string(),
+        values: values.to_vec(),
+    }];
+    sweep_grid_simulated(lp, &swept, plan, sim, progress)
+}
+
+/// Evaluate every combination of keys among which some change the
+/// recordings (the path's speed, the controller's stiffness, a simulator
+/// setting): each combination's values of those keys simulate their own
+/// dataset ([`simulated_dataset`], same seed for every one; the points
+/// that share them share it), then the point validates as `plan` says. A
+/// point the profile refuses, or whose recordings the analysis cannot use
+/// (a path so fast the window has gaps), is reported with its reason and
+/// the sweep goes on. `progress` hears (point index, scans done
+/// in its dataset, scans per dataset).
+pub fn sweep_grid_simulated(
+    lp: &LoadedProfile,
+    swept: &[Swept],
+    plan: &Plan,
+    sim: SimPlan,
+    progress: &(dyn Fn(usize, usize, usize) + Sync),
+) -> Result<Sweep, EvaluateError> {
+    let keys = resolve_all(&lp.profile, swept)?;
+    // Samples are kept only when an [analysis] key is swept: points with
+    // the same recordings then extract their own features.
+    let keep = if keys.iter().any(|k| k.table == "analysis") {
+        Keep::Samples
+    } else {
+        Keep::Features
+    };
+    let replan = keys.iter().any(|k| k.table == "evaluation");
+    let mut made: Option<(Vec<String>, Dataset)> = None;
+    let combos = combinations(swept);
+    // Evaluated grouped by the recording keys' values, so each of their
+    // combinations is simulated once whatever the keys' order; reported
+    // in the grid's order.
+    let mut order: Vec<usize> = (0..combos.len()).collect();
+    order.sort_by_key(|&i| {
+        keys.iter()
+            .zip(&combos[i])
+            .filter(|(k, _)| k.needs_simulation())
+            .map(|(_, &j)| j)
+            .collect::<Vec<_>>()
+    });
+    let mut points: Vec<Option<SweepPoint>> = vec![None; combos.len()];
+    let mut cache = Vec::new();
+    for i in order {
+        let set = point_set(&keys, swept, &combos[i]);
+        let values = texts(&set);
+        let p = match profile_with(&lp.profile, &set) {
+            Ok(p) => p,
+            Err(reason) => {
+                points[i] = Some(not_evaluated(values, reason, 0, 0));
+                continue;
+            }
+        };
+        let recordings_of: Vec<String> = set
+            .iter()
+            .filter(|(k, _)| k.needs_simulation())
+            .map(|(_, v)| meta_text(v))
+            .collect();
+        let lp_v = LoadedProfile {
             profile: p,
             ..lp.clone()
         };
-        // Recordings the analysis cannot use (a path so fast the window
-        // has gaps) are this value's result: say so and go on. Anything
-        // else (an unreadable file, k larger than the training part, …)
-        // stops the sweep.
-        let options = Options {
-            unusable: Unusable::Skip,
-            ..Options::default()
+        let data = match made {
+            Some((ref of, ref data)) if *of == recordings_of => data,
+            _ => {
+                // Recordings the analysis cannot use are this point's
+                // result; they are listed, not fatal.
+                let options = Options {
+                    keep,
+                    unusable: Unusable::Skip,
+                    ..Options::default()
+                };
+                made = None;
+                cache.clear();
+                let data = simulated_dataset(
+                    &lp_v,
+                    sim,
+                    &lp_v.profile.analysis,
+                    options,
+                    &|done, total| progress(i, done, total),
+                )?;
+                &made.insert((recordings_of, data)).1
+            }
         };
-        let data = simulated_dataset(
-            &lp_v,
-            sim,
-            &lp_v.profile.analysis,
-            options,
-            &|done, total| progress(i, done, total),
-        )?;
+        let incomplete = data
+            .skipped
+            .iter()
+            .filter(|s| matches!(s, Skipped::Incomplete { .. }))
+            .count();
         let mut unusable = data.skipped.iter().filter_map(|s| match s {
             Skipped::Unusable {
                 reason, unreadable, ..
             } => Some((reason, *unreadable)),
             Skipped::Incomplete { .. } => None,
         });
-        let examples = match unusable.next() {
+        let result = match unusable.next() {
+            // An unreadable file is not the value's doing: stop.
             Some((reason, true)) => return Err(bad(reason)),
             Some((reason, false)) => Err(bad(reason)),
             None if data.scans.is_empty() => Err(bad("no simulated scan finished")),
-            None => data.examples(&lp_v.profile.analysis),
+            None => validate_point(&lp_v.profile, data, &mut cache, plan, replan),
         };
-        let examples = match examples {
-            Ok(e) => e,
-            Err(f) => {
-                points.push(SweepPoint {
-                    value: meta_text(v),
-                    accuracy: f64::NAN,
-                    accuracy_mean: f64::NAN,
-                    accuracy_std: f64::NAN,
-                    macro_f1: f64::NAN,
-                    k: Vec::new(),
-                    k_notice: None,
-                    recordings: data.scans.len(),
-                    incomplete: data
-                        .skipped
-                        .iter()
-                        .filter(|s| matches!(s, Skipped::Incomplete { .. }))
-                        .count(),
-                    error: Some(f.to_string()),
-                });
-                continue;
+        points[i] = Some(match result {
+            Ok(r) => evaluated(values, &r, data),
+            Err(e) if e.is_bad_input() => {
+                not_evaluated(values, e.to_string(), data.counts().0, incomplete)
             }
-        };
-        let groups = match &plan.group_by {
-            Some(g) => Some(data.groups(g)?),
-            None => None,
-        };
-        let r = validate(&lp_v.profile, examples, groups.as_deref(), plan)
-            .map_err(|f| bad(format!("--sweep {} = {v}: {f}", k.name())))?;
-        points.push(point(v, &r, &data));
+            Err(e) => return Err(e),
+        });
     }
-    Ok(Sweep {
-        key: k.name(),
-        method: plan.describe(),
-        points,
-        simulated: Some(SimulatedInfo {
+    Ok(Sweep::new(
+        keys.iter().map(SweepKey::name).collect(),
+        plan.describe(),
+        points.into_iter().flatten().collect(),
+        Some(SimulatedInfo {
             per_class: sim.per_class,
             seed: lp.profile.simulator.seed,
         }),
-    })
+    ))
 }
 
-impl Sweep {
-    pub fn table(&self) -> String {
-        let w = self
-            .points
-            .iter()
-            .map(|p| p.value.len())
-            .chain([self.key.len()])
-            .max()
-            .unwrap_or(1);
-        let mut out = format!("{:<w$}  accuracy  per-fold mean ± sd  macro-F1\n", self.key);
-        for p in &self.points {
-            if let Some(e) = &p.error {
-                out.push_str(&format!("{:<w$}  not evaluated: {e}\n", p.value));
-                continue;
-            }
-            out.push_str(&format!(
-                "{:<w$}  {:>7.1}%  {:>8.1} ± {:<5.1} %  {:>8.3}",
-                p.value,
-                100.0 * p.accuracy,
-                100.0 * p.accuracy_mean,
-                100.0 * p.accuracy_std,
-                p.macro_f1
-            ));
-            if p.incomplete > 0 {
-                out.push_str(&format!(
-                    "  ({} of {} scans did not finish)",
-                    p.incomplete,
-                    p.incomplete + p.recordings
-                ));
-            }
-            out.push('\n');
-            if let Some(n) = &p.k_notice {
-                out.push_str(&format!("{:<w$}  ({n})\n", ""));
-            }
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn swept(key: &str, n: i64) -> Swept {
+        Swept {
+            key: key.into(),
+            values: (1..=n).map(toml::Value::Integer).collect(),
         }
-        if let Some(best) = self
-            .points
-            .iter()
-            .filter(|p| p.error.is_none())
-            .max_by(|a, b| {
-                a.accuracy
-                    .total_cmp(&b.accuracy)
-                    .then(std::cmp::Ordering::Greater)
-            })
-        {
-            out.push_str(&format!(
-                "best: {} = {} ({:.1} %), {}\n",
-                self.key,
-                best.value,
-                100.0 * best.accuracy,
-                self.method
-            ));
+    }
+
+    fn at(accuracy: Option<f64>) -> SweepPoint {
+        let values = vec!["v".to_string()];
+        match accuracy {
+            Some(a) => SweepPoint {
+                accuracy: a,
+                ..not_evaluated(values, String::new(), 1, 0)
+            }
+            .tap_evaluated(),
+            None => not_evaluated(values, "refused".into(), 1, 0),
         }
-        out
+    }
+
+    impl SweepPoint {
+        fn tap_evaluated(mut self) -> SweepPoint {
+            self.evaluated = true;
+            self.reason = None;
+            self.error = None;
+            self
+        }
+    }
+
+    fn best_of(accuracies: &[Option<f64>]) -> Vec<bool> {
+        let mut points: Vec<SweepPoint> = accuracies.iter().map(|a| at(*a)).collect();
+        mark_best(&mut points);
+        points.iter().map(|p| p.best).collect()
+    }
+
+    #[test]
+    fn combinations_come_row_by_row() {
+        let c = combinations(&[swept("a", 2), swept("b", 3)]);
+        assert_eq!(
+            c,
+            [[0, 0], [0, 1], [0, 2], [1, 0], [1, 1], [1, 2]].map(Vec::from)
+        );
+        assert_eq!(
+            combinations(&[swept("a", 2), swept("b", 2), swept("c", 2)]).len(),
+            8
+        );
+    }
+
+    #[test]
+    fn the_best_is_the_top_accuracy_unless_every_point_ties() {
+        assert_eq!(
+            best_of(&[Some(0.5), Some(0.9), Some(0.7)]),
+            [false, true, false]
+        );
+        assert_eq!(
+            best_of(&[Some(0.9), Some(0.5), Some(0.9)]),
+            [true, false, true]
+        );
+        assert_eq!(best_of(&[Some(0.9), Some(0.9)]), [false, false]);
+        assert_eq!(best_of(&[Some(0.9)]), [false]);
+        assert_eq!(best_of(&[None, None]), [false, false]);
+        // A point not evaluated ranks below every evaluated one.
+        assert_eq!(best_of(&[Some(0.9), None]), [true, false]);
+    }
+
+    #[test]
+    fn the_verdict_names_the_best_or_says_none() {
+        let sweep = |acc: &[Option<f64>]| {
+            let points = acc.iter().map(|a| at(*a)).collect();
+            Sweep::new(vec!["k".into()], "3-fold".into(), points, None).table()
+        };
+        assert!(sweep(&[Some(0.5), Some(0.9)]).contains("best: k = v (90.0 %), 3-fold"));
+        assert!(sweep(&[Some(0.9), Some(0.9)]).contains("no best: every value gives 90.0 %"));
+        let none = sweep(&[None, None]);
+        assert!(none.contains("no value could be evaluated"), "{none}");
+        assert!(none.contains("not evaluated: refused"), "{none}");
+    }
+
+    #[test]
+    fn a_key_swept_twice_or_too_many_points_is_refused() {
+        let p = LoadedProfile::thesis().profile;
+        assert!(resolve_all(&p, &[swept("k", 2), swept("classifier.k", 2)]).is_err());
+        assert!(resolve_all(&p, &[swept("k", 200), swept("spacing", 200)]).is_err());
+        assert!(resolve_all(&p, &[]).is_err());
+        let k = resolve_all(&p, &[swept("k", 2), swept("taper", 2)]).unwrap();
+        assert_eq!(k[1].name(), "analysis.taper");
+    }
+
+    #[test]
+    fn a_grid_point_is_validated_with_all_its_keys_set() {
+        let p = LoadedProfile::thesis().profile;
+        let spectrum = resolve_key(&p, "spectrum").unwrap();
+        let bins = resolve_key(&p, "bins").unwrap();
+        let welch = toml::Value::String("welch".into());
+        let few: toml::Value = toml::from_str::<toml::Table>("v = [1, 12]").unwrap()["v"].clone();
+        // Alone, Welch is refused beside the thesis's 49 bins…
+        let e = profile_with(&p, &[(&spectrum, &welch)]).unwrap_err();
+        assert!(e.starts_with("analysis.bins"), "{e}");
+        // …together with bins it allows, the point is valid.
+        let q = profile_with(&p, &[(&spectrum, &welch), (&bins, &few)]).unwrap();
+        assert_eq!(q.analysis.bins, [1, 12]);
     }
 }

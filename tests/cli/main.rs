@@ -14,6 +14,7 @@ mod faults;
 mod first_session;
 mod import;
 mod plot;
+mod sweep_grid;
 mod sweep_simulated;
 mod validation;
 mod windows;
