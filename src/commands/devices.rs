@@ -166,7 +166,9 @@ impl Operator<EmulatedFalcon> for Terminal {
     fn request(&mut self, request: &Request, transport: &mut EmulatedFalcon) {
         self.tell(&format!(">> {}", request.instruction()));
         if let Some(task) = request.hand_task() {
-            self.tell("   (the emulator's simulated hand does it)");
+            if *request != Request::WatchLeds {
+                self.tell("   (the emulator's simulated hand does it)");
+            }
             transport.ask_hand(task);
         }
     }
