@@ -301,3 +301,54 @@ fn a_panic_mid_pulse_leaves_the_forces_zero() {
     assert_eq!(device.transport().inner.motor(), [0; 3]);
     assert_eq!(device.motor_commands(), [0; 3]);
 }
+
+/// Ctrl-C while the user holds the grip for the pulses: the pulse step
+/// fails as interrupted, no pulse runs, and the forces are zero.
+#[test]
+fn a_stop_flag_ends_the_test_with_the_forces_zero() {
+    let lp = thesis_emulator();
+    let stop = AtomicBool::new(false);
+    struct StopsAtHold<'a> {
+        stop: &'a AtomicBool,
+        script: Script,
+    }
+    impl Operator<EmulatedFalcon> for StopsAtHold<'_> {
+        fn request(&mut self, request: &Request, transport: &mut EmulatedFalcon) {
+            if *request == Request::HoldLightly {
+                self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+            }
+            self.script.request(request, transport);
+        }
+        fn confirm(&mut self, q: &str) -> bool {
+            Operator::<EmulatedFalcon>::confirm(&mut self.script, q)
+        }
+        fn note(&mut self, line: &str) {
+            Operator::<EmulatedFalcon>::note(&mut self.script, line)
+        }
+    }
+    let mut user = StopsAtHold {
+        stop: &stop,
+        script: Script::answering(true),
+    };
+    let (report, device) = run(
+        &lp.profile.name,
+        |log| open_emulated(&lp, None, 7, log),
+        Pace {
+            clock: &mut clock(),
+            stop: &stop,
+        },
+        &mut user,
+        &options(),
+    );
+    let device = device.unwrap();
+    let text = report.lines().join("\n");
+    assert_eq!(verdict(&report, "encoders"), Verdict::Pass, "{text}");
+    assert_eq!(verdict(&report, "pulses"), Verdict::Fail, "{text}");
+    assert!(
+        text.contains("interrupted (Ctrl-C)") && !report.passed,
+        "{text}"
+    );
+    assert!(report.pulses.is_empty());
+    assert_eq!(device.transport().counters.max_motor, 0);
+    assert_eq!(device.transport().motor(), [0; 3]);
+}
