@@ -352,3 +352,38 @@ fn a_stop_flag_ends_the_test_with_the_forces_zero() {
     assert_eq!(device.transport().counters.max_motor, 0);
     assert_eq!(device.transport().motor(), [0; 3]);
 }
+
+/// A Falcon without firmware: the self-test uploads it, each step told, a
+/// failed first attempt retried, and the report says how it went.
+#[test]
+fn firmware_is_loaded_when_needed_and_each_step_told() {
+    let dir = tempfile::tempdir().unwrap();
+    let image = dir.path().join("nvent_firmware.bin");
+    let bytes: Vec<u8> = (0..8492u32)
+        .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)
+        .collect();
+    std::fs::write(&image, bytes).unwrap();
+    let mut lp = thesis_emulator();
+    let falcon = lp.profile.falcon.as_mut().unwrap();
+    falcon.firmware = Some(image);
+    falcon.emulator.firmware_loaded = false;
+    falcon.emulator.upload_failures = 1;
+    let mut user = Script::answering(true);
+    let (report, device) = run_on(&lp, &mut user);
+    let text = report.lines().join("\n");
+    assert!(report.passed, "{text}");
+    assert_eq!(device.transport().counters.uploads_completed, 1);
+    assert!(
+        text.contains("firmware uploaded on attempt 2 (1 failed before)"),
+        "{text}"
+    );
+    let told = user.notes.join("\n");
+    assert!(
+        told.contains("uploading firmware") && told.contains("attempt 1 failed"),
+        "{told}"
+    );
+    assert!(
+        report.open_log.iter().any(|l| l == "firmware running"),
+        "{text}"
+    );
+}
