@@ -474,6 +474,7 @@ pub fn injected_faults(lp: &LoadedProfile) -> Option<String> {
                     ("read_error_after_s", e.read_error_after_s),
                     ("stall_after_s", e.stall_after_s),
                     ("unplug_after_s", e.unplug_after_s),
+                    ("reversed_motor", e.reversed_motor.map(f64::from)),
                 ]),
             )
         }

@@ -68,8 +68,10 @@ pub enum Command {
         after_help = "Keys: ↑/↓ recording, space pause, +/- speed, . step, ← restart, p predict, q quit.\n\nExample:\n  hapticlab replay recordings/thesis-sim\n  hapticlab replay recordings/thesis-sim/S2/S2_003.csv"
     )]
     Replay(replay::ReplayArgs),
-    /// List attached Novint Falcons and HID triggers, and whether they can be opened.
-    #[command(after_help = "Example:\n  hapticlab devices --profile profiles/thesis-falcon.toml")]
+    /// List attached Novint Falcons and HID triggers, and whether they can be opened; --self-test checks a Falcon step by step.
+    #[command(
+        after_help = "With --self-test: open the profile's Falcon (loading its firmware if needed), cycle the LEDs, home, read the encoders while you move the grip, push it with 1 N pulses along each axis (asked first unless --yes) and check it moves the way it is pushed; a report to paste into an issue. Exit code 0 when every step passed, 1 when one did not, 2 for bad input.\n\nExamples:\n  hapticlab devices --profile profiles/thesis-falcon.toml\n  hapticlab devices --self-test --profile profiles/thesis-falcon.toml\n  hapticlab devices --self-test --profile profiles/thesis-emulator.toml --yes --json"
+    )]
     Devices(devices::DevicesArgs),
     /// Is this PC ready for the profile? Falcon USB access, firmware, real-time limits, terminal, dataset folder; the fix for each.
     #[command(

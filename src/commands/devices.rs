@@ -1,10 +1,21 @@
 //! `hapticlab devices`: the Falcons and HID triggers attached, whether each
-//! can be opened, and what to do when one cannot.
+//! can be opened, and what to do when one cannot; with `--self-test`, the
+//! profile's Falcon checked step by step (the engine is
+//! [`crate::device::falcon::self_test`]; this file asks and prints).
+
+use std::io::BufRead;
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
 
 use clap::Args;
 
+use crate::device::falcon;
+use crate::device::falcon::emulator::EmulatedFalcon;
+use crate::device::falcon::self_test::{self, Operator, Pace, Request};
 use crate::device::falcon::usb::{self, UsbError};
-use crate::support::{Failure, ProfileArg, load_profile};
+use crate::profile::{DeviceKind, LoadedProfile};
+use crate::servo::clock::RealClock;
+use crate::support::{Failure, ProfileArg, bad, load_profile, runtime};
 use crate::triggers::hid;
 
 /// The report as lines, from what was found (pure, for tests).
@@ -88,10 +99,23 @@ pub fn report(
 pub struct DevicesArgs {
     #[command(flatten)]
     pub profile: ProfileArg,
+    /// Test the profile's Falcon (device.kind "falcon" or "falcon-emulator")
+    /// step by step and print a report to paste into an issue.
+    #[arg(long)]
+    pub self_test: bool,
+    /// Apply the self-test's force pulses without asking.
+    #[arg(long, requires = "self_test")]
+    pub yes: bool,
+    /// Print the self-test's report as JSON (progress stays on standard error).
+    #[arg(long, requires = "self_test")]
+    pub json: bool,
 }
 
 pub fn run(a: DevicesArgs) -> Result<(), Failure> {
     let lp = load_profile(&a.profile)?;
+    if a.self_test {
+        return run_self_test(&lp, a.yes, a.json);
+    }
     let falcons = usb::list_falcons();
     let hid_devices = hid::list();
     for line in report(
@@ -103,6 +127,134 @@ pub fn run(a: DevicesArgs) -> Result<(), Failure> {
         crate::outln!("{line}");
     }
     Ok(())
+}
+
+/// The person at the Falcon: told on standard error, asked on standard input.
+/// For the emulator, its simulated hand does what the person is asked.
+struct Terminal {
+    yes: bool,
+}
+
+impl Terminal {
+    fn tell(&self, line: &str) {
+        crate::errln!("{line}");
+    }
+
+    fn ask(&self, question: &str) -> bool {
+        crate::errln!("{question} [y/N] (--yes skips this question)");
+        let mut answer = String::new();
+        match std::io::stdin().lock().read_line(&mut answer) {
+            Ok(n) if n > 0 => matches!(answer.trim(), "y" | "Y" | "yes" | "Yes" | "YES"),
+            _ => false,
+        }
+    }
+}
+
+impl Operator<usb::UsbTransport> for Terminal {
+    fn request(&mut self, request: &Request, _: &mut usb::UsbTransport) {
+        self.tell(&format!(">> {}", request.instruction()));
+    }
+    fn confirm(&mut self, question: &str) -> bool {
+        self.yes || self.ask(question)
+    }
+    fn note(&mut self, line: &str) {
+        self.tell(line);
+    }
+}
+
+impl Operator<EmulatedFalcon> for Terminal {
+    fn request(&mut self, request: &Request, transport: &mut EmulatedFalcon) {
+        self.tell(&format!(">> {}", request.instruction()));
+        if let Some(task) = request.hand_task() {
+            if *request != Request::WatchLeds {
+                self.tell("   (the emulator's simulated hand does it)");
+            }
+            transport.ask_hand(task);
+        }
+    }
+    fn confirm(&mut self, question: &str) -> bool {
+        self.yes || self.ask(question)
+    }
+    fn note(&mut self, line: &str) {
+        self.tell(line);
+    }
+}
+
+/// What the self-test takes from the profile, read in one place.
+fn self_test_options(lp: &LoadedProfile, yes: bool) -> Result<self_test::Options, Failure> {
+    let p = &lp.profile;
+    if !matches!(
+        p.device.kind,
+        DeviceKind::Falcon | DeviceKind::FalconEmulator
+    ) {
+        return Err(bad(format!(
+            "{}: devices --self-test needs a Falcon profile (device.kind = \"falcon\", or \"falcon-emulator\" to try it on the emulator), not \"{}\"; e.g. -p profiles/thesis-falcon.toml",
+            lp.origin,
+            p.device.kind.name()
+        )));
+    }
+    Ok(self_test::Options {
+        rate_hz: p.device.rate_hz,
+        homing_timeout_s: p.falcon.as_ref().map_or(120.0, |f| f.homing_timeout_s),
+        assume_yes: yes,
+        ..self_test::Options::default()
+    })
+}
+
+fn run_self_test(lp: &LoadedProfile, yes: bool, json: bool) -> Result<(), Failure> {
+    let options = self_test_options(lp, yes)?;
+    // Ctrl-C stops the test with the forces zeroed; a second one exits at once.
+    let stop = Arc::new(AtomicBool::new(false));
+    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register_conditional_shutdown(sig, 130, stop.clone())
+            .and_then(|_| signal_hook::flag::register(sig, stop.clone()))
+            .map_err(runtime)?;
+    }
+    let mut terminal = Terminal { yes };
+    let mut clock = RealClock::start();
+    let name = &lp.profile.name;
+    let (report, opened) = if lp.profile.device.kind == DeviceKind::Falcon {
+        let pace = Pace {
+            clock: &mut clock,
+            stop: &stop,
+        };
+        let open = |log: &mut dyn FnMut(&str)| falcon::open_usb(lp, log);
+        let (report, device) = self_test::run(name, open, pace, &mut terminal, &options);
+        (report, device.err())
+    } else {
+        let pace = Pace {
+            clock: &mut clock,
+            stop: &stop,
+        };
+        let seed = lp.profile.simulator.seed;
+        let open = |log: &mut dyn FnMut(&str)| falcon::open_emulated(lp, None, seed, log);
+        let (report, device) = self_test::run(name, open, pace, &mut terminal, &options);
+        (report, device.err())
+    };
+    if let Some(falcon::OpenError::BadInput(m)) = opened {
+        // A firmware file that is missing or the wrong size, found before any USB traffic.
+        return Err(bad(m));
+    }
+    if json {
+        let text = serde_json::to_string_pretty(&report).map_err(runtime)?;
+        crate::outln!("{text}");
+    } else {
+        for line in report.lines() {
+            crate::outln!("{line}");
+        }
+    }
+    if report.passed {
+        return Ok(());
+    }
+    let names: Vec<String> = report
+        .not_passed()
+        .iter()
+        .map(|s| format!("{} {}", s.name, s.verdict.word()))
+        .collect();
+    Err(runtime(format!(
+        "the Falcon self-test did not pass: {}",
+        names.join(", ")
+    )))
 }
 
 #[cfg(test)]

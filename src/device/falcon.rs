@@ -24,6 +24,7 @@ pub mod emulator;
 pub mod firmware;
 pub mod kinematics;
 pub mod packet;
+pub mod self_test;
 pub mod usb;
 
 use std::time::{Duration, Instant};
@@ -182,6 +183,8 @@ pub struct FalconDevice<T: FalconTransport> {
     missed_streak: u32,
     usb_error_streak: u32,
     homed: bool,
+    /// LEDs shown instead of the homing colours (the self-test's cycle).
+    leds: Option<u8>,
     buttons: u8,
     /// Profile frame.
     pos: [f64; 3],
@@ -225,6 +228,7 @@ impl<T: FalconTransport> FalconDevice<T> {
             missed_streak: 0,
             usb_error_streak: 0,
             homed: false,
+            leds: None,
             buttons: 0,
             pos,
             have_position: false,
@@ -255,13 +259,24 @@ impl<T: FalconTransport> FalconDevice<T> {
         self.homed
     }
 
+    /// Show these LEDs (`packet::LED_*`) from the next packet on, or the
+    /// homing colours again (red until homed, blue after) with `None`.
+    pub fn show_leds(&mut self, leds: Option<u8>) {
+        self.leds = leds;
+    }
+
+    /// The motor commands the last packet carried (or will carry).
+    pub fn motor_commands(&self) -> [i16; 3] {
+        self.motor
+    }
+
     fn flags(&self) -> u8 {
-        packet::FLAG_HOMING
-            | if self.homed {
-                packet::LED_BLUE
-            } else {
-                packet::LED_RED
-            }
+        let homing_colour = if self.homed {
+            packet::LED_BLUE
+        } else {
+            packet::LED_RED
+        };
+        packet::FLAG_HOMING | self.leds.unwrap_or(homing_colour)
     }
 
     fn lost(&mut self, e: TransportError) -> DeviceError {

@@ -134,6 +134,10 @@ pub struct EmulatorSection {
     pub upload_needs_reopen: bool,
     /// The link's timing; absent, every byte is there at once.
     pub timing: Option<EmulatorTiming>,
+    /// Motor N (0, 1 or 2, as the legs are numbered) is wired backwards:
+    /// it turns against its command, so a force comes out bent or reversed
+    /// (what `devices --self-test`'s force pulses are there to catch).
+    pub reversed_motor: Option<u8>,
 }
 
 /// The emulated link's timing model (`[falcon.emulator.timing]`); the FTDI
@@ -183,6 +187,7 @@ impl Default for EmulatorSection {
             stale_byte_before_sync: false,
             upload_needs_reopen: false,
             timing: None,
+            reversed_motor: None,
         }
     }
 }
@@ -493,6 +498,14 @@ pub fn validate(p: &Profile) -> Result<(), Invalid> {
                 }
             }
             rate("falcon.emulator.timing.late_rate", t.late_rate)?;
+        }
+        if let Some(m) = e.reversed_motor
+            && m > 2
+        {
+            return bad(
+                "falcon.emulator.reversed_motor",
+                format!("must be 0, 1 or 2 (a leg's motor), got {m}"),
+            );
         }
         if !e.firmware_loaded && f.firmware.is_none() {
             return bad(

@@ -65,6 +65,29 @@ fn arm_angle_on_axis(z_m: f64) -> f64 {
     kinematics::inverse([0.0, 0.0, z_m]).map_or(0.0, |a| a.theta1[0])
 }
 
+/// How far (m) and how fast (Hz, per axis) the hand sweeps the grip when
+/// asked to move it ([`HandTask::MoveGrip`]): a slow Lissajous figure about
+/// the middle of the workspace, as a user waving the grip around would.
+const HAND_SWEEP_M: f64 = 0.02;
+const HAND_SWEEP_HZ: [f64; 3] = [0.5, 0.7, 0.3];
+
+/// What the simulated hand is asked to do (the self-test's requests; see
+/// [`EmulatedFalcon::ask_hand`]). Until it is first asked, the hand follows
+/// `auto_home`: it homes the grip, brings it to the middle and lets go.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HandTask {
+    /// Pull the grip out past the homing marks, push it in past the others,
+    /// then hold it in the middle of the workspace.
+    Home,
+    /// Sweep the grip around the middle along all three axes.
+    MoveGrip,
+    /// Hold the grip lightly in the middle (a compliant hold the motors can
+    /// push against).
+    HoldLightly,
+    /// Let go.
+    LetGo,
+}
+
 /// Beyond the arms' reach the mechanism holds the grip back, stiffly.
 const REACH_STIFFNESS_N_PER_M: f64 = 20_000.0;
 const REACH_DAMPING_N_S_PER_M: f64 = 20.0;
@@ -178,6 +201,8 @@ pub struct EmulatedFalcon {
     read_errors_left: Option<u32>,
     stalls_done: u32,
     stall: Option<Duration>,
+    /// What the hand was last asked to do, and when (servo time).
+    hand_task: Option<(HandTask, f64)>,
     pub counters: EmulatorCounters,
 }
 
@@ -219,6 +244,7 @@ impl EmulatedFalcon {
             read_errors_left: None,
             stalls_done: 0,
             stall: None,
+            hand_task: None,
             counters: EmulatorCounters::default(),
             cfg,
         }
@@ -239,6 +265,12 @@ impl EmulatedFalcon {
     /// The motor commands the firmware is applying (zero once made safe or unplugged).
     pub fn motor(&self) -> [i16; 3] {
         self.motor
+    }
+
+    /// Ask the simulated hand to do something (from now on it does only
+    /// what it is asked; `auto_home` no longer applies).
+    pub fn ask_hand(&mut self, task: HandTask) {
+        self.hand_task = Some((task, self.t));
     }
 
     /// Pull the cable now.
@@ -354,6 +386,12 @@ impl EmulatedFalcon {
         self.counters.commands += 1;
         self.motor = c.motor;
         self.flags = c.flags;
+        let mut turning = c.motor;
+        if let Some(m) = self.cfg.device.reversed_motor {
+            // Wired backwards: the motor turns against its command.
+            let m = usize::from(m).min(2);
+            turning[m] = turning[m].saturating_neg();
+        }
         let m = c
             .motor
             .iter()
@@ -362,7 +400,7 @@ impl EmulatedFalcon {
             .unwrap_or(0);
         self.counters.max_motor = self.counters.max_motor.max(m);
         // Torques through the Jacobian at the true position.
-        let tau = kinematics::torques_of_commands(c.motor);
+        let tau = kinematics::torques_of_commands(turning);
         let force = kinematics::inverse(self.falcon_position())
             .and_then(|a| kinematics::jacobian(&a))
             .and_then(|j| kinematics::force_of_torques(&j, tau))
@@ -447,18 +485,12 @@ impl EmulatedFalcon {
         let homed = self.is_homed();
         let p = self.sim.true_position();
         let v = self.sim.true_velocity();
-        let target = if !self.cfg.device.auto_home || self.released {
+        let target = if let Some((task, since)) = self.hand_task {
+            self.asked_target(task, self.t - since, homing)
+        } else if !self.cfg.device.auto_home || self.released {
             None
         } else if !homed {
-            // Out past the homing marks, then in past the others.
-            homing.then(|| {
-                let z = if self.seen_out.iter().all(|&s| s) {
-                    HOME_IN_Z_M - 0.004
-                } else {
-                    HOME_OUT_Z_M + 0.004
-                };
-                self.cfg.frame.to_profile([0.0, 0.0, z])
-            })
+            homing.then(|| self.homing_target())
         } else {
             let c = WORKSPACE_CENTRE_M;
             let off = (0..3).map(|a| (p[a] - c[a]).powi(2)).sum::<f64>().sqrt();
@@ -492,6 +524,32 @@ impl EmulatedFalcon {
             }
         }
         self.sim.set_hand_force(hand);
+    }
+}
+
+impl EmulatedFalcon {
+    /// Out past the homing marks, then in past the others (profile frame).
+    fn homing_target(&self) -> [f64; 3] {
+        let z = if self.seen_out.iter().all(|&s| s) {
+            HOME_IN_Z_M - 0.004
+        } else {
+            HOME_OUT_Z_M + 0.004
+        };
+        self.cfg.frame.to_profile([0.0, 0.0, z])
+    }
+
+    /// Where the hand takes the grip for `task`, asked `since_s` ago.
+    fn asked_target(&self, task: HandTask, since_s: f64, homing: bool) -> Option<[f64; 3]> {
+        let c = WORKSPACE_CENTRE_M;
+        match task {
+            HandTask::Home if !self.is_homed() => homing.then(|| self.homing_target()),
+            HandTask::Home | HandTask::HoldLightly => Some(c),
+            HandTask::MoveGrip => Some(std::array::from_fn(|a| {
+                let phase = std::f64::consts::TAU * HAND_SWEEP_HZ[a] * since_s;
+                c[a] + HAND_SWEEP_M * phase.sin()
+            })),
+            HandTask::LetGo => None,
+        }
     }
 }
 

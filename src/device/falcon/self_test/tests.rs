@@ -1,0 +1,389 @@
+//! The self-test against the emulated Falcon in virtual time, its user
+//! scripted: a clean device passes every step; a motor wired backwards
+//! fails a pulse; declined pulses apply no force; a panic mid-pulse leaves
+//! the forces zero; an unhomed grip fails homing and skips the rest.
+
+use std::path::Path;
+use std::time::Duration;
+
+use super::*;
+use crate::device::falcon::emulator::{EmulatedFalcon, EmulatorConfig};
+use crate::device::falcon::{TransportError, open_emulated};
+use crate::profile::LoadedProfile;
+use crate::servo::clock::VirtualClock;
+
+fn thesis_emulator() -> LoadedProfile {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("profiles/thesis-emulator.toml");
+    LoadedProfile::load(&path).unwrap()
+}
+
+/// A user who does what is asked (the emulator's hand does it) and answers
+/// every question with `yes`.
+struct Script {
+    yes: bool,
+    requests: Vec<Request>,
+    questions: Vec<String>,
+    notes: Vec<String>,
+}
+
+impl Script {
+    fn answering(yes: bool) -> Script {
+        Script {
+            yes,
+            requests: Vec::new(),
+            questions: Vec::new(),
+            notes: Vec::new(),
+        }
+    }
+}
+
+impl<T: HandOf> Operator<T> for Script {
+    fn request(&mut self, request: &Request, transport: &mut T) {
+        self.requests.push(*request);
+        if let Some(task) = request.hand_task() {
+            transport.emulator().ask_hand(task);
+        }
+    }
+    fn confirm(&mut self, question: &str) -> bool {
+        self.questions.push(question.into());
+        self.yes
+    }
+    fn note(&mut self, line: &str) {
+        self.notes.push(line.into());
+    }
+}
+
+/// Transports with an emulated Falcon inside.
+trait HandOf {
+    fn emulator(&mut self) -> &mut EmulatedFalcon;
+}
+
+impl HandOf for EmulatedFalcon {
+    fn emulator(&mut self) -> &mut EmulatedFalcon {
+        self
+    }
+}
+
+fn clock() -> VirtualClock {
+    VirtualClock::new(1000.0, 0.0, 0.0, 1)
+}
+
+fn options() -> Options {
+    Options {
+        homing_timeout_s: 30.0,
+        move_timeout_s: 30.0,
+        ..Options::default()
+    }
+}
+
+fn run_on(lp: &LoadedProfile, user: &mut Script) -> (Report, FalconDevice<EmulatedFalcon>) {
+    let (report, device) = run(
+        &lp.profile.name,
+        |log| open_emulated(lp, None, 7, log),
+        Pace {
+            clock: &mut clock(),
+            stop: &AtomicBool::new(false),
+        },
+        user,
+        &options(),
+    );
+    (report, device.expect("the emulated Falcon opens"))
+}
+
+fn verdict(report: &Report, name: &str) -> Verdict {
+    report
+        .steps
+        .iter()
+        .find(|s| s.name == name)
+        .unwrap_or_else(|| panic!("no step {name}: {:#?}", report.steps))
+        .verdict
+}
+
+#[test]
+fn a_clean_emulated_falcon_passes_every_step() {
+    let lp = thesis_emulator();
+    let mut user = Script::answering(true);
+    let (report, device) = run_on(&lp, &mut user);
+    let text = report.lines().join("\n");
+    println!("{text}");
+    assert!(report.passed, "{text}");
+    let names: Vec<&str> = report.steps.iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "open", "leds", "homing", "encoders", "pulse x", "pulse y", "pulse z"
+        ]
+    );
+    // The user was asked to home, move, hold, and finally let go; asked once before any force.
+    assert_eq!(user.requests[0], Request::WatchLeds);
+    assert!(
+        matches!(user.requests[1], Request::Home { .. }),
+        "{:?}",
+        user.requests
+    );
+    assert_eq!(user.requests.last(), Some(&Request::LetGo));
+    assert_eq!(user.questions.len(), 1, "{:?}", user.questions);
+    assert!(user.questions[0].contains("1.0 N for 100 ms"));
+    // Positions were told while the grip moved.
+    assert!(
+        user.notes.iter().any(|n| n.contains("grip at")),
+        "{:?}",
+        user.notes
+    );
+    // Each pulse moved the grip clearly along its own axis.
+    assert_eq!(report.pulses.len(), 3);
+    for p in &report.pulses {
+        assert!(p.along_m > 0.002 && p.cosine > 0.9, "{p:?}\n{text}");
+    }
+    assert!(text.contains("result: PASS") && text.contains("firmware already running"));
+    // Forces zero at the end, in the driver and at the device.
+    assert_eq!(device.motor_commands(), [0; 3]);
+    assert_eq!(device.transport().motor(), [0; 3]);
+    // The pulses stayed within 1 N: no motor command near its limit.
+    assert!(device.transport().counters.max_motor < 1000);
+}
+
+#[test]
+fn a_motor_wired_backwards_fails_a_pulse() {
+    for motor in 0..3u8 {
+        let mut lp = thesis_emulator();
+        lp.profile.falcon.as_mut().unwrap().emulator.reversed_motor = Some(motor);
+        let mut user = Script::answering(true);
+        let (report, device) = run_on(&lp, &mut user);
+        let text = report.lines().join("\n");
+        println!("reversed motor {motor}:\n{text}");
+        assert!(!report.passed, "motor {motor}:\n{text}");
+        assert_eq!(verdict(&report, "encoders"), Verdict::Pass, "{text}");
+        let failed: Vec<&Step> = report
+            .steps
+            .iter()
+            .filter(|s| s.verdict == Verdict::Fail)
+            .collect();
+        assert!(
+            !failed.is_empty() && failed.iter().all(|s| s.name.starts_with("pulse ")),
+            "motor {motor}:\n{text}"
+        );
+        assert!(text.contains("result: FAIL"), "{text}");
+        assert_eq!(device.transport().motor(), [0; 3]);
+    }
+}
+
+#[test]
+fn declined_pulses_are_skipped_and_no_force_is_applied() {
+    let lp = thesis_emulator();
+    let mut user = Script::answering(false);
+    let (report, device) = run_on(&lp, &mut user);
+    assert!(!report.passed);
+    for axis in ["pulse x", "pulse y", "pulse z"] {
+        assert_eq!(verdict(&report, axis), Verdict::Skipped);
+    }
+    assert_eq!(verdict(&report, "encoders"), Verdict::Pass);
+    assert_eq!(device.transport().counters.max_motor, 0);
+}
+
+#[test]
+fn without_a_hand_homing_times_out_and_the_rest_is_skipped() {
+    let lp = thesis_emulator();
+    // A user who never does what is asked.
+    struct Absent;
+    impl Operator<EmulatedFalcon> for Absent {
+        fn request(&mut self, _: &Request, transport: &mut EmulatedFalcon) {
+            transport.ask_hand(HandTask::LetGo);
+        }
+        fn confirm(&mut self, _: &str) -> bool {
+            true
+        }
+        fn note(&mut self, _: &str) {}
+    }
+    let (report, _) = run(
+        &lp.profile.name,
+        |log| open_emulated(&lp, None, 7, log),
+        Pace {
+            clock: &mut clock(),
+            stop: &AtomicBool::new(false),
+        },
+        &mut Absent,
+        &Options {
+            homing_timeout_s: 2.0,
+            ..options()
+        },
+    );
+    let text = report.lines().join("\n");
+    assert_eq!(verdict(&report, "homing"), Verdict::Fail, "{text}");
+    assert!(text.contains("not homed within 2 s"), "{text}");
+    assert_eq!(verdict(&report, "encoders"), Verdict::Skipped);
+    assert_eq!(verdict(&report, "pulses"), Verdict::Skipped);
+}
+
+/// The emulator behind a transport that panics once, 20 packets into the
+/// first force (as a bug mid-pulse would).
+struct PanicsMidPulse {
+    inner: EmulatedFalcon,
+    forced: u32,
+    panicked: bool,
+}
+
+impl HandOf for PanicsMidPulse {
+    fn emulator(&mut self) -> &mut EmulatedFalcon {
+        &mut self.inner
+    }
+}
+
+impl FalconTransport for PanicsMidPulse {
+    fn kind(&self) -> &'static str {
+        self.inner.kind()
+    }
+    fn control(&mut self, request: u8, value: u16) -> Result<(), TransportError> {
+        self.inner.control(request, value)
+    }
+    fn write(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
+        self.inner.write(bytes)?;
+        if self.inner.motor() != [0; 3] {
+            self.forced += 1;
+        }
+        if self.forced == 20 && !self.panicked {
+            self.panicked = true;
+            panic!("a bug mid-pulse");
+        }
+        Ok(())
+    }
+    fn read(&mut self, buf: &mut [u8], timeout: Duration) -> Result<usize, TransportError> {
+        self.inner.read(buf, timeout)
+    }
+    fn now(&self) -> std::time::Instant {
+        self.inner.now()
+    }
+    fn advance_to(&mut self, t_s: f64) {
+        self.inner.advance_to(t_s)
+    }
+    fn take_stall(&mut self) -> Option<Duration> {
+        self.inner.take_stall()
+    }
+}
+
+#[test]
+fn a_panic_mid_pulse_leaves_the_forces_zero() {
+    let lp = thesis_emulator();
+    let config = crate::device::falcon::config_from_profile(&lp).unwrap();
+    let sim = crate::device::sim::SimDevice::new(&lp.profile, &lp.base_dir, None, 7)
+        .unwrap()
+        .without_faults();
+    let inner = EmulatedFalcon::new(
+        sim,
+        EmulatorConfig {
+            device: lp.profile.falcon.clone().unwrap().emulator,
+            frame: config.frame,
+            position_noise_m: lp.profile.simulator.position_noise_m,
+            ..EmulatorConfig::default()
+        },
+    );
+    let wrapped = PanicsMidPulse {
+        inner,
+        forced: 0,
+        panicked: false,
+    };
+    let mut device = FalconDevice::open(wrapped, config, &mut |_| {}).unwrap();
+    let mut report = Report::new("thesis-emulator");
+    let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        run_steps(
+            &mut device,
+            Pace {
+                clock: &mut clock(),
+                stop: &AtomicBool::new(false),
+            },
+            &mut Script::answering(true),
+            &options(),
+            &mut report,
+        )
+    }));
+    assert!(outcome.is_err(), "the transport should have panicked");
+    assert!(device.transport().panicked);
+    assert_eq!(device.transport().inner.motor(), [0; 3]);
+    assert_eq!(device.motor_commands(), [0; 3]);
+}
+
+/// Ctrl-C while the user holds the grip for the pulses: the pulse step
+/// fails as interrupted, no pulse runs, and the forces are zero.
+#[test]
+fn a_stop_flag_ends_the_test_with_the_forces_zero() {
+    let lp = thesis_emulator();
+    let stop = AtomicBool::new(false);
+    struct StopsAtHold<'a> {
+        stop: &'a AtomicBool,
+        script: Script,
+    }
+    impl Operator<EmulatedFalcon> for StopsAtHold<'_> {
+        fn request(&mut self, request: &Request, transport: &mut EmulatedFalcon) {
+            if *request == Request::HoldLightly {
+                self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+            }
+            self.script.request(request, transport);
+        }
+        fn confirm(&mut self, q: &str) -> bool {
+            Operator::<EmulatedFalcon>::confirm(&mut self.script, q)
+        }
+        fn note(&mut self, line: &str) {
+            Operator::<EmulatedFalcon>::note(&mut self.script, line)
+        }
+    }
+    let mut user = StopsAtHold {
+        stop: &stop,
+        script: Script::answering(true),
+    };
+    let (report, device) = run(
+        &lp.profile.name,
+        |log| open_emulated(&lp, None, 7, log),
+        Pace {
+            clock: &mut clock(),
+            stop: &stop,
+        },
+        &mut user,
+        &options(),
+    );
+    let device = device.unwrap();
+    let text = report.lines().join("\n");
+    assert_eq!(verdict(&report, "encoders"), Verdict::Pass, "{text}");
+    assert_eq!(verdict(&report, "pulses"), Verdict::Fail, "{text}");
+    assert!(
+        text.contains("interrupted (Ctrl-C)") && !report.passed,
+        "{text}"
+    );
+    assert!(report.pulses.is_empty());
+    assert_eq!(device.transport().counters.max_motor, 0);
+    assert_eq!(device.transport().motor(), [0; 3]);
+}
+
+/// A Falcon without firmware: the self-test uploads it, each step told, a
+/// failed first attempt retried, and the report says how it went.
+#[test]
+fn firmware_is_loaded_when_needed_and_each_step_told() {
+    let dir = tempfile::tempdir().unwrap();
+    let image = dir.path().join("nvent_firmware.bin");
+    let bytes: Vec<u8> = (0..8492u32)
+        .map(|i| (i.wrapping_mul(2_654_435_761) >> 13) as u8)
+        .collect();
+    std::fs::write(&image, bytes).unwrap();
+    let mut lp = thesis_emulator();
+    let falcon = lp.profile.falcon.as_mut().unwrap();
+    falcon.firmware = Some(image);
+    falcon.emulator.firmware_loaded = false;
+    falcon.emulator.upload_failures = 1;
+    let mut user = Script::answering(true);
+    let (report, device) = run_on(&lp, &mut user);
+    let text = report.lines().join("\n");
+    assert!(report.passed, "{text}");
+    assert_eq!(device.transport().counters.uploads_completed, 1);
+    assert!(
+        text.contains("firmware uploaded on attempt 2 (1 failed before)"),
+        "{text}"
+    );
+    let told = user.notes.join("\n");
+    assert!(
+        told.contains("uploading firmware") && told.contains("attempt 1 failed"),
+        "{told}"
+    );
+    assert!(
+        report.open_log.iter().any(|l| l == "firmware running"),
+        "{text}"
+    );
+}
