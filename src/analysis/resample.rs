@@ -99,81 +99,93 @@ impl Resampler {
         // Distance along the direction of travel (NaN ends are caught below).
         let direction = if last >= origin { 1.0 } else { -1.0 };
 
-        self.count.fill(0);
-        self.sum_u.fill(0.0);
-        self.sum_v.fill(0.0);
         let inv_spacing = 1.0 / self.spacing;
         let upper = self.n as f64 - 0.5;
-        // Scans arrive mostly in order, so consecutive samples share a bin:
-        // summing a run in registers and storing it once avoids a chain of
-        // store-to-load round trips through the bin arrays.
-        let mut run_bin = 0;
-        let (mut run_n, mut run_u, mut run_v) = (0u32, 0.0, 0.0);
-        let mut finite = true;
-        let (near_axis, near_signal) = if in_order {
-            debug_assert!(axis.windows(2).all(|w| w[0] <= w[1]));
-            // A grid point's bin reaches half a spacing out; one spacing of
-            // margin keeps rounding on the safe side (the test below still
-            // decides each sample).
-            let lo = origin + self.start - self.spacing;
-            let hi = origin + self.start + (self.n as f64 + 0.5) * self.spacing;
-            let from = axis.partition_point(|&a| a < lo);
-            let to = axis.partition_point(|&a| a <= hi).max(from);
-            (&axis[from..to], &signal[from..to])
-        } else {
-            (axis, signal)
-        };
-        for (&a, &v) in near_axis.iter().zip(near_signal) {
-            // One flag for the whole loop keeps it branch-light; the rare
-            // failure is located afterwards.
-            // (Checked by the caller when in order; the flag costs a
-            // little in this loop, which is the whole of it.)
-            finite &= in_order || (a.is_finite() & v.is_finite());
+        // Nearest grid point: bin i holds u in [i − ½, i + ½). The cast
+        // truncates, which is the floor here since u + ½ ≥ 0; `upper` is
+        // exclusive, but rounding in `u + 0.5` can still reach n.
+        let bin_of = |a: f64| {
             let u = (direction * (a - origin) - self.start) * inv_spacing;
-            // Nearest grid point: bin i holds u in [i − ½, i + ½). The cast
-            // truncates, which is the floor here since u + ½ ≥ 0.
-            if !(-0.5..upper).contains(&u) {
-                continue;
-            }
             let i = (u + 0.5) as usize;
-            // `upper` is exclusive, but rounding in `u + 0.5` can still reach n.
-            if i >= self.n {
-                continue;
-            }
-            if i != run_bin {
-                self.count[run_bin] += run_n;
-                self.sum_u[run_bin] += run_u;
-                self.sum_v[run_bin] += run_v;
-                (run_bin, run_n, run_u, run_v) = (i, 0, 0.0, 0.0);
-            }
-            run_n += 1;
-            run_u += u;
-            run_v += v;
-        }
-        self.count[run_bin] += run_n;
-        self.sum_u[run_bin] += run_u;
-        self.sum_v[run_bin] += run_v;
-        if !finite {
-            return Err(first_non_finite(axis, signal));
-        }
-
+            ((-0.5..upper).contains(&u) && i < self.n).then_some((i, u))
+        };
         self.centroid_u.clear();
         self.centroid_v.clear();
         let mut first = None;
         let mut last_bin = 0;
-        for i in 0..self.n {
-            let c = self.count[i];
-            if c > 0 {
-                first.get_or_insert(i);
-                last_bin = i;
-                // One sample is its own centroid (x / 1 is x: no division).
-                if c == 1 {
-                    self.centroid_u.push(self.sum_u[i]);
-                    self.centroid_v.push(self.sum_v[i]);
-                } else {
-                    let c = f64::from(c);
-                    self.centroid_u.push(self.sum_u[i] / c);
-                    self.centroid_v.push(self.sum_v[i] / c);
+        if in_order {
+            debug_assert!(axis.windows(2).all(|w| w[0] <= w[1]));
+            // A grid point's bin reaches half a spacing out; one spacing of
+            // margin keeps rounding on the safe side (`bin_of` still decides
+            // each sample).
+            let lo = origin + self.start - self.spacing;
+            let hi = origin + self.start + (self.n as f64 + 0.5) * self.spacing;
+            let from = axis.partition_point(|&a| a < lo);
+            let to = axis.partition_point(|&a| a <= hi).max(from);
+            // In order, each bin's samples are one run: its centroid is
+            // pushed when the run ends, with the sums the bin arrays would
+            // hold (0 + x is x), so the result is the same to the bit.
+            let (mut run_bin, mut run_n, mut run_u, mut run_v) = (usize::MAX, 0u32, 0.0, 0.0);
+            let mut push = |bin: usize, n: u32, su: f64, sv: f64| {
+                if n == 0 {
+                    return;
+                }
+                first.get_or_insert(bin);
+                last_bin = bin;
+                let (cu, cv) = centroid(n, su, sv);
+                self.centroid_u.push(cu);
+                self.centroid_v.push(cv);
+            };
+            for (&a, &v) in axis[from..to].iter().zip(&signal[from..to]) {
+                let Some((i, u)) = bin_of(a) else { continue };
+                if i != run_bin {
+                    push(run_bin, run_n, run_u, run_v);
+                    (run_bin, run_n, run_u, run_v) = (i, 0, 0.0, 0.0);
+                }
+                run_n += 1;
+                run_u += u;
+                run_v += v;
+            }
+            push(run_bin, run_n, run_u, run_v);
+        } else {
+            self.count.fill(0);
+            self.sum_u.fill(0.0);
+            self.sum_v.fill(0.0);
+            // Scans arrive mostly in order, so consecutive samples share a
+            // bin: summing a run in registers and storing it once avoids a
+            // chain of store-to-load round trips through the bin arrays.
+            let mut run_bin = 0;
+            let (mut run_n, mut run_u, mut run_v) = (0u32, 0.0, 0.0);
+            let mut finite = true;
+            for (&a, &v) in axis.iter().zip(signal) {
+                // One flag for the whole loop keeps it branch-light; the
+                // rare failure is located afterwards.
+                finite &= a.is_finite() & v.is_finite();
+                let Some((i, u)) = bin_of(a) else { continue };
+                if i != run_bin {
+                    self.count[run_bin] += run_n;
+                    self.sum_u[run_bin] += run_u;
+                    self.sum_v[run_bin] += run_v;
+                    (run_bin, run_n, run_u, run_v) = (i, 0, 0.0, 0.0);
+                }
+                run_n += 1;
+                run_u += u;
+                run_v += v;
+            }
+            self.count[run_bin] += run_n;
+            self.sum_u[run_bin] += run_u;
+            self.sum_v[run_bin] += run_v;
+            if !finite {
+                return Err(first_non_finite(axis, signal));
+            }
+            for i in 0..self.n {
+                let c = self.count[i];
+                if c > 0 {
+                    first.get_or_insert(i);
+                    last_bin = i;
+                    let (cu, cv) = centroid(c, self.sum_u[i], self.sum_v[i]);
+                    self.centroid_u.push(cu);
+                    self.centroid_v.push(cv);
                 }
             }
         }
@@ -247,6 +259,17 @@ impl Resampler {
         }
         self.has_run = true;
         Ok(())
+    }
+}
+
+/// A bin's centroid from its count and sums; one sample is its own (x / 1
+/// is x: no division).
+fn centroid(count: u32, sum_u: f64, sum_v: f64) -> (f64, f64) {
+    if count == 1 {
+        (sum_u, sum_v)
+    } else {
+        let c = f64::from(count);
+        (sum_u / c, sum_v / c)
     }
 }
 
