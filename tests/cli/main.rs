@@ -13,6 +13,7 @@ mod falcon_emulator;
 mod faults;
 mod first_session;
 mod plot;
+mod rigless;
 mod sweep_simulated;
 mod validation;
 mod windows;

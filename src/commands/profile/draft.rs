@@ -133,7 +133,10 @@ pub fn draft(s: &Survey, name: &str, from: &Path) -> Result<String, String> {
     let segment = (n / 4).clamp(1, 2048);
     let segment = 1usize << (usize::BITS - 1 - segment.leading_zeros());
     let welch_ok = segment >= 16;
-    let long = n > 4096 && welch_ok;
+    // Log-Welch for other rigs' signals in time (vibration, sound: the
+    // issue's reference reached its best with it) and for long windows;
+    // the thesis's |DFT| for a short stroke resampled by position.
+    let welch_active = (time || n > 4096) && welch_ok;
     let magnitude_bins = (n / 2).min(128);
     let mut groups: Vec<Group> = Vec::new();
     let mag = |kind: &str| {
@@ -149,7 +152,7 @@ pub fn draft(s: &Survey, name: &str, from: &Path) -> Result<String, String> {
             ("bins", format!("[1, {}]", segment / 2)),
         ]
     };
-    let active = if long {
+    let active = if welch_active {
         welch("log-welch")
     } else {
         mag("magnitude")
@@ -338,7 +341,7 @@ pub fn draft(s: &Survey, name: &str, from: &Path) -> Result<String, String> {
         "windows",
         format!("{{ length = {length_text}, hop = {hop_text} }}"),
     )];
-    if !long {
+    if !welch_active {
         windows.push((
             "bins",
             format!("[1, {}]", (sub.points() / 2).min(magnitude_bins)),
