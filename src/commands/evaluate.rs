@@ -73,7 +73,7 @@ pub struct ValidationArgs {
     /// Evaluate a dataset simulated from the profile in virtual time (no PATH; a temporary folder, removed after); with --sweep of a [controller], [path], [simulator] or [device] key, one dataset per value.
     #[arg(long)]
     pub simulate: bool,
-    /// With --simulate: scans per texture (default: the profile's train_per_class + test_per_class).
+    /// With --simulate: scans per texture (default: the profile's train_per_class + test_per_class; 30, or the folds, when it names neither).
     #[arg(long, value_name = "N")]
     pub per_class: Option<usize>,
 }

@@ -277,3 +277,20 @@ fn profile_new_refuses_to_overwrite_an_empty_folder_and_only_incomplete_recordin
     );
     assert!(!other.exists(), "nothing written");
 }
+
+#[test]
+fn evaluate_simulate_without_train_per_class_simulates_thirty_per_texture() {
+    let dir = tempfile::tempdir().unwrap();
+    let thesis = fs::read_to_string(Path::new(REPO).join("profiles/thesis.toml")).unwrap();
+    let text = thesis
+        .replace("train_per_class = 20\n", "method = \"leave-one-out\"\n")
+        .replace("test_per_class = 10\n", "");
+    assert_ne!(text, thesis);
+    let profile = write_profile(dir.path(), "loo.toml", &text);
+    let r = run(&["evaluate", "--simulate", "-p", &profile]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(
+        r.stdout.contains("leave-one-out, 120 simulated recordings"),
+        "{r:?}"
+    );
+}
