@@ -39,21 +39,27 @@ fn main() {
     // The thesis profile's own real-time setup unless overridden:
     // `HAPTICLAB_RT=0` runs at normal priority, `HAPTICLAB_SPIN_US=N` sets
     // device.spin_us.
+    let device = lp
+        .profile
+        .device
+        .as_mut()
+        .expect("the thesis profile's [device]");
     if std::env::var("HAPTICLAB_RT").is_ok_and(|v| v == "0") {
-        lp.profile.device.realtime = None;
+        device.realtime = None;
     }
     if let Some(spin) = std::env::var("HAPTICLAB_SPIN_US")
         .ok()
         .and_then(|v| v.parse().ok())
     {
-        lp.profile.device.spin_us = spin;
+        device.spin_us = spin;
     }
-    let rt = lp.profile.device.realtime.is_some();
-    let spin_us = lp.profile.device.spin_us;
+    let rt = device.realtime.is_some();
+    let spin_us = device.spin_us;
     let (no_scan, no_draw) = (flag("HAPTICLAB_NO_SCAN"), flag("HAPTICLAB_NO_DRAW"));
     let profile = lp.profile.clone();
     let base = lp.base_dir.clone();
-    let handle = spawn(&lp.profile, move || {
+    let rig = lp.rig().expect("the thesis profile's rig");
+    let handle = spawn(rig, move || {
         SimDevice::new(&profile, &base, Some("S2"), 1).expect("the thesis texture S2")
     })
     .expect("spawn the servo thread");

@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 use crate::device::HapticDevice;
 use crate::device::falcon::{self, OpenError};
 use crate::device::sim::{SimDevice, SimError};
-use crate::profile::{DeviceKind, LoadedProfile, check_label};
+use crate::profile::{DeviceKind, LoadedProfile, MissingRig, PathSpec, check_label};
 use crate::recorder::SavedScan;
 use crate::servo::clock::VirtualClock;
 use crate::servo::stats::LoopStats;
@@ -37,6 +37,14 @@ impl AcquireError {
     }
 }
 
+/// An analysis-only profile asked to make scans: bad input, naming the
+/// missing sections.
+impl From<MissingRig> for AcquireError {
+    fn from(e: MissingRig) -> Self {
+        AcquireError::BadInput(e.to_string())
+    }
+}
+
 impl From<OpenError> for AcquireError {
     fn from(e: OpenError) -> Self {
         match e {
@@ -56,12 +64,16 @@ pub fn open_device(
     log: &mut dyn FnMut(&str),
 ) -> Result<Box<dyn HapticDevice>, AcquireError> {
     let p = &lp.profile;
-    Ok(match p.device.kind {
+    Ok(match lp.rig()?.device.kind {
         DeviceKind::Sim => Box::new(SimDevice::new(p, &lp.base_dir, texture, seed)?),
         DeviceKind::FalconEmulator => Box::new(falcon::open_emulated(lp, texture, seed, log)?),
         DeviceKind::Falcon => Box::new(falcon::open_usb(lp, log)?),
     })
 }
+
+/// Scans per texture `simulate` makes unless told (the thesis's 30), and
+/// `evaluate --simulate` when the profile's evaluation names no count.
+pub const DEFAULT_PER_CLASS: usize = 30;
 
 /// What `scan` tells the user when the Falcon is not homed.
 pub const HOMING_HELP: &str = "the Falcon is not homed (its LEDs are red): pull the grip all the way out towards you, then push it all the way back in; the LEDs turn blue when it is homed";
@@ -76,6 +88,9 @@ pub fn scan_metadata(
     use toml::Value;
     let p = &lp.profile;
     let arr = |v: [f64; 3]| Value::Array(v.iter().map(|&x| Value::Float(x)).collect());
+    // Scans come from a rig; without one (an analysis-only profile) only
+    // the keys that do not describe it are written.
+    let rig = p.rig().ok();
     let mut meta = vec![
         ("label".to_string(), Value::String(label.into())),
         ("profile".to_string(), Value::String(p.name.clone())),
@@ -84,32 +99,39 @@ pub fn scan_metadata(
             Value::String(lp.sha256.clone()),
         ),
         ("device".to_string(), Value::String(device.into())),
-        ("rate_hz".to_string(), Value::Float(p.device.rate_hz)),
-        (
-            "software".to_string(),
-            Value::String(format!("hapticlab {}", env!("CARGO_PKG_VERSION"))),
-        ),
-        (
-            "stiffness_n_per_m".to_string(),
-            arr(p.controller.stiffness_n_per_m),
-        ),
-        (
-            "damping_n_s_per_m".to_string(),
-            arr(p.controller.damping_n_s_per_m),
-        ),
-        (
-            "speed_m_per_s".to_string(),
-            Value::Float(p.path.speed_m_per_s),
-        ),
-        (
-            "scan_from_m".to_string(),
-            arr(p.path.waypoints_m[p.path.scan_leg - 1]),
-        ),
-        (
-            "scan_to_m".to_string(),
-            arr(p.path.waypoints_m[p.path.scan_leg]),
-        ),
     ];
+    if let Some(rig) = rig {
+        meta.push(("rate_hz".to_string(), Value::Float(rig.device.rate_hz)));
+    }
+    meta.push((
+        "software".to_string(),
+        Value::String(format!("hapticlab {}", env!("CARGO_PKG_VERSION"))),
+    ));
+    if let Some(rig) = rig {
+        let path = rig.path;
+        meta.extend([
+            (
+                "stiffness_n_per_m".to_string(),
+                arr(rig.controller.stiffness_n_per_m),
+            ),
+            (
+                "damping_n_s_per_m".to_string(),
+                arr(rig.controller.damping_n_s_per_m),
+            ),
+            (
+                "speed_m_per_s".to_string(),
+                Value::Float(path.speed_m_per_s),
+            ),
+            (
+                "scan_from_m".to_string(),
+                arr(path.waypoints_m[path.scan_leg - 1]),
+            ),
+            (
+                "scan_to_m".to_string(),
+                arr(path.waypoints_m[path.scan_leg]),
+            ),
+        ]);
+    }
     for (k, v) in extra {
         meta.push((k.to_string(), v.clone()));
     }
@@ -168,7 +190,8 @@ pub fn simulate_one(
     path: &Path,
 ) -> Result<(SavedScan, LoopStats), AcquireError> {
     let p = &lp.profile;
-    if p.device.kind == DeviceKind::Falcon {
+    let rig = lp.rig()?;
+    if rig.device.kind == DeviceKind::Falcon {
         return Err(AcquireError::BadInput(format!(
             "{}: simulate runs on the simulator or the emulated Falcon, not a real one (device.kind = \"falcon\"); use `scan` for the real device",
             lp.origin
@@ -176,7 +199,7 @@ pub fn simulate_one(
     }
     let device = open_device(lp, Some(label), seed, &mut |_| {})?;
     let clock = VirtualClock::new(
-        p.device.rate_hz,
+        rig.device.rate_hz,
         p.simulator.period_jitter_s,
         p.simulator.period_jitter_fraction,
         seed,
@@ -197,12 +220,12 @@ pub fn simulate_one(
         events: Some(ev_tx),
         ..Links::default()
     };
-    let mut servo = ServoLoop::new(device, clock, p, sink, links);
-    if p.device.kind == DeviceKind::FalconEmulator {
+    let mut servo = ServoLoop::new(device, clock, rig, sink, links);
+    if rig.device.kind == DeviceKind::FalconEmulator {
         // The emulated hand homes the grip first (forces stay off until then).
         let mut ticks = 0u64;
         while !servo.reading().homed {
-            if ticks > (30.0 * p.device.rate_hz) as u64 {
+            if ticks > (30.0 * rig.device.rate_hz) as u64 {
                 return Err(AcquireError::Runtime(
                     "the emulated Falcon did not home within 30 s (is `[falcon.emulator] auto_home` off?)".into(),
                 ));
@@ -220,8 +243,8 @@ pub fn simulate_one(
         meta,
     });
     // The whole path can take at most this long in virtual time.
-    let limit = path_duration_s(lp) * 3.0 + 10.0;
-    let max_ticks = (limit * p.device.rate_hz) as u64;
+    let limit = path_duration_s(rig.path) * 3.0 + 10.0;
+    let max_ticks = (limit * rig.device.rate_hz) as u64;
     let mut stats = LoopStats::default();
     let mut ticks = 0u64;
     while servo.scan_pending() && ticks < max_ticks {
@@ -250,9 +273,8 @@ pub fn simulate_one(
     Ok((saved, stats))
 }
 
-/// Seconds the path takes at the profile's speeds (from the first waypoint).
-pub fn path_duration_s(lp: &LoadedProfile) -> f64 {
-    let p = &lp.profile.path;
+/// Seconds the path takes at its speeds (from the first waypoint).
+pub fn path_duration_s(p: &PathSpec) -> f64 {
     let transit = p.transit_speed_m_per_s.unwrap_or(p.speed_m_per_s);
     p.waypoints_m
         .windows(2)
@@ -293,6 +315,8 @@ pub fn simulate_dataset_until(
     progress: &(dyn Fn(usize, usize) + Sync),
     stop: &std::sync::atomic::AtomicBool,
 ) -> Result<Vec<SavedScan>, AcquireError> {
+    // An analysis-only profile has nothing to simulate with: say which sections.
+    lp.rig()?;
     if lp.profile.textures.is_empty() {
         return Err(AcquireError::BadInput(format!(
             "{}: the profile has no [[textures]] to simulate",
@@ -453,7 +477,7 @@ pub fn injected_faults(lp: &LoadedProfile) -> Option<String> {
             .filter_map(|(k, v)| v.map(|t| format!("{k} = {t}")))
             .collect()
     };
-    let (section, faults) = match p.device.kind {
+    let (section, faults) = match p.device.as_ref()?.kind {
         DeviceKind::Sim => {
             let f = &p.simulator.faults;
             (
@@ -566,7 +590,7 @@ pub fn scan_live_stopping(
     check_label(label).map_err(AcquireError::BadInput)?;
     // Before the device moves: the recordings must have somewhere to go.
     check_writable(&out.join(label))?;
-    let p = &lp.profile;
+    let rig = lp.rig()?;
     if let Some(faults) = injected_faults(lp) {
         on_note(&format!(
             "note: {} injects device faults ({faults}), to rehearse failures",
@@ -575,12 +599,12 @@ pub fn scan_live_stopping(
     }
     let device = open_device(lp, Some(texture.unwrap_or(label)), seed, on_note)?;
     let kind = device.kind();
-    let handle = crate::servo::spawn(p, move || device)
+    let handle = crate::servo::spawn(rig, move || device)
         .map_err(|e| AcquireError::Runtime(format!("cannot start the servo thread: {e}")))?;
     // Signals raise the loop's own stop flag too.
     let servo_stop = handle.stop.clone();
     let mut reports = Vec::new();
-    let per_scan_limit = Duration::from_secs_f64(path_duration_s(lp) * 2.0 + 30.0);
+    let per_scan_limit = Duration::from_secs_f64(path_duration_s(rig.path) * 2.0 + 30.0);
     let homed = match wait_for_homing(lp, &handle, &stop, on_note) {
         Ok(h) => h,
         Err(e) => {
@@ -767,7 +791,7 @@ mod tests {
 
     #[test]
     fn the_thesis_path_takes_about_thirteen_seconds() {
-        let d = path_duration_s(&LoadedProfile::thesis());
+        let d = path_duration_s(LoadedProfile::thesis().rig().unwrap().path);
         assert!((d - (0.1009 / 0.03 + 8.97 + 0.3)).abs() < 0.01, "{d}");
     }
 }

@@ -20,6 +20,7 @@ pub mod features;
 pub mod import;
 pub mod inspect;
 pub mod plot;
+pub mod profile;
 pub mod replay;
 pub mod scan;
 pub mod simulate;
@@ -93,6 +94,11 @@ pub enum Command {
         after_help = "Examples:\n  hapticlab plot trace recordings/thesis-sim/S2/S2_001.csv.gz --out s2.png\n  hapticlab evaluate recordings/thesis-sim --folds 10 --json > r.json && hapticlab plot confusion r.json --out confusion.svg\n  hapticlab plot features recordings/thesis-sim --per-class 5 --out features.png\n  hapticlab evaluate recordings/thesis-sim --folds 5 --sweep k=1..15 --json > s.json && hapticlab plot sweep s.json --out sweep.png\n  hapticlab evaluate recordings/thesis-sim --folds 5 --sweep 'bins=[1,1],[1,2]' --sweep k=1,10 --json > g.json && hapticlab plot sweep g.json --out grid.svg"
     )]
     Plot(plot::PlotArgs),
+    /// Write profiles: `profile new --from DIR --out P.toml`, an analysis-only profile for a folder of recordings.
+    #[command(
+        after_help = "Example:\n  hapticlab profile new --from recordings/rig --out profiles/rig.toml"
+    )]
+    Profile(profile::ProfileArgs),
     /// Check profiles: parse and validate every value.
     #[command(after_help = "Example:\n  hapticlab check profiles/*.toml")]
     Check(check::CheckArgs),
@@ -110,6 +116,7 @@ pub fn run(cmd: Command) -> Result<(), Failure> {
         Command::Classify(a) => classify::run(a),
         Command::Evaluate(a) => evaluate::run(a),
         Command::Check(a) => check::run(a),
+        Command::Profile(a) => profile::run(a),
         Command::Devices(a) => devices::run(a),
         Command::Doctor(a) => doctor::run(a),
         Command::Plot(a) => plot::run(&a),

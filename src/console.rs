@@ -106,6 +106,13 @@ fn open_terminal() -> Result<crate::terminal::Screen, Failure> {
 
 /// `hapticlab` / `hapticlab console`: the live console.
 pub fn run(lp: LoadedProfile, dataset: Option<PathBuf>) -> Result<(), Failure> {
+    // Live mode drives the rig; replay works on an analysis-only profile.
+    let rig = lp.rig().map_err(|e| {
+        Failure::BadInput(format!(
+            "console: {e}; to browse, train on and predict its recordings: hapticlab replay DIR --profile {}",
+            lp.origin
+        ))
+    })?;
     let keys = KeyMap::from_settings(&lp.profile.console).map_err(Failure::BadInput)?;
     let dataset = dataset.unwrap_or_else(default_dataset);
     let signals = Signals::register().map_err(runtime)?;
@@ -113,7 +120,7 @@ pub fn run(lp: LoadedProfile, dataset: Option<PathBuf>) -> Result<(), Failure> {
         lp.clone(),
         keys,
         Source::Live {
-            backend: lp.profile.device.kind.name().into(),
+            backend: rig.device.kind.name().into(),
         },
         dataset.clone(),
     );

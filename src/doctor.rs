@@ -20,10 +20,10 @@ use std::path::PathBuf;
 
 use serde::Serialize;
 
-use crate::profile::{DeviceKind, LoadedProfile, Realtime};
+use crate::profile::{DeviceKind, LoadedProfile, MissingRig, Realtime};
 use crate::recorder::COLUMNS;
 use crate::recording::decimals_for;
-use crate::support::{Failure, ProfileArg, load_profile};
+use crate::support::{Failure, ProfileArg, bad, load_profile};
 
 pub use dataset::dataset_checks;
 pub use facts::{DatasetFacts, DirState, Facts, Limit, SystemFacts, TerminalFacts};
@@ -98,21 +98,24 @@ pub struct Needs {
 }
 
 impl Needs {
-    pub fn of(lp: &LoadedProfile) -> Needs {
+    /// What `lp`'s rig asks; an analysis-only profile asks nothing of the
+    /// machine that doctor checks, and is refused naming its missing sections.
+    pub fn of(lp: &LoadedProfile) -> Result<Needs, MissingRig> {
         let p = &lp.profile;
-        Needs {
+        let rig = lp.rig()?;
+        Ok(Needs {
             profile: p.name.clone(),
-            kind: p.device.kind,
+            kind: rig.device.kind,
             falcon_index: p.falcon.as_ref().map_or(0, |f| f.index),
             firmware: p
                 .falcon
                 .as_ref()
                 .and_then(|f| f.firmware.as_deref())
                 .map(|f| lp.resolve(f)),
-            realtime: p.device.realtime.clone(),
-            rate_hz: p.device.rate_hz,
-            scan_s: p.scan_leg_length_m() / p.path.speed_m_per_s + p.path.dwell_s,
-        }
+            realtime: rig.device.realtime.clone(),
+            rate_hz: rig.device.rate_hz,
+            scan_s: rig.scan_leg_length_m() / rig.path.speed_m_per_s + rig.path.dwell_s,
+        })
     }
 
     /// A typical recording's size (uncompressed, as the console and `scan`
@@ -212,7 +215,7 @@ pub fn render_json(checks: &[Check]) -> serde_json::Value {
 /// `hapticlab doctor`.
 pub fn run(profile: &ProfileArg, dataset: Option<PathBuf>, json: bool) -> Result<(), Failure> {
     let lp = load_profile(profile)?;
-    let needs = Needs::of(&lp);
+    let needs = Needs::of(&lp).map_err(|e| bad(format!("doctor: {e}")))?;
     let dataset = dataset.unwrap_or_else(crate::console::default_dataset);
     let facts = Facts::gather(&needs, &dataset);
     let checks = checks(&needs, &facts);

@@ -62,9 +62,15 @@ pub struct Profile {
     pub name: String,
     #[serde(default)]
     pub description: String,
-    pub device: Device,
-    pub controller: Controller,
-    pub path: PathSpec,
+    /// The rig that makes scans: `[device]`, `[controller]` and `[path]`.
+    /// A profile that only analyses recordings has none of them (see
+    /// [`Profile::rig`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub device: Option<Device>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub controller: Option<Controller>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path: Option<PathSpec>,
     pub analysis: Analysis,
     pub classifier: Classifier,
     pub evaluation: Evaluation,
@@ -190,6 +196,14 @@ impl LoadedProfile {
         })
     }
 
+    /// The rig, or an error naming the missing sections and this file.
+    pub fn rig(&self) -> Result<Rig<'_>, MissingRig> {
+        self.profile.rig().map_err(|e| MissingRig {
+            origin: Some(self.origin.clone()),
+            ..e
+        })
+    }
+
     /// A file path named in the profile, resolved against the profile's folder.
     pub fn resolve(&self, p: &Path) -> PathBuf {
         if p.is_absolute() {
@@ -239,14 +253,20 @@ impl Profile {
         if self.name.trim().is_empty() {
             return bad("name", "must not be empty");
         }
-        device::validate(&self.device)?;
-        controller::validate(&self.controller)?;
-        path::validate(&self.path)?;
-        analysis::validate(&self.analysis, &self.path)?;
+        if let Some(d) = &self.device {
+            device::validate(d)?;
+        }
+        if let Some(c) = &self.controller {
+            controller::validate(c)?;
+        }
+        if let Some(p) = &self.path {
+            path::validate(p)?;
+        }
+        analysis::validate(&self.analysis, self.path.as_ref())?;
         classifier::validate(&self.classifier)?;
         evaluation::validate(&self.evaluation, &self.classifier, self.textures.len())?;
         textures::validate(&self.textures)?;
-        simulator::validate(&self.simulator, self.device.rate_hz)?;
+        simulator::validate(&self.simulator, self.device.as_ref().map(|d| d.rate_hz))?;
         hardware::validate_sim_faults(self)?;
         self.console.bindings()?;
         hardware::validate(self)
@@ -260,7 +280,7 @@ impl Profile {
     /// axis (`x_m`, `y_m`, `z_m`), metres, or its duration with the dwell
     /// (`t_s`), seconds. `None` for another axis or an invalid path.
     pub fn scan_leg_extent(&self, axis: &str) -> Option<f64> {
-        let p = &self.path;
+        let p = self.path.as_ref()?;
         if p.scan_leg == 0 || p.scan_leg >= p.waypoints_m.len() {
             return None;
         }
@@ -290,6 +310,48 @@ impl Profile {
         }
     }
 
+    /// The rig that makes scans, when the profile has all of it; otherwise
+    /// which of `[device]`, `[controller]` and `[path]` are missing (the
+    /// profile is then analysis only).
+    pub fn rig(&self) -> Result<Rig<'_>, MissingRig> {
+        match (&self.device, &self.controller, &self.path) {
+            (Some(device), Some(controller), Some(path)) => Ok(Rig {
+                device,
+                controller,
+                path,
+            }),
+            (d, c, p) => Err(MissingRig {
+                origin: None,
+                profile: self.name.clone(),
+                missing: [
+                    (d.is_none(), "[device]"),
+                    (c.is_none(), "[controller]"),
+                    (p.is_none(), "[path]"),
+                ]
+                .into_iter()
+                .filter_map(|(gone, name)| gone.then_some(name))
+                .collect(),
+            }),
+        }
+    }
+
+    /// No `[device]`, `[controller]` nor `[path]`: the profile analyses
+    /// recordings and makes none.
+    pub fn is_analysis_only(&self) -> bool {
+        self.device.is_none() && self.controller.is_none() && self.path.is_none()
+    }
+}
+
+/// The sections a profile needs to make scans, borrowed from it: what the
+/// servo loop, the devices, `scan`, `simulate` and the live console run on.
+#[derive(Debug, Clone, Copy)]
+pub struct Rig<'a> {
+    pub device: &'a Device,
+    pub controller: &'a Controller,
+    pub path: &'a PathSpec,
+}
+
+impl Rig<'_> {
     /// Length of the scan leg, metres.
     pub fn scan_leg_length_m(&self) -> f64 {
         dist(
@@ -298,6 +360,46 @@ impl Profile {
         )
     }
 }
+
+/// A profile without a rig asked to make scans: which sections it lacks.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MissingRig {
+    /// The profile file, when known ([`LoadedProfile::rig`]).
+    pub origin: Option<String>,
+    /// The profile's name.
+    pub profile: String,
+    /// The sections missing, as `[device]`, `[controller]`, `[path]`.
+    pub missing: Vec<&'static str>,
+}
+
+impl MissingRig {
+    /// The missing sections in words: `[path]`, `[device] or [path]`,
+    /// `[device], [controller] or [path]`.
+    pub fn sections(&self) -> String {
+        match self.missing.split_last() {
+            Some((last, [])) => last.to_string(),
+            Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+            None => String::new(),
+        }
+    }
+}
+
+impl fmt::Display for MissingRig {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let what = format!("no {} section", self.sections());
+        match &self.origin {
+            Some(o) => write!(f, "{o}: ")?,
+            None => write!(f, "profile {:?}: ", self.profile)?,
+        }
+        write!(
+            f,
+            "{what}: it analyses recordings only (features, train, classify, evaluate, inspect, plot, replay); \
+             making scans needs a rig: [device], [controller] and [path] (see profiles/thesis.toml)"
+        )
+    }
+}
+
+impl std::error::Error for MissingRig {}
 
 pub fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
     ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()

@@ -32,7 +32,7 @@ use crossbeam_channel::{Receiver, Sender, TryRecvError, TrySendError, bounded};
 use serde::Serialize;
 
 use crate::device::{HapticDevice, Reading};
-use crate::profile::Profile;
+use crate::profile::Rig;
 use crate::recorder::{Recorder, Sample, SavedScan, ScanSink};
 use clock::Clock;
 use controller::SpringDamper;
@@ -194,40 +194,41 @@ pub struct ServoLoop<D: HapticDevice, C: Clock> {
 
 impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
     /// A loop holding the probe where it is, in manual mode, recording into `sink`.
-    pub fn new(device: D, clock: C, profile: &Profile, sink: ScanSink, links: Links) -> Self {
-        let c = &profile.controller;
+    /// The rig comes from [`crate::profile::Profile::rig`].
+    pub fn new(device: D, clock: C, rig: Rig<'_>, sink: ScanSink, links: Links) -> Self {
+        let c = rig.controller;
         ServoLoop {
             device,
             clock,
-            path: profile.path.clone(),
-            transit_speed: profile
+            path: rig.path.clone(),
+            transit_speed: rig
                 .path
                 .transit_speed_m_per_s
-                .unwrap_or(profile.path.speed_m_per_s),
+                .unwrap_or(rig.path.speed_m_per_s),
             controller: SpringDamper::new(
                 c.stiffness_n_per_m,
                 c.damping_n_s_per_m,
                 c.force_limit_n,
             ),
-            period: 1.0 / profile.device.rate_hz,
-            missed_limit: profile.device.missed_deadline_streak,
-            missed_fraction: profile.device.missed_deadline_fraction,
+            period: 1.0 / rig.device.rate_hz,
+            missed_limit: rig.device.missed_deadline_streak,
+            missed_fraction: rig.device.missed_deadline_fraction,
             mode: Mode::Manual,
-            setpoint: profile.path.waypoints_m[0],
+            setpoint: rig.path.waypoints_m[0],
             trajectory: None,
             speed_scale: 1.0,
             scan_path: None,
             scan_meta: None,
             scan_t0: None,
             sink,
-            stats: StatsCollector::new(profile.device.rate_hz),
-            scan_stats: StatsCollector::new(profile.device.rate_hz),
+            stats: StatsCollector::new(rig.device.rate_hz),
+            scan_stats: StatsCollector::new(rig.device.rate_hz),
             snapshot: LoopStats::default(),
             links,
             deadline_index: 0,
             last_t: None,
             reading: Reading {
-                pos_m: profile.path.waypoints_m[0],
+                pos_m: rig.path.waypoints_m[0],
                 ..Reading::default()
             },
             force: [0.0; 3],
@@ -646,7 +647,7 @@ pub const TELEMETRY_CAPACITY: usize = 4096;
 
 /// Start the loop on a named thread, in real time. `make` builds the device
 /// on that thread (some devices must live where they are polled).
-pub fn spawn<D, F>(profile: &Profile, make: F) -> std::io::Result<ServoHandle>
+pub fn spawn<D, F>(rig: Rig<'_>, make: F) -> std::io::Result<ServoHandle>
 where
     D: HapticDevice + 'static,
     F: FnOnce() -> D + Send + 'static,
@@ -664,11 +665,17 @@ where
         events: Some(ev_tx),
         stop: Some(stop.clone()),
     };
-    let profile = profile.clone();
+    let (device_spec, controller, path) =
+        (rig.device.clone(), rig.controller.clone(), rig.path.clone());
     let thread = std::thread::Builder::new()
         .name("servo".into())
         .spawn(move || {
-            let notices = profile
+            let rig = Rig {
+                device: &device_spec,
+                controller: &controller,
+                path: &path,
+            };
+            let notices = rig
                 .device
                 .realtime
                 .as_ref()
@@ -683,8 +690,8 @@ where
                 let _ = tx.try_send(ServoEvent::Notice { message });
             }
             let device = make();
-            let clock = clock::RealClock::start().with_spin(profile.device.spin_us);
-            let mut servo = ServoLoop::new(device, clock, &profile, sink, links);
+            let clock = clock::RealClock::start().with_spin(rig.device.spin_us);
+            let mut servo = ServoLoop::new(device, clock, rig, sink, links);
             servo.watch_heartbeat(watched);
             let halt = servo.run();
             let stats = servo.stats();

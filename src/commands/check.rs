@@ -18,23 +18,47 @@ pub fn run(a: CheckArgs) -> Result<(), Failure> {
     check(&a.profiles)
 }
 
+/// What the profile holds, and for an analysis-only one what it can be used for.
+fn summary(lp: &LoadedProfile) -> String {
+    let p = &lp.profile;
+    let analysis = format!(
+        "{} features, k = {}",
+        p.analysis.feature_count(),
+        p.classifier.k_text()
+    );
+    match lp.rig() {
+        Ok(rig) => format!(
+            "profile {:?}, device {}, {} waypoints, {} textures, {analysis}{}",
+            p.name,
+            rig.device.kind.name(),
+            rig.path.waypoints_m.len(),
+            p.textures.len(),
+            acquire::injected_faults(lp)
+                .map(|f| format!("; injects faults: {f}"))
+                .unwrap_or_default()
+        ),
+        Err(missing) => format!(
+            "profile {:?}, analysis only (no {} section): {analysis}, channel{} {} along {}; \
+             for features, train, classify, evaluate, inspect, plot and replay of recorded scans, \
+             not for scan, simulate, doctor or the live console",
+            p.name,
+            missing.sections(),
+            if p.analysis.channels.is_empty() {
+                ""
+            } else {
+                "s"
+            },
+            p.analysis.all_channels().collect::<Vec<_>>().join(", "),
+            p.analysis.axis
+        ),
+    }
+}
+
 fn check(profiles: &[PathBuf]) -> Result<(), Failure> {
     let mut errors = Vec::new();
     for p in profiles {
         match LoadedProfile::load(p) {
-            Ok(lp) => crate::outln!(
-                "{}: ok — profile {:?}, device {}, {} waypoints, {} textures, {} features, k = {}{}",
-                p.display(),
-                lp.profile.name,
-                lp.profile.device.kind.name(),
-                lp.profile.path.waypoints_m.len(),
-                lp.profile.textures.len(),
-                lp.profile.analysis.feature_count(),
-                lp.profile.classifier.k_text(),
-                acquire::injected_faults(&lp)
-                    .map(|f| format!("; injects faults: {f}"))
-                    .unwrap_or_default()
-            ),
+            Ok(lp) => crate::outln!("{}: ok — {}", p.display(), summary(&lp)),
             Err(e) => errors.push(e.to_string()),
         }
     }

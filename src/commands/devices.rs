@@ -183,18 +183,19 @@ impl Operator<EmulatedFalcon> for Terminal {
 /// What the self-test takes from the profile, read in one place.
 fn self_test_options(lp: &LoadedProfile, yes: bool) -> Result<self_test::Options, Failure> {
     let p = &lp.profile;
-    if !matches!(
-        p.device.kind,
-        DeviceKind::Falcon | DeviceKind::FalconEmulator
-    ) {
+    let device = lp
+        .rig()
+        .map_err(|e| bad(format!("devices --self-test: {e}")))?
+        .device;
+    if !matches!(device.kind, DeviceKind::Falcon | DeviceKind::FalconEmulator) {
         return Err(bad(format!(
             "{}: devices --self-test needs a Falcon profile (device.kind = \"falcon\", or \"falcon-emulator\" to try it on the emulator), not \"{}\"; e.g. -p profiles/thesis-falcon.toml",
             lp.origin,
-            p.device.kind.name()
+            device.kind.name()
         )));
     }
     Ok(self_test::Options {
-        rate_hz: p.device.rate_hz,
+        rate_hz: device.rate_hz,
         homing_timeout_s: p.falcon.as_ref().map_or(120.0, |f| f.homing_timeout_s),
         assume_yes: yes,
         ..self_test::Options::default()
@@ -213,7 +214,13 @@ fn run_self_test(lp: &LoadedProfile, yes: bool, json: bool) -> Result<(), Failur
     let mut terminal = Terminal { yes };
     let mut clock = RealClock::start();
     let name = &lp.profile.name;
-    let (report, opened) = if lp.profile.device.kind == DeviceKind::Falcon {
+    // (`self_test_options` has checked the profile has a Falcon device.)
+    let real = lp
+        .profile
+        .device
+        .as_ref()
+        .is_some_and(|d| d.kind == DeviceKind::Falcon);
+    let (report, opened) = if real {
         let pace = Pace {
             clock: &mut clock,
             stop: &stop,

@@ -73,7 +73,7 @@ pub struct ValidationArgs {
     /// Evaluate a dataset simulated from the profile in virtual time (no PATH; a temporary folder, removed after); with --sweep of a [controller], [path], [simulator] or [device] key, one dataset per value.
     #[arg(long)]
     pub simulate: bool,
-    /// With --simulate: scans per texture (default: the profile's train_per_class + test_per_class).
+    /// With --simulate: scans per texture (default: the profile's train_per_class + test_per_class; 30, or the folds, when it names neither).
     #[arg(long, value_name = "N")]
     pub per_class: Option<usize>,
 }
@@ -275,10 +275,19 @@ fn validated(
             profile.profile.display()
         )));
     }
+    if args.simulate {
+        lp.rig()
+            .map_err(|e| bad(format!("evaluate --simulate: {e}")))?;
+    }
+    // The holdout's own counts; cross-validation names none, so as many
+    // scans as `simulate` makes by default (more when the folds need it).
+    let held_out = lp.profile.evaluation.train_per_class + lp.profile.evaluation.test_per_class;
     let sim = SimPlan {
-        per_class: args.per_class.unwrap_or(
-            lp.profile.evaluation.train_per_class + lp.profile.evaluation.test_per_class,
-        ),
+        per_class: args.per_class.unwrap_or(if held_out > 0 {
+            held_out
+        } else {
+            crate::acquire::DEFAULT_PER_CLASS.max(plan.folds)
+        }),
         threads: plan.threads,
     };
     if args.per_class.is_some() && !args.simulate {

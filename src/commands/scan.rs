@@ -53,11 +53,12 @@ fn scan(
     seed: Option<u64>,
 ) -> Result<(), Failure> {
     let lp = load_profile(profile)?;
+    let rig = lp.rig().map_err(|e| bad(format!("scan: {e}")))?;
     if count == 0 {
         return Err(bad("--count must be at least 1"));
     }
     crate::profile::check_label(label).map_err(|e| bad(format!("--label: {e}")))?;
-    if lp.profile.device.kind != crate::profile::DeviceKind::Falcon {
+    if rig.device.kind != crate::profile::DeviceKind::Falcon {
         let tex = texture.unwrap_or(label);
         if lp.profile.texture(tex).is_none() {
             let known: Vec<&str> = lp
@@ -106,8 +107,8 @@ fn scan(
     };
     tell(format_args!(
         "scanning {label} on the {} device: {count} scan(s) of about {:.0} s each; Ctrl-C stops safely",
-        lp.profile.device.kind.name(),
-        acquire::path_duration_s(&lp)
+        rig.device.kind.name(),
+        acquire::path_duration_s(rig.path)
     ));
     let mut n = 0;
     let mut failed = None;

@@ -8,7 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use clap::Args;
 
 use crate::acquire::{self, SimulateOptions};
-use crate::support::{Failure, ProfileArg, load_profile, progress_bar, runtime};
+use crate::support::{Failure, ProfileArg, bad, load_profile, progress_bar, runtime};
 
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
@@ -18,7 +18,7 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
     /// Scans per texture.
-    #[arg(long, default_value_t = 30, value_name = "N")]
+    #[arg(long, default_value_t = acquire::DEFAULT_PER_CLASS, value_name = "N")]
     pub per_class: usize,
     /// Dataset seed (default: the profile's simulator.seed).
     #[arg(long, value_name = "S")]
@@ -61,6 +61,11 @@ fn simulate(
     json: bool,
 ) -> Result<(), Failure> {
     let lp = load_profile(profile)?;
+    let rate_hz = lp
+        .rig()
+        .map_err(|e| bad(format!("simulate: {e}")))?
+        .device
+        .rate_hz;
     let (out, per_class) = (opts.out.clone(), opts.per_class);
     let total = per_class * lp.profile.textures.len();
     let pb = progress_bar(total as u64, "simulating");
@@ -107,7 +112,7 @@ fn simulate(
     let saved = saved.map_err(Failure::from)?;
     let secs = started.elapsed().as_secs_f64();
     let samples: usize = saved.iter().map(|s| s.rows).sum();
-    let sim_s = samples as f64 / lp.profile.device.rate_hz;
+    let sim_s = samples as f64 / rate_hz;
     let printed = if json {
         let files: Vec<String> = saved.iter().map(|s| s.path.display().to_string()).collect();
         let v = serde_json::json!({

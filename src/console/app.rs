@@ -133,6 +133,16 @@ pub struct App {
 }
 
 impl App {
+    /// Where the probe rests: the path's first waypoint (the workspace's
+    /// centre for a profile without a path, which has no live mode).
+    fn home_m(&self) -> [f64; 3] {
+        self.profile
+            .profile
+            .path
+            .as_ref()
+            .map_or([0.0; 3], |p| p.waypoints_m[0])
+    }
+
     pub fn new(profile: LoadedProfile, keys: KeyMap, source: Source, dataset: PathBuf) -> App {
         let label = profile
             .profile
@@ -428,7 +438,7 @@ impl App {
                 let m = self
                     .target_m
                     .or(self.live.latest.map(|t| t.pos_m))
-                    .unwrap_or(self.profile.profile.path.waypoints_m[0]);
+                    .unwrap_or_else(|| self.home_m());
                 let hint = format!(
                     "workspace x {:.0}…{:.0}, y {:.0}…{:.0}, z {:.0}…{:.0} cm; Tab next field, Enter go, Esc cancel",
                     WORKSPACE_MIN_M[0] * 100.0,
@@ -570,7 +580,7 @@ impl App {
                 let mut t = self
                     .target_m
                     .or(self.live.latest.map(|t| t.pos_m))
-                    .unwrap_or(self.profile.profile.path.waypoints_m[0]);
+                    .unwrap_or_else(|| self.home_m());
                 t[axis] =
                     (t[axis] + sign * NUDGE_M).clamp(WORKSPACE_MIN_M[axis], WORKSPACE_MAX_M[axis]);
                 self.target_m = Some(t);

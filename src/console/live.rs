@@ -81,7 +81,7 @@ impl Lab {
         dataset: &Path,
         texture: Option<&str>,
     ) -> Result<Lab, AcquireError> {
-        let simulated = lp.profile.device.kind != DeviceKind::Falcon;
+        let simulated = lp.rig()?.device.kind != DeviceKind::Falcon;
         let mut lab = Lab {
             lp: lp.clone(),
             handle: None,
@@ -97,11 +97,16 @@ impl Lab {
     }
 
     pub fn backend(&self) -> &'static str {
-        self.lp.profile.device.kind.name()
+        self.lp
+            .profile
+            .device
+            .as_ref()
+            .map_or("none", |d| d.kind.name())
     }
 
     fn spawn(&mut self) -> Result<(), AcquireError> {
         let p = &self.lp.profile;
+        let rig = self.lp.rig()?;
         let seed = scan_seed(
             p.simulator.seed,
             self.texture.as_deref().unwrap_or(""),
@@ -113,7 +118,7 @@ impl Lab {
         })?;
         self.mounts += 1;
         self.last_stop = None;
-        let handle = servo::spawn(p, move || device)
+        let handle = servo::spawn(rig, move || device)
             .map_err(|e| AcquireError::Runtime(format!("cannot start the servo thread: {e}")))?;
         self.handle = Some(handle);
         Ok(())
@@ -122,7 +127,7 @@ impl Lab {
     /// Restart the simulator with another texture (only while idle): the
     /// old loop is shut down, its device made safe.
     pub fn mount(&mut self, texture: &str, app: &mut App) -> Result<(), String> {
-        if self.lp.profile.device.kind == DeviceKind::Falcon {
+        if self.lp.profile.device.as_ref().map(|d| d.kind) == Some(DeviceKind::Falcon) {
             // The lab changes a real texture by hand; the Falcon stays homed.
             return Ok(());
         }

@@ -501,7 +501,8 @@ pub fn config_from_profile(lp: &crate::profile::LoadedProfile) -> Result<FalconC
         ),
         None => None,
     };
-    let period_ms = 1000.0 / lp.profile.device.rate_hz;
+    let rig = lp.rig().map_err(|e| OpenError::BadInput(e.to_string()))?;
+    let period_ms = 1000.0 / rig.device.rate_hz;
     Ok(FalconConfig {
         frame: Frame {
             origin_m: section.origin_m,

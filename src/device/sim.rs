@@ -73,6 +73,7 @@ impl SimDevice {
         texture: Option<&str>,
         seed: u64,
     ) -> Result<SimDevice, SimError> {
+        let rig = profile.rig()?;
         let p = profile.simulator.clone();
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let trace = match texture {
@@ -104,10 +105,10 @@ impl SimDevice {
             }
         };
         let sigma = p.position_noise_m.max(0.0);
-        let max_step = 1.0 / profile.device.rate_hz / f64::from(p.substeps.max(1));
+        let max_step = 1.0 / rig.device.rate_hz / f64::from(p.substeps.max(1));
         Ok(SimDevice {
             trace,
-            pos: profile.path.waypoints_m[0],
+            pos: rig.path.waypoints_m[0],
             vel: [0.0; 3],
             force: [0.0; 3],
             hand: [0.0; 3],
@@ -322,6 +323,9 @@ pub enum SimError {
     UnknownTexture { label: String, known: Vec<String> },
     #[error(transparent)]
     Surface(#[from] SurfaceError),
+    /// An analysis-only profile: nothing to simulate.
+    #[error(transparent)]
+    NoRig(#[from] crate::profile::MissingRig),
 }
 
 #[cfg(test)]
@@ -367,8 +371,8 @@ mod tests {
         let end = hold(
             &mut dev,
             target,
-            p.controller.stiffness_n_per_m,
-            p.controller.damping_n_s_per_m,
+            p.rig().unwrap().controller.stiffness_n_per_m,
+            p.rig().unwrap().controller.damping_n_s_per_m,
             3.0,
         );
         let sag = target[1] - end[1];
@@ -385,8 +389,8 @@ mod tests {
         let end = hold(
             &mut dev,
             target,
-            p.controller.stiffness_n_per_m,
-            p.controller.damping_n_s_per_m,
+            p.rig().unwrap().controller.stiffness_n_per_m,
+            p.rig().unwrap().controller.damping_n_s_per_m,
             3.0,
         );
         let surf = dev.surface_height(end[0]).unwrap();

@@ -12,7 +12,7 @@ use crate::device::falcon::usb::{FalconInfo, UsbError};
 const MIB: u64 = 1 << 20;
 
 fn thesis() -> Needs {
-    Needs::of(&LoadedProfile::thesis())
+    Needs::of(&LoadedProfile::thesis()).unwrap()
 }
 
 fn falcon_needs() -> Needs {

@@ -624,11 +624,9 @@ pub fn check_windows(s: &Analysis, w: Windows) -> Result<(), String> {
     Ok(())
 }
 
-/// Check `[analysis]` against the path (validated before it).
-pub(super) fn validate(an: &Analysis, p: &PathSpec) -> Result<(), Invalid> {
-    let a0 = p.waypoints_m[p.scan_leg - 1];
-    let a1 = p.waypoints_m[p.scan_leg];
-    let leg_len = dist(a0, a1);
+/// Check `[analysis]`, and against the path (validated before it) when the
+/// profile has one: an analysis-only profile has none to check against.
+pub(super) fn validate(an: &Analysis, p: Option<&PathSpec>) -> Result<(), Invalid> {
     let axis_index = match an.axis.as_str() {
         "x_m" => Some(0),
         "y_m" => Some(1),
@@ -651,7 +649,11 @@ pub(super) fn validate(an: &Analysis, p: &PathSpec) -> Result<(), Invalid> {
     if an.window == SCAN_LEG {
         return bad(
             "analysis.window",
-            "\"scan-leg\" needs a scan leg that moves along the axis",
+            if p.is_none() {
+                "\"scan-leg\" needs the scan leg of a [path], and this profile has no [path] section: give the window as [start, end] in the axis unit"
+            } else {
+                "\"scan-leg\" needs a scan leg that moves along the axis"
+            },
         );
     }
     if !(an.window[0].is_finite()
@@ -670,24 +672,8 @@ pub(super) fn validate(an: &Analysis, p: &PathSpec) -> Result<(), Invalid> {
     if let Some(w) = an.windows {
         check_windows(an, w).or_else(|reason| bad("analysis.windows", reason))?;
     }
-    let leg_extent = match axis_index {
-        Some(ax) => (a1[ax] - a0[ax]).abs(),
-        None => leg_len / p.speed_m_per_s + p.dwell_s,
-    };
-    if axis_index.is_some() && leg_extent <= 0.0 {
-        return bad(
-            "analysis.axis",
-            "the scan leg does not move along this axis",
-        );
-    }
-    if an.window[1] > leg_extent + 1e-9 {
-        return bad(
-            "analysis.window",
-            format!(
-                "ends at {} but the scan leg spans only {:.6} along {} (window = \"scan-leg\" takes all of it)",
-                an.window[1], leg_extent, an.axis
-            ),
-        );
+    if let Some(p) = p {
+        check_against_scan_leg(an, p, axis_index)?;
     }
     let n = an.points();
     if n < 4 {
@@ -725,6 +711,37 @@ pub(super) fn validate(an: &Analysis, p: &PathSpec) -> Result<(), Invalid> {
     }
     if let Err((key, reason)) = check_options(an) {
         return bad(key, reason);
+    }
+    Ok(())
+}
+
+/// The window must lie on the path's scan leg, which must move along the
+/// axis (a position axis), or last as long as the window (`t_s`).
+fn check_against_scan_leg(
+    an: &Analysis,
+    p: &PathSpec,
+    axis_index: Option<usize>,
+) -> Result<(), Invalid> {
+    let a0 = p.waypoints_m[p.scan_leg - 1];
+    let a1 = p.waypoints_m[p.scan_leg];
+    let leg_extent = match axis_index {
+        Some(ax) => (a1[ax] - a0[ax]).abs(),
+        None => dist(a0, a1) / p.speed_m_per_s + p.dwell_s,
+    };
+    if axis_index.is_some() && leg_extent <= 0.0 {
+        return bad(
+            "analysis.axis",
+            "the scan leg does not move along this axis",
+        );
+    }
+    if an.window[1] > leg_extent + 1e-9 {
+        return bad(
+            "analysis.window",
+            format!(
+                "ends at {} but the scan leg spans only {:.6} along {} (window = \"scan-leg\" takes all of it)",
+                an.window[1], leg_extent, an.axis
+            ),
+        );
     }
     Ok(())
 }

@@ -280,7 +280,11 @@ pub fn validate_sim_faults(p: &Profile) -> Result<(), Invalid> {
     stall(prefix, f.stall_after_s, f.stall_ms, f.stalls)?;
     fault_time(prefix, "nan_after_s", f.nan_after_s)?;
     fault_time(prefix, "vanish_after_s", f.vanish_after_s)?;
-    if f.any() && p.device.kind != DeviceKind::Sim {
+    let kind = p.device.as_ref().map(|d| d.kind);
+    if let Some(kind) = kind
+        && f.any()
+        && kind != DeviceKind::Sim
+    {
         let first = [
             ("read_error_after_s", f.read_error_after_s),
             ("stall_after_s", f.stall_after_s),
@@ -294,7 +298,7 @@ pub fn validate_sim_faults(p: &Profile) -> Result<(), Invalid> {
             format!("{prefix}.{first}"),
             format!(
                 "`[simulator.faults]` applies to device.kind = \"sim\" only, not {:?}; the emulated Falcon's faults go in `[falcon.emulator]` (read_error_after_s, stall_after_s, unplug_after_s, …)",
-                p.device.kind.name()
+                kind.name()
             ),
         );
     }
@@ -376,11 +380,9 @@ fn rate(key: &str, v: f64) -> Result<(), Invalid> {
 
 /// Check the hardware sections (called by `Profile::validate`).
 pub fn validate(p: &Profile) -> Result<(), Invalid> {
-    let falcon_kind = matches!(
-        p.device.kind,
-        DeviceKind::Falcon | DeviceKind::FalconEmulator
-    );
-    if p.device.kind == DeviceKind::Falcon
+    let kind = p.device.as_ref().map(|d| d.kind);
+    let falcon_kind = matches!(kind, Some(DeviceKind::Falcon | DeviceKind::FalconEmulator));
+    if kind == Some(DeviceKind::Falcon)
         && p.falcon
             .as_ref()
             .and_then(|f| f.firmware.as_ref())
@@ -422,7 +424,8 @@ pub fn validate(p: &Profile) -> Result<(), Invalid> {
         {
             return bad("falcon.reply_timeout_ms", "must be in (0, 100] ms");
         }
-        let period_ms = 1000.0 / p.device.rate_hz;
+        // Without a [device] the servo rate is unknown: the thesis's 1 kHz.
+        let period_ms = 1000.0 / p.device.as_ref().map_or(1000.0, |d| d.rate_hz);
         if !(f.link_lost_after_ms.is_finite()
             && f.link_lost_after_ms >= 2.0 * period_ms
             && f.link_lost_after_ms <= 10_000.0)
@@ -514,11 +517,11 @@ pub fn validate(p: &Profile) -> Result<(), Invalid> {
             );
         }
     }
-    if falcon_kind {
+    if falcon_kind && let Some(path) = &p.path {
         let frame = falcon_reach::Frame {
             origin_m: p.falcon.as_ref().map_or(DEFAULT_ORIGIN_M, |f| f.origin_m),
         };
-        for (i, w) in p.path.waypoints_m.iter().enumerate() {
+        for (i, w) in path.waypoints_m.iter().enumerate() {
             let q = frame.to_falcon(*w);
             if !falcon_reach::in_workspace(q) {
                 return bad(

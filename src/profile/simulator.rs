@@ -73,7 +73,7 @@ impl Default for Simulator {
 }
 
 /// Check `[simulator]` (its period jitter against the servo rate).
-pub(super) fn validate(s: &Simulator, rate_hz: f64) -> Result<(), Invalid> {
+pub(super) fn validate(s: &Simulator, rate_hz: Option<f64>) -> Result<(), Invalid> {
     finite_pos("simulator.mass_kg", s.mass_kg)?;
     finite_nonneg("simulator.unbalanced_weight_n", s.unbalanced_weight_n)?;
     finite_nonneg(
@@ -109,7 +109,7 @@ pub(super) fn validate(s: &Simulator, rate_hz: f64) -> Result<(), Invalid> {
         return bad("simulator.period_jitter_fraction", "must be in [0, 1]");
     }
     finite_nonneg("simulator.period_jitter_s", s.period_jitter_s)?;
-    if s.period_jitter_s * rate_hz > 0.2 {
+    if rate_hz.is_some_and(|rate_hz| s.period_jitter_s * rate_hz > 0.2) {
         return bad(
             "simulator.period_jitter_s",
             "must be under a fifth of the servo period",

@@ -177,8 +177,9 @@ mod tests {
 
     #[test]
     fn the_thesis_path_runs_each_leg_at_its_speed() {
-        let p = LoadedProfile::thesis().profile;
-        let mut t = Trajectory::for_path(&p.path, p.path.waypoints_m[0]);
+        let lp = LoadedProfile::thesis();
+        let path = lp.rig().unwrap().path;
+        let mut t = Trajectory::for_path(path, path.waypoints_m[0]);
         let dt = 0.001;
         let mut scan_ticks = 0;
         let mut ticks = 0;
@@ -191,7 +192,7 @@ mod tests {
                 first_scan.get_or_insert(s.setpoint);
             }
             if s.done {
-                assert_eq!(s.setpoint, p.path.waypoints_m[4]);
+                assert_eq!(s.setpoint, path.waypoints_m[4]);
                 break;
             }
         }

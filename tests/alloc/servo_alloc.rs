@@ -42,7 +42,7 @@ fn ticks_on_the_scan_leg_do_not_allocate() {
 
     let device = SimDevice::new(p, Path::new("."), Some("S2"), 7).unwrap();
     let clock = VirtualClock::new(
-        p.device.rate_hz,
+        p.rig().unwrap().device.rate_hz,
         p.simulator.period_jitter_s,
         p.simulator.period_jitter_fraction,
         7,
@@ -57,7 +57,7 @@ fn ticks_on_the_scan_leg_do_not_allocate() {
         events: Some(ev_tx),
         stop: None,
     };
-    let mut servo = ServoLoop::new(device, clock, p, sink, links);
+    let mut servo = ServoLoop::new(device, clock, p.rig().unwrap(), sink, links);
     cmd_tx
         .send(Command::StartScan {
             path: file.clone(),

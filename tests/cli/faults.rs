@@ -89,7 +89,7 @@ fn scan_virtual<D: HapticDevice>(p: &Profile, dev: D, check: impl FnOnce(&D)) ->
         ..Links::default()
     };
     let clock = VirtualClock::new(
-        p.device.rate_hz,
+        p.rig().unwrap().device.rate_hz,
         p.simulator.period_jitter_s,
         p.simulator.period_jitter_fraction,
         3,
@@ -99,7 +99,7 @@ fn scan_virtual<D: HapticDevice>(p: &Profile, dev: D, check: impl FnOnce(&D)) ->
         commands: 0,
         non_finite: 0,
     };
-    let mut servo = ServoLoop::new(watch, clock, p, sink, links);
+    let mut servo = ServoLoop::new(watch, clock, p.rig().unwrap(), sink, links);
     let mut halt = None;
     let mut ticks = 0;
     while !servo.reading().homed {
@@ -253,7 +253,7 @@ fn sim_single_stall_is_counted_and_the_scan_completes() {
 #[test]
 fn sim_stall_streak_aborts_per_the_missed_deadline_policy() {
     let mut lp = load(QUICK_SIM);
-    lp.profile.device.missed_deadline_streak = 20;
+    lp.profile.device.as_mut().unwrap().missed_deadline_streak = 20;
     let f = &mut lp.profile.simulator.faults;
     f.stall_after_s = Some(0.5);
     f.stall_ms = 3.0;
@@ -339,7 +339,7 @@ fn emulator_single_stall_is_counted_and_the_scan_completes() {
 #[test]
 fn emulator_stall_streak_aborts() {
     let mut lp = load(QUICK_EMU);
-    lp.profile.device.missed_deadline_streak = 20;
+    lp.profile.device.as_mut().unwrap().missed_deadline_streak = 20;
     let e = &mut lp.profile.falcon.as_mut().unwrap().emulator;
     e.stall_after_s = Some(2.4);
     e.stall_ms = 3.0;

@@ -15,6 +15,7 @@ mod faults;
 mod first_session;
 mod import;
 mod plot;
+mod rigless;
 mod sweep_grid;
 mod sweep_simulated;
 mod validation;

@@ -46,9 +46,12 @@ fn simulation_keys_resolve_by_table_bare_name_or_component() {
         &toml::Value::Integer(90),
     )
     .unwrap();
-    assert_eq!(q.controller.stiffness_n_per_m, [2400.0, 90.0, 2400.0]);
+    assert_eq!(
+        q.rig().unwrap().controller.stiffness_n_per_m,
+        [2400.0, 90.0, 2400.0]
+    );
     let q = with_key(&p, "path.speed_m_per_s", &toml::Value::Float(0.02)).unwrap();
-    assert_eq!(q.path.speed_m_per_s, 0.02);
+    assert_eq!(q.rig().unwrap().path.speed_m_per_s, 0.02);
     // Values the profile refuses are refused, naming the key.
     let e = with_key(&p, "path.speed_m_per_s", &toml::Value::Float(-1.0)).unwrap_err();
     assert!(

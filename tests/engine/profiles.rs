@@ -74,12 +74,10 @@ fn the_shipped_profiles_are_valid() {
 fn the_falcon_profiles_ask_for_the_thesis_real_time_setup() {
     let thesis = LoadedProfile::load(Path::new("profiles/thesis.toml")).unwrap();
     let falcon = LoadedProfile::load(Path::new("profiles/thesis-falcon.toml")).unwrap();
-    assert!(thesis.profile.device.realtime.is_some());
-    assert_eq!(
-        falcon.profile.device.realtime,
-        thesis.profile.device.realtime
-    );
-    assert_eq!(falcon.profile.device.spin_us, thesis.profile.device.spin_us);
+    let (thesis, falcon) = (thesis.rig().unwrap().device, falcon.rig().unwrap().device);
+    assert!(thesis.realtime.is_some());
+    assert_eq!(falcon.realtime, thesis.realtime);
+    assert_eq!(falcon.spin_us, thesis.spin_us);
 }
 
 const SHIPPED: [&str; 3] = [

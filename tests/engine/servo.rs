@@ -73,7 +73,7 @@ fn faulty(
 }
 
 fn virtual_clock(p: &Profile) -> VirtualClock {
-    VirtualClock::new(p.device.rate_hz, 0.00002, 0.1, 3)
+    VirtualClock::new(p.rig().unwrap().device.rate_hz, 0.00002, 0.1, 3)
 }
 
 /// Run until the scan is no longer pending or the loop halts; the loop is dropped after.
@@ -106,7 +106,7 @@ fn a_virtual_scan_records_the_whole_scan_leg() {
         ..Links::default()
     };
     let dev = SimDevice::new(&p, Path::new("."), Some("S2"), 11).unwrap();
-    let mut servo = ServoLoop::new(dev, virtual_clock(&p), &p, sink, links);
+    let mut servo = ServoLoop::new(dev, virtual_clock(&p), p.rig().unwrap(), sink, links);
     servo.apply(Command::StartScan {
         path: file.clone(),
         meta: vec![("label".into(), toml::Value::String("S2".into()))],
@@ -175,7 +175,13 @@ fn a_device_that_vanishes_mid_scan_leaves_an_incomplete_recording_and_zero_force
     let (recorder, sink) = hapticlab::recorder::start();
     // The scan leg starts after about 3.4 s of transit; unplug at 6 s.
     let (dev, safe) = faulty(&p, Some(6000), None);
-    let mut servo = ServoLoop::new(dev, virtual_clock(&p), &p, sink, Links::default());
+    let mut servo = ServoLoop::new(
+        dev,
+        virtual_clock(&p),
+        p.rig().unwrap(),
+        sink,
+        Links::default(),
+    );
     servo.apply(Command::StartScan {
         path: file.clone(),
         meta: vec![],
@@ -241,7 +247,7 @@ fn a_streak_of_missed_deadlines_stops_the_motion_and_keeps_the_samples() {
         events: Some(ev_tx),
         ..Links::default()
     };
-    let mut servo = ServoLoop::new(dev, clock, &p, sink, links);
+    let mut servo = ServoLoop::new(dev, clock, p.rig().unwrap(), sink, links);
     servo.apply(Command::StartScan {
         path: file.clone(),
         meta: vec![],
@@ -276,7 +282,13 @@ fn a_panic_in_the_servo_thread_zeroes_forces_and_keeps_the_samples() {
     let pp = p.clone();
     let f2 = file.clone();
     let handle = std::thread::spawn(move || {
-        let mut servo = ServoLoop::new(dev, virtual_clock(&pp), &pp, sink, Links::default());
+        let mut servo = ServoLoop::new(
+            dev,
+            virtual_clock(&pp),
+            pp.rig().unwrap(),
+            sink,
+            Links::default(),
+        );
         servo.apply(Command::StartScan {
             path: f2,
             meta: vec![],
@@ -311,7 +323,7 @@ fn manual_mode_applies_no_force_and_target_mode_holds_the_target() {
         telemetry: Some(tel_tx),
         ..Links::default()
     };
-    let mut servo = ServoLoop::new(dev, virtual_clock(&p), &p, sink, links);
+    let mut servo = ServoLoop::new(dev, virtual_clock(&p), p.rig().unwrap(), sink, links);
     for _ in 0..100 {
         servo.tick().unwrap();
     }
@@ -358,7 +370,7 @@ fn a_stalled_telemetry_consumer_is_counted_not_waited_for() {
         telemetry: Some(tel_tx),
         ..Links::default()
     };
-    let mut servo = ServoLoop::new(dev, virtual_clock(&p), &p, sink, links);
+    let mut servo = ServoLoop::new(dev, virtual_clock(&p), p.rig().unwrap(), sink, links);
     for _ in 0..1000 {
         servo.tick().unwrap();
     }

@@ -77,7 +77,7 @@ fn run(stall_s: f64) -> (Vec<f64>, hapticlab::servo::stats::LoopStats) {
         stall_s,
     };
     let (_recorder, sink) = hapticlab::recorder::start();
-    let mut servo = ServoLoop::new(dev, clock, p, sink, Links::default());
+    let mut servo = ServoLoop::new(dev, clock, p.rig().unwrap(), sink, Links::default());
     loop {
         servo.tick().unwrap();
         if reads.lock().unwrap().last().is_some_and(|&t| t >= 3.0) {

@@ -39,8 +39,8 @@ fn mid_scan(
         ..Links::default()
     };
     let dev = SimDevice::new(p, Path::new("."), Some("S2"), 5).unwrap();
-    let clock = VirtualClock::new(p.device.rate_hz, 0.0, 0.0, 5);
-    let mut servo = ServoLoop::new(dev, clock, p, sink, links);
+    let clock = VirtualClock::new(p.rig().unwrap().device.rate_hz, 0.0, 0.0, 5);
+    let mut servo = ServoLoop::new(dev, clock, p.rig().unwrap(), sink, links);
     if let Some(h) = heartbeat {
         servo.watch_heartbeat(h);
     }
@@ -119,7 +119,7 @@ fn a_heartbeat_that_stops_stops_the_motion() {
         "a beating front end is not stopped"
     );
     // The beat stops: the motion stops WATCHDOG_S later, not before.
-    let ticks = (WATCHDOG_S * p.device.rate_hz) as usize;
+    let ticks = (WATCHDOG_S * p.rig().unwrap().device.rate_hz) as usize;
     for _ in 0..ticks - 50 {
         servo.tick().unwrap();
     }

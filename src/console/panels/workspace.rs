@@ -57,7 +57,13 @@ fn draw(app: &App, v: &View, area: Rect, buf: &mut Buffer) {
     let span = |a: usize| (WORKSPACE_MAX_M[a] - WORKSPACE_MIN_M[a]) * 100.0;
     let (x0, y0) = (lo(v.across), lo(v.up));
     let (w, h) = (span(v.across), span(v.up));
-    let wps = &app.profile.profile.path.waypoints_m;
+    // An analysis-only profile (replay) has no path to draw.
+    let wps: &[[f64; 3]] = app
+        .profile
+        .profile
+        .path
+        .as_ref()
+        .map_or(&[], |p| &p.waypoints_m);
     let probe = app.feed().latest.map(|t| t.pos_m);
     let target = (app.replay.is_none() && app.mode() == Mode::Target)
         .then_some(app.target_m)

@@ -400,7 +400,7 @@ mod tests {
     fn the_thesis_path_is_reachable_through_the_default_frame() {
         let frame = Frame::default();
         let lp = crate::profile::LoadedProfile::thesis();
-        for w in &lp.profile.path.waypoints_m {
+        for w in &lp.rig().unwrap().path.waypoints_m {
             let q = frame.to_falcon(*w);
             assert!(in_workspace(q), "{w:?} -> {q:?}");
         }

@@ -1,0 +1,105 @@
+//! `hapticlab profile new --from DIR --out P.toml`: an analysis-only
+//! profile written for a folder of recordings — the channels, the rate, the
+//! axis and spacing, a window that fits the shortest complete recording,
+//! the labels with their counts — with the analysis, classifier and
+//! evaluation choices as commented option groups, each saying when to use
+//! it. The survey of the folder is [`survey()`]; the text is [`draft()`].
+//!
+//! Every option group is written so that putting it in place of the lines
+//! it replaces ([`apply_group`]) still gives a valid profile; the tests
+//! check that on every group of the profiles they write.
+
+use std::path::{Path, PathBuf};
+
+use clap::{Args, Subcommand};
+
+use crate::profile::LoadedProfile;
+use crate::support::{Failure, bad, runtime, write_atomically};
+
+pub mod draft;
+pub mod survey;
+
+pub use draft::{apply_group, draft, groups_of};
+pub use survey::{Survey, survey};
+
+#[derive(Debug, Args)]
+pub struct ProfileArgs {
+    #[command(subcommand)]
+    pub action: ProfileAction,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum ProfileAction {
+    /// Write a commented analysis-only profile for a folder of recordings.
+    #[command(
+        after_help = "The profile has only name, [analysis], [classifier] and [evaluation]: it evaluates, trains and classifies recordings, and makes none.\n\nExample:\n  hapticlab profile new --from recordings/rig --out profiles/rig.toml\n  hapticlab check profiles/rig.toml && hapticlab evaluate recordings/rig -p profiles/rig.toml"
+    )]
+    New(NewArgs),
+}
+
+#[derive(Debug, Args)]
+pub struct NewArgs {
+    /// The folder of recordings (*.csv, *.csv.gz; one subfolder per label, or a `label` in each).
+    #[arg(long, value_name = "DIR")]
+    pub from: PathBuf,
+    /// The profile to write.
+    #[arg(long, value_name = "P.toml")]
+    pub out: PathBuf,
+    /// Replace the file when it exists (by default that is an error).
+    #[arg(long)]
+    pub overwrite: bool,
+}
+
+pub fn run(a: ProfileArgs) -> Result<(), Failure> {
+    match a.action {
+        ProfileAction::New(n) => new(&n),
+    }
+}
+
+fn new(a: &NewArgs) -> Result<(), Failure> {
+    if a.out.exists() && !a.overwrite {
+        return Err(bad(format!(
+            "{} already exists: profile new does not replace it; give another --out, or --overwrite",
+            a.out.display()
+        )));
+    }
+    let s = survey(&a.from)?;
+    let name = a
+        .out
+        .file_stem()
+        .map_or("recordings".into(), |n| n.to_string_lossy().into_owned());
+    let text = draft(&s, &name, &a.from).map_err(bad)?;
+    // What is written must load: a profile that does not is this command's fault.
+    let base = a.out.parent().unwrap_or(Path::new("."));
+    LoadedProfile::from_str(&text, &a.out.display().to_string(), base)
+        .map_err(|e| runtime(format!("the profile drafted is invalid (a bug): {e}")))?;
+    write_atomically(&a.out, text.as_bytes())?;
+    crate::outln!(
+        "wrote {}: analysis only, {} along {} at {}, {} label(s) from {} complete recording(s){}",
+        a.out.display(),
+        s.channels(&s.choice().axis).join(", "),
+        s.choice().axis,
+        rate_text(s.rate_hz),
+        s.labels.len(),
+        s.complete,
+        if s.incomplete.is_empty() {
+            String::new()
+        } else {
+            format!(" ({} incomplete left out)", s.incomplete.len())
+        }
+    );
+    crate::outln!(
+        "next: hapticlab check {0} && hapticlab evaluate {1} -p {0}",
+        a.out.display(),
+        a.from.display()
+    );
+    Ok(())
+}
+
+fn rate_text(rate_hz: f64) -> String {
+    if rate_hz >= 1000.0 {
+        format!("{} kHz", rate_hz / 1000.0)
+    } else {
+        format!("{rate_hz} Hz")
+    }
+}

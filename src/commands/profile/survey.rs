@@ -1,0 +1,296 @@
+//! The survey behind `profile new`: every recording of a folder read (on
+//! every core) and summed up — labels and counts, the columns all share,
+//! the rate, each column's shortest travel, step and spread, the metadata
+//! that varies — and the axis and signal columns chosen from that.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use crate::dataset;
+use crate::recording::{self, Recording};
+use crate::support::{Failure, bad, progress_bar, runtime};
+
+/// What one complete recording tells about the folder.
+#[derive(Debug, Clone)]
+struct Seen {
+    file: String,
+    label: String,
+    columns: Vec<String>,
+    /// The sample rate: `rate_hz` in the metadata, else from `t_s`.
+    rate_hz: Option<f64>,
+    /// Per column: the travel from the first sample along the direction of
+    /// travel (what the analysis measures on an axis), and the spread.
+    travel: Vec<f64>,
+    step: Vec<f64>,
+    spread: Vec<f64>,
+    meta: Vec<(String, String)>,
+}
+
+/// The folder's recordings, summed up.
+#[derive(Debug, Clone, Default)]
+pub struct Survey {
+    pub complete: usize,
+    /// Files left out: incomplete (no `# end samples` trailer).
+    pub incomplete: Vec<String>,
+    pub labels: BTreeMap<String, usize>,
+    /// Columns every complete recording has, in the first one's order.
+    pub columns: Vec<String>,
+    pub rate_hz: f64,
+    /// Per column: the shortest travel over the recordings, and which file.
+    pub shortest: BTreeMap<String, (f64, String)>,
+    /// Per column: the median over the recordings of the net progress per
+    /// sample, and the mean spread.
+    pub step: BTreeMap<String, f64>,
+    pub spread: BTreeMap<String, f64>,
+    /// Metadata keys that take more than one value (session, trial, …).
+    pub varying_meta: Vec<String>,
+}
+
+/// Read every recording under `dir` (on every core) and sum them up.
+pub fn survey(dir: &Path) -> Result<Survey, Failure> {
+    let files = recording::collect_files(&[dir.to_path_buf()]).map_err(|e| {
+        if e.is_bad_input() || matches!(e, recording::RecordingError::Io { .. }) {
+            bad(e)
+        } else {
+            runtime(e)
+        }
+    })?;
+    if files.is_empty() {
+        return Err(bad(format!(
+            "{}: no recordings (*.csv, *.csv.gz) to write a profile from",
+            dir.display()
+        )));
+    }
+    let pb = progress_bar(files.len() as u64, "reading");
+    let threads = dataset::cores().clamp(1, files.len());
+    let chunk = files.len().div_ceil(threads);
+    let results: Vec<Result<Option<Seen>, Failure>> = std::thread::scope(|scope| {
+        let handles: Vec<_> = files
+            .chunks(chunk)
+            .map(|part| {
+                let pb = &pb;
+                scope.spawn(move || {
+                    part.iter()
+                        .map(|f| {
+                            let r = look_at(f);
+                            pb.inc(1);
+                            r
+                        })
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        handles
+            .into_iter()
+            .flat_map(|h| {
+                h.join()
+                    .unwrap_or_else(|_| vec![Err(runtime("a reader thread failed"))])
+            })
+            .collect()
+    });
+    pb.finish_and_clear();
+    let mut seen = Vec::new();
+    let mut incomplete = Vec::new();
+    for (f, r) in files.iter().zip(results) {
+        match r? {
+            Some(s) => seen.push(s),
+            None => incomplete.push(f.display().to_string()),
+        }
+    }
+    if seen.is_empty() {
+        return Err(bad(format!(
+            "{}: none of the {} recording(s) is complete (each lacks the `# end samples = N` trailer): nothing to fit a window to",
+            dir.display(),
+            files.len()
+        )));
+    }
+    Ok(sum_up(&seen, incomplete))
+}
+
+/// One recording's summary; `None` when it is incomplete.
+fn look_at(file: &Path) -> Result<Option<Seen>, Failure> {
+    let rec =
+        recording::read(file).map_err(|e| if e.is_bad_input() { bad(e) } else { runtime(e) })?;
+    if !rec.is_complete() || rec.len() < 2 {
+        return Ok(None);
+    }
+    let label = dataset::label_of(&rec, file).map_err(bad)?;
+    Ok(Some(summarise(&rec, file, label)))
+}
+
+fn summarise(rec: &Recording, file: &Path, label: String) -> Seen {
+    let n = rec.len();
+    let mut travel = Vec::new();
+    let mut step = Vec::new();
+    let mut spread = Vec::new();
+    for c in 0..rec.columns.len() {
+        let v = &rec.data[c];
+        let dir = if v[n - 1] >= v[0] { 1.0 } else { -1.0 };
+        travel.push(v.iter().map(|x| dir * (x - v[0])).fold(0.0, f64::max));
+        // The net progress per sample: encoder steps and noise average out.
+        step.push((v[n - 1] - v[0]).abs() / (n - 1) as f64);
+        let mean = v.iter().sum::<f64>() / n as f64;
+        spread.push((v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64).sqrt());
+    }
+    let t_step = rec
+        .columns
+        .iter()
+        .position(|c| c == "t_s")
+        .map(|i| step[i])
+        .filter(|s| *s > 0.0);
+    Seen {
+        file: file.display().to_string(),
+        label,
+        columns: rec.columns.clone(),
+        rate_hz: rec
+            .meta_f64("rate_hz")
+            .filter(|r| r.is_finite() && *r > 0.0)
+            .or(t_step.map(|s| 1.0 / s)),
+        travel,
+        step,
+        spread,
+        meta: rec
+            .meta
+            .iter()
+            .map(|(k, v)| (k.clone(), dataset::meta_text(v)))
+            .collect(),
+    }
+}
+
+/// Keys every hapticlab recording carries that say nothing about grouping.
+const PLAIN_META: [&str; 14] = [
+    "label",
+    "profile",
+    "profile_sha256",
+    "device",
+    "rate_hz",
+    "software",
+    "started_at",
+    "seed",
+    "texture",
+    "clock",
+    "stiffness_n_per_m",
+    "damping_n_s_per_m",
+    "scan_from_m",
+    "scan_to_m",
+];
+
+fn sum_up(seen: &[Seen], incomplete: Vec<String>) -> Survey {
+    let columns: Vec<String> = seen[0]
+        .columns
+        .iter()
+        .filter(|c| seen.iter().all(|s| s.columns.contains(c)))
+        .cloned()
+        .collect();
+    let mut s = Survey {
+        complete: seen.len(),
+        incomplete,
+        columns: columns.clone(),
+        ..Survey::default()
+    };
+    for r in seen {
+        *s.labels.entry(r.label.clone()).or_default() += 1;
+    }
+    let mut rates: Vec<f64> = seen.iter().filter_map(|r| r.rate_hz).collect();
+    rates.sort_by(f64::total_cmp);
+    s.rate_hz = rates.get(rates.len() / 2).copied().unwrap_or(1000.0);
+    for c in &columns {
+        let at = |r: &Seen| r.columns.iter().position(|x| x == c).unwrap_or(0);
+        let shortest = seen
+            .iter()
+            .map(|r| (r.travel[at(r)], r.file.clone()))
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .unwrap_or((0.0, String::new()));
+        s.shortest.insert(c.clone(), shortest);
+        let mut steps: Vec<f64> = seen.iter().map(|r| r.step[at(r)]).collect();
+        steps.sort_by(f64::total_cmp);
+        s.step.insert(c.clone(), steps[steps.len() / 2]);
+        let spread = seen.iter().map(|r| r.spread[at(r)]).sum::<f64>() / seen.len() as f64;
+        s.spread.insert(c.clone(), spread);
+    }
+    let mut keys: BTreeMap<&str, std::collections::BTreeSet<&str>> = BTreeMap::new();
+    for r in seen {
+        for (k, v) in &r.meta {
+            keys.entry(k).or_default().insert(v);
+        }
+    }
+    s.varying_meta = keys
+        .into_iter()
+        .filter(|(k, v)| v.len() > 1 && !PLAIN_META.contains(k))
+        .map(|(k, _)| k.to_string())
+        .collect();
+    s
+}
+
+/// The axis and channels chosen, and why.
+#[derive(Debug, Clone)]
+pub struct Choice {
+    pub axis: String,
+    pub signals: Vec<String>,
+    pub why: String,
+}
+
+const POSITIONS: [&str; 3] = ["x_m", "y_m", "z_m"];
+/// At most this many signal columns analysed together by default.
+const MAX_CHANNELS: usize = 4;
+
+impl Survey {
+    /// A position axis when the probe travels (a stroke of 1 mm or more in
+    /// every recording): the one it travels most along, the thesis's way;
+    /// otherwise time.
+    pub fn choice(&self) -> Choice {
+        let travel = |c: &str| self.shortest.get(c).map_or(0.0, |t| t.0);
+        let stroke = POSITIONS
+            .iter()
+            .filter(|c| self.columns.iter().any(|x| x == *c))
+            .max_by(|a, b| travel(a).total_cmp(&travel(b)))
+            .filter(|c| travel(c) >= 0.001);
+        let varies = |c: &String| self.spread.get(c).is_some_and(|s| *s > 0.0);
+        match stroke {
+            Some(axis) => {
+                // The probe's height across the stroke when there is one (the
+                // thesis's y_m), else the position that moves most.
+                let height = ["y_m", "z_m", "x_m"]
+                    .into_iter()
+                    .map(str::to_string)
+                    .find(|c| c != axis && self.columns.contains(c) && varies(c));
+                let signal = height.or_else(|| {
+                    self.columns
+                        .iter()
+                        .filter(|c| c.as_str() != *axis && *c != "t_s" && varies(c))
+                        .max_by(|a, b| self.spread[*a].total_cmp(&self.spread[*b]))
+                        .cloned()
+                });
+                Choice {
+                    axis: axis.to_string(),
+                    signals: signal.into_iter().collect(),
+                    why: format!(
+                        "the probe strokes along {axis} (at least {:.1} mm in every recording): resampled by position, as the thesis",
+                        travel(axis) * 1000.0
+                    ),
+                }
+            }
+            None => Choice {
+                axis: "t_s".into(),
+                signals: self
+                    .columns
+                    .iter()
+                    .filter(|c| *c != "t_s" && !POSITIONS.contains(&c.as_str()) && varies(c))
+                    .take(MAX_CHANNELS)
+                    .cloned()
+                    .collect(),
+                why: "no probe stroke in the recordings: resampled by time".into(),
+            },
+        }
+    }
+
+    /// The signal columns analysed along `axis`.
+    pub fn channels(&self, axis: &str) -> Vec<String> {
+        let c = self.choice();
+        if c.axis == axis {
+            c.signals
+        } else {
+            Vec::new()
+        }
+    }
+}
