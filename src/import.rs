@@ -468,7 +468,7 @@ pub fn write_recording(
     }
     w.finish().map_err(|e| Failure::Runtime(e.to_string()))?;
     if gzip {
-        crate::recording::compress(path).map_err(|e| Failure::Runtime(e.to_string()))
+        crate::recording::compress_quickly(path).map_err(|e| Failure::Runtime(e.to_string()))
     } else {
         Ok(path.to_path_buf())
     }

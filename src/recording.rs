@@ -41,7 +41,9 @@ mod reader;
 mod writer;
 pub use label::check_label;
 use reader::{Select, gunzip, parse_text};
-pub use writer::{Digits, RecordingWriter, compress, decimals_for, sync_folder, time_decimals};
+pub use writer::{
+    Digits, RecordingWriter, compress, compress_quickly, decimals_for, sync_folder, time_decimals,
+};
 
 #[derive(Debug, thiserror::Error)]
 pub enum RecordingError {
