@@ -9,8 +9,7 @@
 # writes one profile per setting to OUT/profiles and prints
 # "setting  reference  hapticlab". Sound: leave-one-out over 56 clips;
 # fingertip: time split (first 5 trials of each material train, last 5 test).
-# The profiles copy [device], [controller] and [path] from profiles/thesis.toml
-# for as long as hapticlab needs them in an analysis-only profile.
+# The profiles are analysis-only: name, [analysis], [classifier], [evaluation].
 set -eu
 out=$1
 hl=${2:-target/release/hapticlab}
@@ -19,7 +18,6 @@ here=$(dirname "$0")
 [ -d "$out/rec/sound" ] || "$hl" import "$out"/sets/sound/*/*.wav --out "$out/rec/sound" >/dev/null
 [ -d "$out/rec/fingertip" ] || "$hl" import "$out"/sets/fingertip/*/*.csv --rate 2200 --out "$out/rec/fingertip" >/dev/null
 mkdir -p "$out/profiles"
-rig=$(sed -n '/^\[device\]/,/^\[analysis\]/p' "$here/../profiles/thesis.toml" | sed '$d')
 sound='channel = "ch1"
 axis = "t_s"
 window = [0.0, 4.99]
@@ -36,8 +34,8 @@ method = "leave-one-out"'
 split='train_per_class = 5
 test_per_class = 5'
 profile() { # name analysis evaluation
-  printf 'name = "%s"\n%s\n\n[analysis]\n%s\n\n[classifier]\nk = 1\nstandardize = true\n\n[evaluation]\n%s\n' \
-    "$1" "$rig" "$2" "$3" >"$out/profiles/$1.toml"
+  printf 'name = "%s"\n\n[analysis]\n%s\n\n[classifier]\nk = 1\nstandardize = %s\n\n[evaluation]\n%s\n' \
+    "$1" "$2" "${4:-true}" "$3" >"$out/profiles/$1.toml"
 }
 profile sound-welch "$sound
 spectrum = \"welch\"
@@ -86,6 +84,33 @@ spectrum = \"log-welch\"
 welch_segment = 256
 bands = { count = 16, from = 60.0, to = 1000.0 }
 cepstra = 12" "$split"
+# The README's "Your own rig's data": cepstra without c0, unstandardised,
+# with and without sub-windows of a tenth of the clip / two Welch segments.
+profile sound-readme "$sound
+spectrum = \"log-welch\"
+welch_segment = 2048
+bands = { count = 32, from = 86.1, to = 22000.0, scale = \"log\" }
+cepstra = 13
+drop_level = true
+windows = { length = 0.499, hop = 0.249 }" "$loo" false
+profile finger-readme-cepstra "$finger
+spectrum = \"log-welch\"
+welch_segment = 2048
+bands = { count = 32, from = 4.29, to = 1100.0, scale = \"log\" }
+cepstra = 13
+drop_level = true" "$split" false
+profile finger-readme-windows "$finger
+spectrum = \"log-welch\"
+welch_segment = 2048
+bands = { count = 32, from = 4.29, to = 1100.0, scale = \"log\" }
+cepstra = 13
+drop_level = true
+windows = { length = 1.86, hop = 0.93 }" "$split" false
+profile finger-log-welch-windows "$finger
+spectrum = \"log-welch\"
+welch_segment = 2048
+bins = [1, 1024]
+windows = { length = 1.86, hop = 0.93 }" "$split" false
 printf '%-26s %-22s %s\n' setting reference hapticlab
 for p in "$out"/profiles/*.toml; do
   name=$(basename "$p" .toml)

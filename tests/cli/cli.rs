@@ -20,12 +20,12 @@ use crate::common::{REPO, hapticlab, p, run};
 
 const QUICK_SCAN: &str = "tests/data/profiles/quick-scan.toml";
 
-fn assert_ok(r: &Run) {
+pub(crate) fn assert_ok(r: &Run) {
     assert_eq!(r.code, Some(0), "{r:?}");
     assert_no_panic(r);
 }
 
-fn assert_no_panic(r: &Run) {
+pub(crate) fn assert_no_panic(r: &Run) {
     for text in [&r.stdout, &r.stderr] {
         assert!(
             !text.contains("panicked") && !text.contains("RUST_BACKTRACE"),
@@ -36,7 +36,7 @@ fn assert_no_panic(r: &Run) {
 
 /// A user-facing failure: the exit code, and one line on standard error
 /// starting `hapticlab: error: `, returned without that prefix.
-fn assert_error(r: &Run, code: i32) -> String {
+pub(crate) fn assert_error(r: &Run, code: i32) -> String {
     assert_eq!(r.code, Some(code), "{r:?}");
     assert_no_panic(r);
     let lines: Vec<&str> = r.stderr.lines().filter(|l| !l.is_empty()).collect();
@@ -48,7 +48,7 @@ fn assert_error(r: &Run, code: i32) -> String {
 }
 
 /// The thesis profile with a smaller split and `k`, written into `dir`.
-fn small_profile(dir: &Path, train: usize, test: usize, k: usize) -> PathBuf {
+pub(crate) fn small_profile(dir: &Path, train: usize, test: usize, k: usize) -> PathBuf {
     let text = fs::read_to_string(Path::new(REPO).join("profiles/thesis.toml")).unwrap();
     let mut out = String::new();
     let mut replaced = 0;
@@ -69,7 +69,7 @@ fn small_profile(dir: &Path, train: usize, test: usize, k: usize) -> PathBuf {
     path
 }
 
-fn simulate(out: &Path, per_class: usize, seed: u64) {
+pub(crate) fn simulate(out: &Path, per_class: usize, seed: u64) {
     let r = run(&[
         "simulate",
         "--out",
@@ -83,7 +83,7 @@ fn simulate(out: &Path, per_class: usize, seed: u64) {
 }
 
 /// Recording files under `dir`, sorted.
-fn recordings(dir: &Path) -> Vec<PathBuf> {
+pub(crate) fn recordings(dir: &Path) -> Vec<PathBuf> {
     let mut found = Vec::new();
     for entry in fs::read_dir(dir).unwrap() {
         let path = entry.unwrap().path();
@@ -97,7 +97,7 @@ fn recordings(dir: &Path) -> Vec<PathBuf> {
     found
 }
 
-fn copy_tree(from: &Path, to: &Path) {
+pub(crate) fn copy_tree(from: &Path, to: &Path) {
     fs::create_dir_all(to).unwrap();
     for entry in fs::read_dir(from).unwrap() {
         let path = entry.unwrap().path();
@@ -654,217 +654,6 @@ fn train_then_classify_held_out_scans() {
     let msg = assert_error(&run(&["classify", "--model", p(&other_path), p(&s2)]), 2);
     assert!(msg.contains("analysis.spacing"), "{msg}");
     assert!(msg.contains(p(&other_path)), "{msg}");
-}
-
-// ---------------------------------------------------------------- bad recordings
-
-/// Lines of a recording and the 1-based line number of its `n`th data row.
-fn lines_and_row(path: &Path, n: usize) -> (Vec<String>, usize) {
-    let lines: Vec<String> = fs::read_to_string(path)
-        .unwrap()
-        .lines()
-        .map(str::to_string)
-        .collect();
-    let header = lines.iter().position(|l| l.starts_with("t_s,")).unwrap();
-    (lines, header + 1 + n)
-}
-
-#[test]
-fn malformed_recordings_are_refused_with_file_and_line() {
-    let dir = TempDir::new().unwrap();
-    let base = dir.path().join("base");
-    simulate(&base, 3, 9);
-    let profile = small_profile(dir.path(), 2, 1, 1);
-
-    // Each case: a copy of the dataset with one file broken; the file and
-    // line the message must name.
-    type Breaker = fn(&Path) -> (PathBuf, usize);
-    let cases: [(&str, Breaker); 3] = [
-        ("not-a-recording", |d| {
-            let f = d.join("S2").join("notes.csv");
-            fs::write(&f, "name,value\nspeed,0.01\n").unwrap();
-            (f, 1)
-        }),
-        ("short-row", |d| {
-            let f = d.join("S3").join("S3_002.csv");
-            let (mut lines, line) = lines_and_row(&f, 40);
-            let cells: Vec<&str> = lines[line - 1].split(',').collect();
-            lines[line - 1] = cells[..5].join(",");
-            fs::write(&f, lines.join("\n") + "\n").unwrap();
-            (f, line)
-        }),
-        ("non-numeric", |d| {
-            let f = d.join("S4").join("S4_001.csv");
-            let (mut lines, line) = lines_and_row(&f, 1234);
-            let mut cells: Vec<String> = lines[line - 1].split(',').map(String::from).collect();
-            cells[2] = "-0.00x4".into();
-            lines[line - 1] = cells.join(",");
-            fs::write(&f, lines.join("\n") + "\n").unwrap();
-            (f, line)
-        }),
-    ];
-    for (name, breaker) in cases {
-        let d = dir.path().join(name);
-        copy_tree(&base, &d);
-        let (file, line) = breaker(&d);
-        let at = format!("{}:{line}:", file.display());
-        let out = dir.path().join(format!("{name}.csv"));
-        let msg = assert_error(&run(&["features", p(&d), "--out", p(&out)]), 2);
-        assert!(msg.starts_with(&at), "{name}: expected {at}…, got {msg}");
-        assert!(!out.exists(), "{name}: features wrote output anyway");
-        let msg = assert_error(&run(&["evaluate", "--profile", p(&profile), p(&d)]), 2);
-        assert!(msg.starts_with(&at), "{name}: expected {at}…, got {msg}");
-    }
-}
-
-#[test]
-fn incomplete_recordings_are_skipped_with_a_warning() {
-    let dir = TempDir::new().unwrap();
-    let data = dir.path().join("D");
-    simulate(&data, 4, 10);
-    // Drop the trailer: the scan reads as incomplete.
-    let cut = data.join("S2").join("S2_002.csv");
-    let text = fs::read_to_string(&cut).unwrap();
-    let kept: Vec<&str> = text
-        .lines()
-        .filter(|l| !l.starts_with("# end samples"))
-        .collect();
-    assert_eq!(kept.len() + 1, text.lines().count());
-    fs::write(&cut, kept.join("\n") + "\n").unwrap();
-    // What `kill -9` mid-write leaves: no trailer, the last row cut short.
-    let torn = data.join("S3").join("S3_002.csv");
-    let (lines, line) = lines_and_row(&torn, 500);
-    let mut text = lines[..line - 1].join("\n");
-    text.push('\n');
-    text.push_str(&lines[line - 1][..12]);
-    fs::write(&torn, text).unwrap();
-
-    let out = dir.path().join("F.csv");
-    let r = run(&["features", p(&data), "--out", p(&out)]);
-    assert_ok(&r);
-    let warnings: Vec<&str> = r
-        .stderr
-        .lines()
-        .filter(|l| l.starts_with("warning:"))
-        .collect();
-    assert_eq!(warnings.len(), 2, "{r:?}");
-    assert!(warnings.iter().all(|w| w.contains("incomplete")), "{r:?}");
-    assert!(warnings.iter().any(|w| w.contains(p(&cut))), "{r:?}");
-    assert!(
-        warnings
-            .iter()
-            .any(|w| w.contains(p(&torn)) && w.contains("cut short")),
-        "{r:?}"
-    );
-    let csv = fs::read_to_string(&out).unwrap();
-    assert_eq!(csv.lines().count(), 1 + 14);
-    assert!(!csv.contains(p(&cut)));
-
-    let profile = small_profile(dir.path(), 2, 1, 1);
-    let r = run(&["evaluate", "--profile", p(&profile), "--json", p(&data)]);
-    assert_ok(&r);
-    assert!(r.stderr.contains(p(&cut)), "{r:?}");
-    let v: Value = serde_json::from_str(&r.stdout).unwrap();
-    let used: Vec<&str> = ["train", "test"]
-        .iter()
-        .flat_map(|k| v[k].as_array().unwrap())
-        .map(|f| f.as_str().unwrap())
-        .collect();
-    assert_eq!(used.len(), 12);
-    assert!(!used.contains(&p(&cut)));
-}
-
-/// `classify` of an aborted scan: classified (with a warning) when its
-/// samples cover the window; one error naming both the window and the abort
-/// when they do not — never a warning followed by an error.
-#[test]
-fn classify_says_why_an_aborted_scan_cannot_be_classified() {
-    let dir = TempDir::new().unwrap();
-    let data = dir.path().join("D");
-    simulate(&data, 3, 10);
-    let model = dir.path().join("m.json");
-    assert_ok(&run(&["train", p(&data), "--out", p(&model)]));
-    // The trailer dropped: every sample is there.
-    let whole = data.join("S2").join("S2_001.csv");
-    let text = fs::read_to_string(&whole).unwrap();
-    let kept: Vec<&str> = text
-        .lines()
-        .filter(|l| !l.starts_with("# end samples"))
-        .collect();
-    fs::write(&whole, kept.join("\n") + "\n").unwrap();
-    let r = run(&["classify", "--model", p(&model), p(&whole)]);
-    assert_ok(&r);
-    assert!(r.stdout.contains("S2"), "{r:?}");
-    assert!(
-        r.stderr.contains("incomplete scan") && r.stderr.contains("classified anyway"),
-        "{r:?}"
-    );
-    // Cut after 300 rows, before the probe reaches the window.
-    let short = data.join("S3").join("S3_001.csv");
-    let (lines, line) = lines_and_row(&short, 300);
-    fs::write(&short, lines[..line].join("\n") + "\n").unwrap();
-    // (The model's note on k comes first: 3 scans per texture.)
-    let r = run(&["classify", "--model", p(&model), p(&short)]);
-    assert_eq!(r.code, Some(2), "{r:?}");
-    assert!(!r.stderr.contains("warning"), "{r:?}");
-    let msg = r
-        .stderr
-        .lines()
-        .last()
-        .and_then(|l| l.strip_prefix("hapticlab: error: "))
-        .unwrap_or_else(|| panic!("no error line last: {r:?}"));
-    assert!(
-        msg.starts_with(p(&short))
-            && msg.contains("window needs")
-            && msg.contains("incomplete scan"),
-        "{msg}"
-    );
-}
-
-// ---------------------------------------------------------------- runtime failures
-
-#[test]
-fn simulate_into_a_read_only_folder_fails_with_exit_1() {
-    use std::os::unix::fs::PermissionsExt;
-    use std::os::unix::process::CommandExt;
-
-    let dir = TempDir::new().unwrap();
-    let ro = dir.path().join("read-only");
-    fs::create_dir(&ro).unwrap();
-    fs::set_permissions(&ro, fs::Permissions::from_mode(0o555)).unwrap();
-    let mut cmd = hapticlab();
-    cmd.args(["simulate", "--out", p(&ro), "--per-class", "1"]);
-    let probe = ro.join("probe");
-    if fs::write(&probe, b"").is_ok() {
-        // Root writes anywhere: run the binary as `nobody` instead, if it can.
-        fs::remove_file(&probe).unwrap();
-        if unsafe { libc::geteuid() } != 0 {
-            eprintln!("skipped: the read-only folder is writable");
-            return;
-        }
-        fs::set_permissions(dir.path(), fs::Permissions::from_mode(0o755)).unwrap();
-        cmd.uid(65534).gid(65534);
-    }
-    let r: Run = match cmd.output() {
-        Ok(o) => o.into(),
-        // `nobody` cannot reach the binary (a checkout under a private
-        // folder, as `mktemp -d` makes): nothing to prove here.
-        Err(e) if e.kind() == std::io::ErrorKind::PermissionDenied => {
-            fs::set_permissions(&ro, fs::Permissions::from_mode(0o755)).unwrap();
-            eprintln!("skipped: `nobody` cannot run the binary here: {e}");
-            return;
-        }
-        Err(e) => panic!("run hapticlab: {e}"),
-    };
-    fs::set_permissions(&ro, fs::Permissions::from_mode(0o755)).unwrap();
-    if r.code == Some(0) && unsafe { libc::geteuid() } == 0 {
-        eprintln!("skipped: even `nobody` could write the read-only folder: {r:?}");
-        return;
-    }
-    let msg = assert_error(&r, 1);
-    assert!(msg.contains(p(&ro)), "{msg}");
-    assert!(msg.contains("Permission denied"), "{msg}");
-    assert_eq!(recordings(&ro).len(), 0);
 }
 
 // ---------------------------------------------------------------- live scans

@@ -5,6 +5,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod bad_recordings;
 mod cli;
 mod console_windows;
 mod doctor;
