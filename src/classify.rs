@@ -479,21 +479,30 @@ const PARALLEL_SEARCH_VALUES: usize = 1 << 20;
 pub const AUTO_K_CANDIDATES: [usize; 8] = [1, 3, 5, 7, 9, 11, 13, 15];
 
 /// Inner stratified 5-fold cross-validation of every candidate k on the
-/// (prepared) training rows; folds deal each class's rows round-robin in
-/// their order, so the choice is deterministic.
+/// (prepared) training rows; folds deal each class's recordings round-robin
+/// in their order, so the choice is deterministic. `recording_of` numbers
+/// each row's recording: a recording's sub-windows (consecutive rows of one
+/// file) stay in one fold, so no window is scored against its own
+/// recording's others.
 fn select_k(
     classifier: &Classifier,
     matrix: &[f64],
     norms: &[f64],
     classes_of: &[usize],
+    recording_of: &[usize],
     classes: usize,
 ) -> Vec<KScore> {
     let n = classes_of.len();
     let d = matrix.len() / n.max(1);
     let mut fold_of = vec![0usize; n];
     let mut seen = vec![0usize; classes];
-    let folds = inner_folds(n);
+    let recordings = recording_of.last().map_or(0, |r| r + 1);
+    let folds = inner_folds(recordings);
     for (i, &c) in classes_of.iter().enumerate() {
+        if i > 0 && recording_of[i] == recording_of[i - 1] {
+            fold_of[i] = fold_of[i - 1];
+            continue;
+        }
         fold_of[i] = seen[c] % folds;
         seen[c] += 1;
     }
@@ -547,7 +556,23 @@ fn select_k(
         .collect()
 }
 
-/// The folds of the inner cross-validation that chooses k among `n` examples.
+/// Each example's recording, numbered from 0: consecutive examples of one
+/// file (a recording's sub-windows) share a number.
+fn recording_numbers(examples: &[TrainingExample]) -> Vec<usize> {
+    let mut numbers = Vec::with_capacity(examples.len());
+    for (i, e) in examples.iter().enumerate() {
+        let same = i > 0 && examples[i - 1].file == e.file;
+        numbers.push(match numbers.last() {
+            Some(&last) if same => last,
+            Some(&last) => last + 1,
+            None => 0,
+        });
+    }
+    numbers
+}
+
+/// The folds of the inner cross-validation that chooses k among `n`
+/// recordings.
 fn inner_folds(n: usize) -> usize {
     5.min(n).max(2)
 }
@@ -602,11 +627,13 @@ impl Model {
         };
         model.prepare();
         if auto {
+            let recording_of = recording_numbers(&model.examples);
             let scores = select_k(
                 &model.classifier,
                 &model.matrix,
                 &model.norms,
                 &model.classes,
+                &recording_of,
                 model.labels.len(),
             );
             let best = scores

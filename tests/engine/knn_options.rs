@@ -103,6 +103,32 @@ fn auto_k_picks_by_inner_cross_validation() {
     assert!(sel[0].accuracy < sel[1].accuracy, "{sel:?}");
 }
 
+/// With sub-windows, a recording's windows stay in one inner fold: windows
+/// of one recording that are copies of each other would otherwise give
+/// k = 1 a perfect inner score (each window's nearest is its sibling).
+#[test]
+fn auto_k_keeps_a_recordings_sub_windows_in_one_inner_fold() {
+    // 2 classes x 8 recordings x 4 identical windows; the recordings of the
+    // two classes interleave on a line, so across recordings 1-NN is wrong
+    // about as often as right.
+    let mut train = Vec::new();
+    for r in 0..8 {
+        for (label, offset) in [("A", 0.0), ("B", 0.5)] {
+            for _ in 0..4 {
+                train.push(ex(&format!("{label}{r}"), label, &[r as f64 + offset]));
+            }
+        }
+    }
+    let mut c = knn(K_AUTO, Metric::Euclidean);
+    c.k_candidates = Some(vec![1, 3]);
+    let m = Model::train("t", &analysis(1), &c, train).unwrap();
+    let sel = m.k_selection.as_ref().unwrap();
+    assert!(
+        sel[0].accuracy < 0.9,
+        "a window scored against its siblings: {sel:?}"
+    );
+}
+
 #[test]
 fn k_auto_reads_and_writes_as_a_string() {
     let c: Classifier =
