@@ -577,7 +577,15 @@ fn stage(
     staging: &Path,
 ) -> Result<Staged, Failure> {
     let origin = f.display().to_string();
-    let bytes = std::fs::read(f).map_err(|e| Failure::Runtime(format!("{origin}: {e}")))?;
+    let bytes = std::fs::read(f).map_err(|e| {
+        let m = format!("{origin}: {e}");
+        // A file named that does not exist is the argument's fault.
+        if e.kind() == std::io::ErrorKind::NotFound {
+            Failure::BadInput(m)
+        } else {
+            Failure::Runtime(m)
+        }
+    })?;
     let ext = f
         .extension()
         .map(|e| e.to_string_lossy().into_owned())

@@ -67,10 +67,16 @@ pub enum RecordingError {
 }
 
 impl RecordingError {
-    /// True when the recording itself is at fault (exit code 2), false for an
-    /// I/O failure or a misuse of the writer (exit code 1).
+    /// True when the recording itself is at fault (exit code 2), or a path
+    /// that does not exist was named (an argument's fault: exit code 2 as
+    /// for every other command); false for another I/O failure or a misuse
+    /// of the writer (exit code 1).
     pub fn is_bad_input(&self) -> bool {
-        matches!(self, Self::Malformed { .. } | Self::Compressed { .. })
+        match self {
+            Self::Malformed { .. } | Self::Compressed { .. } => true,
+            Self::Io { source, .. } => source.kind() == io::ErrorKind::NotFound,
+            _ => false,
+        }
     }
 }
 

@@ -129,7 +129,15 @@ pub fn load_examples_on(
     pb.finish_and_clear();
     let loaded = loaded?;
     warn_skipped(&loaded.skipped);
-    Ok(loaded.into_examples())
+    let examples = loaded.into_examples();
+    if examples.is_empty() {
+        // Every one was left out (each named above): nothing to go on.
+        return Err(bad(format!(
+            "none of the {} recording(s) found can be used (each is named above)",
+            files.len()
+        )));
+    }
+    Ok(examples)
 }
 
 /// The recordings under `paths` ([`dataset::find`]); a path that cannot be

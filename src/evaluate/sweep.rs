@@ -29,6 +29,7 @@
 
 mod keys;
 mod table;
+pub use table::grid_axis;
 
 pub use keys::{
     ANALYSIS_TABLES, SIMULATION_TABLES, SweepKey, parse_sweep, profile_with, resolve_key, with_key,

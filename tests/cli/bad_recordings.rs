@@ -73,6 +73,18 @@ fn malformed_recordings_are_refused_with_file_and_line() {
     }
 }
 
+/// Remove a recording's `# end samples` trailer (every sample kept): it
+/// then reads as incomplete.
+fn drop_trailer(path: &Path) {
+    let text = fs::read_to_string(path).unwrap();
+    let kept: Vec<&str> = text
+        .lines()
+        .filter(|l| !l.starts_with("# end samples"))
+        .collect();
+    assert_eq!(kept.len() + 1, text.lines().count());
+    fs::write(path, kept.join("\n") + "\n").unwrap();
+}
+
 #[test]
 fn incomplete_recordings_are_skipped_with_a_warning() {
     let dir = TempDir::new().unwrap();
@@ -80,13 +92,7 @@ fn incomplete_recordings_are_skipped_with_a_warning() {
     simulate(&data, 4, 10);
     // Drop the trailer: the scan reads as incomplete.
     let cut = data.join("S2").join("S2_002.csv");
-    let text = fs::read_to_string(&cut).unwrap();
-    let kept: Vec<&str> = text
-        .lines()
-        .filter(|l| !l.starts_with("# end samples"))
-        .collect();
-    assert_eq!(kept.len() + 1, text.lines().count());
-    fs::write(&cut, kept.join("\n") + "\n").unwrap();
+    drop_trailer(&cut);
     // What `kill -9` mid-write leaves: no trailer, the last row cut short.
     let torn = data.join("S3").join("S3_002.csv");
     let (lines, line) = lines_and_row(&torn, 500);
@@ -142,12 +148,7 @@ fn classify_says_why_an_aborted_scan_cannot_be_classified() {
     assert_ok(&run(&["train", p(&data), "--out", p(&model)]));
     // The trailer dropped: every sample is there.
     let whole = data.join("S2").join("S2_001.csv");
-    let text = fs::read_to_string(&whole).unwrap();
-    let kept: Vec<&str> = text
-        .lines()
-        .filter(|l| !l.starts_with("# end samples"))
-        .collect();
-    fs::write(&whole, kept.join("\n") + "\n").unwrap();
+    drop_trailer(&whole);
     let r = run(&["classify", "--model", p(&model), p(&whole)]);
     assert_ok(&r);
     assert!(r.stdout.contains("S2"), "{r:?}");

@@ -224,6 +224,11 @@ fn missing_paths_and_profiles_exit_2_naming_them() {
         vec!["features", p(&nope)],
         vec!["train", p(&nope), "--out", p(&model)],
         vec!["classify", "--model", p(&nope_model), "profiles"],
+        vec!["inspect", p(&nope)],
+        vec!["plot", "features", p(&nope), "--out", p(&out)],
+        vec!["replay", p(&nope)],
+        vec!["import", p(&nope), "--out", p(&out)],
+        vec!["profile", "new", "--from", p(&nope), "--out", p(&model)],
     ] {
         let msg = assert_error(&run(&args), 2);
         assert!(

@@ -340,13 +340,5 @@ impl SweepFigure {
 
 /// Key `j`'s values in the order they first appear.
 fn unique(points: &[Point], j: usize) -> Vec<&str> {
-    let mut out: Vec<&str> = Vec::new();
-    for p in points {
-        if let Some(v) = p.values.get(j)
-            && !out.contains(&v.as_str())
-        {
-            out.push(v);
-        }
-    }
-    out
+    crate::evaluate::sweep::grid_axis(points.iter().map(|p| &p.values[..]), j)
 }

@@ -219,11 +219,16 @@ fn lead_width(widths: &[usize]) -> usize {
     widths.iter().map(|w| w + 2).sum()
 }
 
-/// Key `j`'s values in the order they first appear.
 fn unique(points: &[SweepPoint], j: usize) -> Vec<&str> {
+    grid_axis(points.iter().map(|p| &p.values[..]), j)
+}
+
+/// A grid's axis: key `j`'s values in the order they first appear among
+/// the points' values (the table's rows or columns, the heat map's too).
+pub fn grid_axis<'a>(values: impl IntoIterator<Item = &'a [String]>, j: usize) -> Vec<&'a str> {
     let mut out: Vec<&str> = Vec::new();
-    for p in points {
-        if let Some(v) = p.values.get(j)
+    for vs in values {
+        if let Some(v) = vs.get(j)
             && !out.contains(&v.as_str())
         {
             out.push(v);
