@@ -206,13 +206,20 @@ fn a_recording_without_trailer_reads_but_is_incomplete() {
     );
 }
 
+/// A file that does not exist was named wrongly: an I/O error naming it,
+/// counted as bad input (exit code 2, as for any argument). Other I/O
+/// failures are runtime ones (exit code 1): here, a folder read as a file.
 #[test]
 fn a_missing_file_is_an_io_error_naming_it() {
     let path = broken("no_such_file.csv");
     let err = recording::read(&path).unwrap_err();
     assert!(matches!(err, RecordingError::Io { .. }));
-    assert!(!err.is_bad_input());
+    assert!(err.is_bad_input());
     assert!(err.to_string().starts_with(&path.display().to_string()));
+    let dir = tempfile::tempdir().unwrap();
+    let err = recording::read(dir.path()).unwrap_err();
+    assert!(matches!(err, RecordingError::Io { .. }), "{err}");
+    assert!(!err.is_bad_input(), "{err}");
 }
 
 #[test]

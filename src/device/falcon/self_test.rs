@@ -189,8 +189,13 @@ impl Report {
                 self.hapticlab, self.platform, self.profile, self.device
             ),
         ];
-        for l in &self.open_log {
-            out.push(format!("  open: {l}"));
+        // The opening's steps, unless the open step's line says it all
+        // (one line: "firmware already running").
+        let open_detail = self.steps.first().map(|s| s.detail.as_str());
+        if !(self.open_log.len() == 1 && open_detail == Some(self.open_log[0].as_str())) {
+            for l in &self.open_log {
+                out.push(format!("  open: {l}"));
+            }
         }
         for s in &self.steps {
             out.push(format!(
