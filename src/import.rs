@@ -680,6 +680,7 @@ pub fn run(args: &ImportArgs) -> Result<Vec<PathBuf>, Failure> {
         Some(t) => t,
     };
     let out_existed = args.out.exists();
+    remove_abandoned_staging(&args.out);
     let staging = args.out.join(format!(".import-{}", std::process::id()));
     let pb = crate::support::progress_bar(args.files.len() as u64, "importing");
     let results = run_jobs(args.files.len(), threads, &|i| {
@@ -695,6 +696,32 @@ pub fn run(args: &ImportArgs) -> Result<Vec<PathBuf>, Failure> {
         let _ = std::fs::remove_dir(&args.out);
     }
     moved
+}
+
+/// Remove the staging folders (`.import-<pid>`) of imports that were killed:
+/// those whose process is gone. A running import's folder is left alone.
+fn remove_abandoned_staging(out: &Path) {
+    let Ok(entries) = std::fs::read_dir(out) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(pid) = name
+            .to_str()
+            .and_then(|n| n.strip_prefix(".import-"))
+            .and_then(|p| p.parse::<libc::pid_t>().ok())
+        else {
+            continue;
+        };
+        // SAFETY: kill with signal 0 sends nothing; it only asks whether
+        // the process exists (EPERM: it does, under another user).
+        let alive = pid > 0
+            && (unsafe { libc::kill(pid, 0) } == 0
+                || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM));
+        if !alive && entry.path().is_dir() {
+            let _ = std::fs::remove_dir_all(entry.path());
+        }
+    }
 }
 
 /// The first failure in input order, or every staged recording synced and

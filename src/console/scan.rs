@@ -234,6 +234,13 @@ fn leaving_out(model: &Model, file: &Path) -> Result<Option<Model>, String> {
         .filter(|e| !same(&e.file))
         .cloned()
         .collect();
+    if rest.is_empty() {
+        return Err(
+            "this scan is the model's only training scan, and a scan is predicted \
+             with itself left out: store scans of other textures and train again"
+                .into(),
+        );
+    }
     // k as the profile asked, chosen again without this recording where
     // the profile's k needed choosing: no leak of the test scan.
     Model::train_adapting_k(
@@ -342,6 +349,31 @@ mod tests {
         assert_eq!(v.label.as_deref(), Some("S4"));
         assert_eq!(v.samples, 2);
         assert!(v.stored.is_none());
+    }
+
+    /// `p` on the one scan a model was trained on says why there is no
+    /// prediction (it is left out, so nothing is left), not "no training
+    /// examples".
+    #[test]
+    fn predicting_the_models_only_scan_says_it_is_left_out() {
+        let lp = crate::profile::LoadedProfile::thesis();
+        let a = &lp.profile.analysis;
+        let features = vec![1.0; a.feature_count()];
+        let example = crate::classify::TrainingExample {
+            file: "session/S1/S1_001.csv".into(),
+            label: "S1".into(),
+            features: features.clone(),
+        };
+        let model =
+            Model::train_adapting_k("thesis", a, &lp.profile.classifier, vec![example]).unwrap();
+        let e = predict(&model, &features, Path::new("session/S1/S1_001.csv")).unwrap_err();
+        assert!(
+            e.contains("only training scan") && e.contains("left out"),
+            "{e}"
+        );
+        // Another scan is predicted by that one.
+        let p = predict(&model, &features, Path::new("session/S2/S2_001.csv")).unwrap();
+        assert_eq!(p.prediction.label, "S1");
     }
 
     #[test]

@@ -512,3 +512,32 @@ proptest! {
         let _ = entries::import_wav(&mutate(bytes, &mutations));
     }
 }
+
+/// A killed import leaves its hidden staging folder; the next import into
+/// the same folder removes it, and leaves a running import's alone.
+#[test]
+fn an_abandoned_staging_folder_is_removed_by_the_next_import() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    // A process that has exited: its pid names the abandoned folder.
+    let mut child = std::process::Command::new("true").spawn().unwrap();
+    let dead = child.id();
+    child.wait().unwrap();
+    let abandoned = out.join(format!(".import-{dead}"));
+    std::fs::create_dir_all(abandoned.join("S1")).unwrap();
+    std::fs::write(abandoned.join("S1/half.csv"), "# hapticlab recording v1\n").unwrap();
+    // A process that is running (this test's parent).
+    let running = out.join(format!(".import-{}", std::os::unix::process::parent_id()));
+    std::fs::create_dir_all(&running).unwrap();
+    let f = dir.path().join("a.csv");
+    std::fs::write(&f, "t;v\n0.0;1\n0.001;2\n").unwrap();
+    let mut a = args(&[&f], &out);
+    a.time_column = Some("t".into());
+    a.label = Some("S1".into());
+    run(&a).unwrap();
+    assert!(
+        !abandoned.exists(),
+        "the killed import's folder is still there"
+    );
+    assert!(running.exists(), "a running import's folder was removed");
+}
