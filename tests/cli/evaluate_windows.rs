@@ -11,27 +11,7 @@ use std::path::{Path, PathBuf};
 use serde_json::Value;
 use tempfile::TempDir;
 
-use crate::common::{REPO, p, run};
-
-/// The thesis profile with three sub-windows along the stroke
-/// (14.7 mm every 7.5 mm of the 29.7 mm window), 24 bins each.
-fn thesis_windows_profile(dir: &Path) -> PathBuf {
-    let text = fs::read_to_string(Path::new(REPO).join("profiles/thesis.toml")).unwrap();
-    let text = text.replace(
-        "\nbins = [1, 49]\n",
-        "\nbins = [1, 24]\nwindows = { length = 0.0147, hop = 0.0075 }\n",
-    );
-    assert!(text.contains("windows = {"));
-    let path = dir.join("windows.toml");
-    fs::write(&path, text).unwrap();
-    path
-}
-
-fn json_of(args: &[&str]) -> Value {
-    let r = run(args);
-    assert_eq!(r.code, Some(0), "{args:?}: {r:?}");
-    serde_json::from_str(&r.stdout).unwrap_or_else(|e| panic!("{e}: {r:?}"))
-}
+use crate::common::{REPO, json_of, p, run, thesis_windows_profile};
 
 fn files(v: &Value, key: &str) -> Vec<String> {
     v[key]

@@ -5,7 +5,6 @@
 //! two-key grid as a heat map.
 
 use std::fs;
-use std::path::Path;
 
 use serde_json::Value;
 use tempfile::TempDir;
@@ -14,13 +13,7 @@ use hapticlab::evaluate::plan::{Overrides, Plan};
 use hapticlab::evaluate::sweep::{SimPlan, Swept, sweep_grid_simulated};
 use hapticlab::profile::LoadedProfile;
 
-use crate::common::{REPO, p, run};
-
-fn json_of(args: &[&str]) -> Value {
-    let r = run(args);
-    assert_eq!(r.code, Some(0), "{args:?}: {r:?}");
-    serde_json::from_str(&r.stdout).unwrap_or_else(|e| panic!("{e}: {r:?}"))
-}
+use crate::common::{json_of, p, run, thesis_windows_profile};
 
 fn points(v: &Value) -> &Vec<Value> {
     v["points"]
@@ -260,20 +253,6 @@ fn three_keys_give_a_row_per_combination_and_bad_grids_are_refused() {
         assert!(r.stderr.contains(says), "{args:?}: {r:?}");
         assert!(!r.stderr.contains("panicked"));
     }
-}
-
-/// The thesis profile with three sub-windows along the stroke, as
-/// `evaluate_windows` makes it.
-fn thesis_windows_profile(dir: &Path) -> std::path::PathBuf {
-    let text = fs::read_to_string(Path::new(REPO).join("profiles/thesis.toml")).unwrap();
-    let text = text.replace(
-        "\nbins = [1, 49]\n",
-        "\nbins = [1, 24]\nwindows = { length = 0.0147, hop = 0.0075 }\n",
-    );
-    assert!(text.contains("windows = {"));
-    let path = dir.join("windows.toml");
-    fs::write(&path, text).unwrap();
-    path
 }
 
 #[test]

@@ -8,26 +8,12 @@ use std::path::Path;
 use serde_json::Value;
 use tempfile::TempDir;
 
-use crate::common::{REPO, p, run};
-
-/// The thesis profile with three sub-windows along the stroke
-/// (14.7 mm every 7.5 mm of the 29.7 mm window), 24 bins each.
-fn windows_profile(dir: &Path) -> std::path::PathBuf {
-    let text = fs::read_to_string(Path::new(REPO).join("profiles/thesis.toml")).unwrap();
-    let text = text.replace(
-        "\nbins = [1, 49]\n",
-        "\nbins = [1, 24]\nwindows = { length = 0.0147, hop = 0.0075 }\n",
-    );
-    assert!(text.contains("windows = {"));
-    let path = dir.join("windows.toml");
-    fs::write(&path, text).unwrap();
-    path
-}
+use crate::common::{REPO, p, run, thesis_windows_profile};
 
 #[test]
 fn features_write_one_row_per_sub_window_and_classify_votes_over_them() {
     let dir = TempDir::new().unwrap();
-    let profile = windows_profile(dir.path());
+    let profile = thesis_windows_profile(dir.path());
     let data = Path::new(REPO).join("recordings/thesis-sim");
     let s1 = data.join("S1");
     let out = dir.path().join("F.csv");

@@ -40,6 +40,28 @@ pub fn run<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Run {
         .into()
 }
 
+/// `hapticlab ARGS` that must succeed, its standard output read as JSON.
+pub fn json_of(args: &[&str]) -> serde_json::Value {
+    let r = run(args);
+    assert_eq!(r.code, Some(0), "{args:?}: {r:?}");
+    serde_json::from_str(&r.stdout).unwrap_or_else(|e| panic!("{e}: {r:?}"))
+}
+
+/// The thesis profile with three sub-windows along the stroke (14.7 mm
+/// every 7.5 mm of the 29.7 mm window), 24 bins each, written to
+/// `dir/windows.toml`.
+pub fn thesis_windows_profile(dir: &Path) -> std::path::PathBuf {
+    let text = std::fs::read_to_string(Path::new(REPO).join("profiles/thesis.toml")).unwrap();
+    let text = text.replace(
+        "\nbins = [1, 49]\n",
+        "\nbins = [1, 24]\nwindows = { length = 0.0147, hop = 0.0075 }\n",
+    );
+    assert!(text.contains("windows = {"));
+    let path = dir.join("windows.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
 /// A temporary path as a command-line argument.
 pub fn p(path: &Path) -> &str {
     path.to_str().expect("a UTF-8 temporary path")
