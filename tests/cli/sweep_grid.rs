@@ -53,9 +53,7 @@ fn the_readme_spectrum_sweep_goes_on_past_welch() {
         r.stdout
     );
 
-    let mut with_json = args.to_vec();
-    with_json.push("--json");
-    let v = json_of(&with_json);
+    let v = json_of(&[&args[..], &["--json"]].concat());
     let [magnitude, welch] = &points(&v)[..] else {
         panic!("two points: {v}");
     };
@@ -102,9 +100,7 @@ fn a_two_key_grid_evaluates_every_combination_and_marks_the_best() {
         "--sweep",
         "k=1,10",
     ];
-    let mut with_json = args.to_vec();
-    with_json.push("--json");
-    let v = json_of(&with_json);
+    let v = json_of(&[&args[..], &["--json"]].concat());
     assert_eq!(v["keys"], serde_json::json!(["bins", "k"]));
     let pts = points(&v);
     assert_eq!(pts.len(), 4);
@@ -181,9 +177,7 @@ fn a_grid_where_every_point_ties_has_no_best() {
         "--sweep",
         "metric=euclidean,cosine",
     ];
-    let mut with_json = args.to_vec();
-    with_json.push("--json");
-    let v = json_of(&with_json);
+    let v = json_of(&[&args[..], &["--json"]].concat());
     assert_eq!(points(&v).len(), 4);
     let first = &points(&v)[0]["accuracy"];
     assert!(points(&v).iter().all(|p| p["accuracy"] == *first), "{v}");
