@@ -3,26 +3,24 @@
 //! Texture Classification Using Fourier Analysis*, master's thesis,
 //! Tecnológico de Monterrey, 2011.
 //!
-//! The engine (profile, device, servo, recorder/recording, analysis,
-//! classifier) knows nothing of any user interface; the command line and the
-//! console are front ends over it.
+//! This package holds the front ends: the command line (`cli`, `commands`),
+//! the console (`console`), `doctor`, `import`'s file readers and the
+//! terminal. They are the only code that prints, reads keys or knows clap.
+//! The engine (devices, servo loop, recordings, analysis, classifier,
+//! evaluation) is the `hapticlab-engine` crate in `engine/`, which cannot
+//! see this package; its modules are re-exported here so that
+//! `hapticlab::dataset` and `crate::dataset` name the same thing.
 
-pub mod acquire;
-pub mod analysis;
-pub mod classify;
+pub use hapticlab_engine::{
+    acquire, analysis, classify, clock, dataset, device, evaluate, profile, recorder, recording,
+    servo, triggers,
+};
+
 pub mod cli;
 pub mod commands;
 pub mod console;
-pub mod dataset;
-pub mod device;
 pub mod doctor;
-pub mod evaluate;
 pub mod import;
-pub mod profile;
-pub mod recorder;
-pub mod recording;
 pub mod scratch;
-pub mod servo;
 pub mod support;
 pub mod terminal;
-pub mod triggers;

@@ -11,12 +11,15 @@
 //! status 130, as the shell reports a Ctrl-C. With no scratch folder alive,
 //! SIGINT ends the process with status 130 straight away. This module
 //! prints one line (the interruption) and never touches anything but its
-//! folder.
+//! folder. It is a front end's: the engine's simulated sweeps see it only
+//! as an [`evaluate::sweep::Scratch`].
 
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Condvar, Mutex, OnceLock};
 use std::time::Duration;
+
+use crate::evaluate;
 
 /// The process's SIGINT flags, registered once: `interrupted` is raised by
 /// every SIGINT; `exit_now` (true unless a scratch folder is alive) makes
@@ -166,4 +169,28 @@ impl Drop for ScratchFolder {
         }
         // Otherwise the TempDir removes the folder after this.
     }
+}
+
+impl evaluate::sweep::Scratch for ScratchFolder {
+    fn path(&self) -> &Path {
+        ScratchFolder::path(self)
+    }
+
+    fn watch<'a>(
+        &'a self,
+        workers: usize,
+        progress: &'a (dyn Fn(usize, usize) + Sync),
+    ) -> Box<dyn Fn(usize, usize) + Sync + 'a> {
+        Box::new(ScratchFolder::watch(self, workers, progress))
+    }
+
+    fn checkpoint(&self) {
+        self.exit_if_interrupted();
+    }
+}
+
+/// A scratch folder for `evaluate --simulate`'s datasets
+/// ([`evaluate::sweep::SimPlan::scratch`]).
+pub fn make() -> Result<Box<dyn evaluate::sweep::Scratch>, String> {
+    Ok(Box::new(ScratchFolder::new("hapticlab-simulate-")?))
 }

@@ -9,12 +9,12 @@ use std::sync::atomic::AtomicBool;
 
 use clap::Args;
 
+use crate::clock::RealClock;
 use crate::device::falcon;
 use crate::device::falcon::emulator::EmulatedFalcon;
 use crate::device::falcon::self_test::{self, Operator, Pace, Request};
 use crate::device::falcon::usb::{self, UsbError};
 use crate::profile::{DeviceKind, LoadedProfile};
-use crate::servo::clock::RealClock;
 use crate::support::{Failure, ProfileArg, bad, load_profile, runtime};
 use crate::triggers::hid;
 

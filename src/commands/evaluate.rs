@@ -289,6 +289,7 @@ fn validated(
             crate::acquire::DEFAULT_PER_CLASS.max(plan.folds)
         }),
         threads: plan.threads,
+        scratch: &crate::scratch::make,
     };
     if args.per_class.is_some() && !args.simulate {
         return Err(bad(

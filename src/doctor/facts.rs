@@ -7,9 +7,9 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 use super::Needs;
+use crate::clock;
 use crate::device::falcon::firmware::{self, FirmwareFileError};
 use crate::device::falcon::usb::{self, FalconInfo, UsbError};
-use crate::servo::clock;
 
 /// Everything the checks look at.
 #[derive(Debug, Clone)]

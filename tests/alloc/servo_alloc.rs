@@ -7,9 +7,9 @@ use std::path::Path;
 
 use crate::counting_alloc::allocations_during;
 
+use hapticlab::clock::VirtualClock;
 use hapticlab::device::sim::SimDevice;
 use hapticlab::profile::LoadedProfile;
-use hapticlab::servo::clock::VirtualClock;
 use hapticlab::servo::{Command, Links, ServoEvent, ServoLoop, Telemetry};
 
 #[test]

@@ -14,13 +14,13 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
+use hapticlab::clock::VirtualClock;
 use hapticlab::device::falcon::{self, FalconDevice, emulator::EmulatedFalcon};
 use hapticlab::device::sim::SimDevice;
 use hapticlab::device::{DeviceError, HapticDevice, LinkStats, Reading};
 use hapticlab::profile::{LoadedProfile, Profile};
 use hapticlab::recorder::SavedScan;
 use hapticlab::recording::{self, Recording};
-use hapticlab::servo::clock::VirtualClock;
 use hapticlab::servo::stats::LoopStats;
 use hapticlab::servo::{Command as Servo, Links, ServoEvent, ServoLoop};
 

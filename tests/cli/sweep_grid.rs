@@ -287,6 +287,7 @@ fn a_simulated_grid_reports_a_path_too_fast_and_goes_on() {
     let sim = SimPlan {
         per_class: 3,
         threads: 2,
+        scratch: &hapticlab::scratch::make,
     };
     let swept = [
         Swept::parse("path.speed_m_per_s=0.01,0.4").unwrap(),

@@ -67,6 +67,7 @@ fn each_value_simulates_its_own_recordings() {
     let sim = SimPlan {
         per_class: 2,
         threads: 2,
+        scratch: &hapticlab::scratch::make,
     };
     let mean_y = |ky: f64| {
         let p = with_key(
@@ -119,6 +120,7 @@ fn a_simulated_sweep_reports_each_value_and_repeats_exactly() {
     let sim = SimPlan {
         per_class: 4,
         threads: 2,
+        scratch: &hapticlab::scratch::make,
     };
     let values = [toml::Value::Integer(90), toml::Value::Integer(810)];
     let run = || {
@@ -161,6 +163,7 @@ fn a_value_whose_recordings_cannot_be_analysed_is_reported_not_fatal() {
     let sim = SimPlan {
         per_class: 4,
         threads: 2,
+        scratch: &hapticlab::scratch::make,
     };
     // At 0.4 m/s and 1 kHz the samples lie 0.4 mm apart: gaps in a 0.3 mm resampling.
     let values = [toml::Value::Float(0.01), toml::Value::Float(0.4)];

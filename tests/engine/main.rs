@@ -19,6 +19,7 @@ mod evaluate;
 mod fuzz_regressions;
 mod import;
 mod knn_options;
+mod layers;
 mod profiles;
 mod recording_reader;
 mod servo;

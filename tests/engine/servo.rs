@@ -5,11 +5,11 @@ use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
+use hapticlab::clock::{Clock, VirtualClock};
 use hapticlab::device::sim::SimDevice;
 use hapticlab::device::{DeviceError, HapticDevice, Reading};
 use hapticlab::profile::{LoadedProfile, Profile};
 use hapticlab::recording;
-use hapticlab::servo::clock::{Clock, VirtualClock};
 use hapticlab::servo::{Command, Links, Mode, ServoEvent, ServoLoop};
 
 fn thesis() -> Profile {

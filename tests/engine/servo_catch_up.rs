@@ -4,10 +4,10 @@
 
 use std::sync::{Arc, Mutex};
 
+use hapticlab::clock::Clock;
 use hapticlab::device::sim::SimDevice;
 use hapticlab::device::{DeviceError, HapticDevice, Reading};
 use hapticlab::profile::LoadedProfile;
-use hapticlab::servo::clock::Clock;
 use hapticlab::servo::{Links, ServoLoop};
 
 /// Virtual time that wakes exactly at each deadline, except once, when the

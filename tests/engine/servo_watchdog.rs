@@ -8,10 +8,10 @@ use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use hapticlab::clock::VirtualClock;
 use hapticlab::device::sim::SimDevice;
 use hapticlab::profile::{LoadedProfile, Profile};
 use hapticlab::recorder::SavedScan;
-use hapticlab::servo::clock::VirtualClock;
 use hapticlab::servo::{Command, Links, Mode, ServoLoop, WATCHDOG_S};
 
 /// The thesis profile: its scan leg runs from about 3.4 s to 12.7 s of loop time.

@@ -179,7 +179,7 @@ mod tests {
             length: 0.0147,
             hop: 0.0075,
         });
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("recordings/thesis-sim");
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../recordings/thesis-sim");
         let files: Vec<PathBuf> = dataset::find(&[dir]).unwrap();
         let (train, test): (Vec<_>, Vec<_>) =
             files.iter().enumerate().partition(|(i, _)| i % 10 != 0);

@@ -522,7 +522,7 @@ mod tests {
     }
 
     fn shipped() -> Vec<PathBuf> {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("recordings/thesis-sim");
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../recordings/thesis-sim");
         find(&[dir]).unwrap()
     }
 

@@ -23,8 +23,8 @@ use serde::Serialize;
 
 use super::emulator::HandTask;
 use super::{FalconDevice, FalconTransport, OpenError, packet};
+use crate::clock::Clock;
 use crate::device::{DeviceError, HapticDevice, LinkStats, Reading};
-use crate::servo::clock::Clock;
 
 /// What the user is asked to do with the grip.
 #[derive(Debug, Clone, Copy, PartialEq)]

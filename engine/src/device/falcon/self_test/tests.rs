@@ -7,13 +7,13 @@ use std::path::Path;
 use std::time::Duration;
 
 use super::*;
+use crate::clock::VirtualClock;
 use crate::device::falcon::emulator::{EmulatedFalcon, EmulatorConfig};
 use crate::device::falcon::{TransportError, open_emulated};
 use crate::profile::LoadedProfile;
-use crate::servo::clock::VirtualClock;
 
 fn thesis_emulator() -> LoadedProfile {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("profiles/thesis-emulator.toml");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../profiles/thesis-emulator.toml");
     LoadedProfile::load(&path).unwrap()
 }
 

@@ -452,7 +452,7 @@ mod thesis_tests {
             length: 0.0147,
             hop: 0.0075,
         });
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("recordings/thesis-sim");
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../recordings/thesis-sim");
         let files = dataset::find(&[dir]).unwrap();
         let loaded = dataset::load(
             &files,
@@ -474,7 +474,7 @@ mod thesis_tests {
     fn kept_samples_give_the_loaded_sub_windows_and_validate_votes_by_recording() {
         use crate::evaluate::plan::{Dataset, Overrides, Plan, validate_with_votes};
         let (profile, recs) = thesis_windows();
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("recordings/thesis-sim");
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../recordings/thesis-sim");
         let a = &profile.analysis;
         let samples =
             Dataset::load(std::slice::from_ref(&dir), a, dataset::Keep::Samples, 2).unwrap();

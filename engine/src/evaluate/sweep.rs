@@ -237,24 +237,54 @@ pub struct SimulatedInfo {
     pub seed: u64,
 }
 
+/// A temporary folder for one simulated dataset's scans, made by the front
+/// end, which decides what an interruption (Ctrl-C) does while workers fill
+/// it: the engine only reports progress through [`Scratch::watch`] and calls
+/// [`Scratch::checkpoint`] between steps. The folder is removed on drop.
+pub trait Scratch: Sync {
+    fn path(&self) -> &std::path::Path;
+    /// Wraps the progress callback of `workers` threads filling the folder,
+    /// called after each of their scans.
+    fn watch<'a>(
+        &'a self,
+        workers: usize,
+        progress: &'a (dyn Fn(usize, usize) + Sync),
+    ) -> Box<dyn Fn(usize, usize) + Sync + 'a>;
+    /// A point between steps where the front end may end the run.
+    fn checkpoint(&self);
+}
+
+/// Makes a [`Scratch`] folder for each simulated dataset.
+pub type MakeScratch<'a> = dyn Fn() -> Result<Box<dyn Scratch + 'a>, String> + Sync + 'a;
+
 /// How `evaluate --simulate` makes its datasets.
-#[derive(Debug, Clone, Copy)]
-pub struct SimPlan {
+#[derive(Clone, Copy)]
+pub struct SimPlan<'a> {
     pub per_class: usize,
     pub threads: usize,
+    /// Where each dataset's scans are written while it is read.
+    pub scratch: &'a MakeScratch<'a>,
+}
+
+impl std::fmt::Debug for SimPlan<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SimPlan")
+            .field("per_class", &self.per_class)
+            .field("threads", &self.threads)
+            .finish_non_exhaustive()
+    }
 }
 
 /// `progress` hears (done, total) scans.
 pub fn simulated_dataset(
     lp: &crate::profile::LoadedProfile,
-    sim: SimPlan,
+    sim: SimPlan<'_>,
     analysis: &Analysis,
     options: Options,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Dataset, EvaluateError> {
-    // Removed on drop, and on Ctrl-C (which would otherwise skip the drop).
-    let dir = crate::scratch::ScratchFolder::new("hapticlab-simulate-")
-        .map_err(EvaluateError::Scratch)?;
+    // Removed on drop; the front end decides what Ctrl-C does meanwhile.
+    let dir = (sim.scratch)().map_err(EvaluateError::Scratch)?;
     let opts = crate::acquire::SimulateOptions {
         out: dir.path().to_path_buf(),
         per_class: sim.per_class,
@@ -263,15 +293,15 @@ pub fn simulated_dataset(
         gzip: false,
         overwrite: false,
     };
-    crate::acquire::simulate_dataset(lp, &opts, &dir.watch(opts.threads, progress))?;
-    dir.exit_if_interrupted();
+    crate::acquire::simulate_dataset(lp, &opts, &*dir.watch(opts.threads, progress))?;
+    dir.checkpoint();
     let files = dataset::find(&[dir.path().to_path_buf()])?;
     let options = Options {
         threads: sim.threads,
         ..options
     };
     let mut data = Dataset::load_files(&files, analysis, options, &|| {})?;
-    dir.exit_if_interrupted();
+    dir.checkpoint();
     let relative = |f: &str| {
         std::path::Path::new(f)
             .strip_prefix(dir.path())
@@ -482,7 +512,7 @@ pub fn sweep_simulated(
     key: &str,
     values: &[toml::Value],
     plan: &Plan,
-    sim: SimPlan,
+    sim: SimPlan<'_>,
     progress: &(dyn Fn(usize, usize, usize) + Sync),
 ) -> Result<Sweep, EvaluateError> {
     let swept = [Swept {
@@ -505,7 +535,7 @@ pub fn sweep_grid_simulated(
     lp: &LoadedProfile,
     swept: &[Swept],
     plan: &Plan,
-    sim: SimPlan,
+    sim: SimPlan<'_>,
     progress: &(dyn Fn(usize, usize, usize) + Sync),
 ) -> Result<Sweep, EvaluateError> {
     let keys = resolve_all(&lp.profile, swept)?;

@@ -54,7 +54,7 @@ pub use simulator::Simulator;
 pub use textures::{Surface, Texture};
 
 /// The thesis profile, compiled in so that `hapticlab` works from any folder.
-pub const THESIS_PROFILE: &str = include_str!("../profiles/thesis.toml");
+pub const THESIS_PROFILE: &str = include_str!("../../profiles/thesis.toml");
 
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(deny_unknown_fields)]

@@ -9,12 +9,12 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
+use crate::clock::VirtualClock;
 use crate::device::HapticDevice;
 use crate::device::falcon::{self, OpenError};
 use crate::device::sim::{SimDevice, SimError};
 use crate::profile::{DeviceKind, LoadedProfile, MissingRig, PathSpec, check_label};
 use crate::recorder::SavedScan;
-use crate::servo::clock::VirtualClock;
 use crate::servo::stats::LoopStats;
 use crate::servo::{Command, Links, ServoEvent, ServoLoop};
 use crate::triggers::{TriggerAction, TriggerEvent};

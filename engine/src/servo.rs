@@ -18,7 +18,6 @@
 //! ([`ServoHandle::heartbeat`]) — stops the motion when the heartbeat stops
 //! for [`WATCHDOG_S`].
 
-pub mod clock;
 pub mod controller;
 pub mod stats;
 pub mod trajectory;
@@ -31,10 +30,10 @@ use std::thread::JoinHandle;
 use crossbeam_channel::{Receiver, Sender, TryRecvError, TrySendError, bounded};
 use serde::Serialize;
 
+use crate::clock::{self, Clock};
 use crate::device::{HapticDevice, Reading};
 use crate::profile::Rig;
 use crate::recorder::{Recorder, Sample, SavedScan, ScanSink};
-use clock::Clock;
 use controller::SpringDamper;
 use stats::{LoopStats, StatsCollector};
 use trajectory::Trajectory;

@@ -1,0 +1,34 @@
+//! hapticlab's engine: haptic texture classification with a Novint Falcon
+//! (or its simulation), after G. A. Hidalgo Vázquez, *Supervised Learning for
+//! Haptics Texture Classification Using Fourier Analysis*, master's thesis,
+//! Tecnológico de Monterrey, 2011.
+//!
+//! Layers, each using only those below it (no module imports one above):
+//!
+//! ```text
+//! acquire · evaluate               simulate / scan; holdout, folds, sweeps
+//! dataset                          recordings → labelled feature vectors, on every core
+//! servo · recorder · classify      the 1 kHz loop; samples to disk; k-NN and its model file
+//! device · triggers · analysis     the Falcon, its emulator and simulation; hands-free triggers; spectra
+//! clock                            real and virtual time, real-time scheduling
+//! profile · recording              ground: the TOML schema and checks; recording format v1
+//! ```
+//!
+//! It knows nothing of any user interface: it never prints, reads the
+//! terminal or parses a command line, and depends on none of clap, ratatui,
+//! crossterm or indicatif. Errors are `thiserror` enums; progress reaches the
+//! caller through callbacks, and the work the caller may cancel (a simulated
+//! sweep's scratch folder) through [`evaluate::sweep::Scratch`].
+
+pub mod acquire;
+pub mod analysis;
+pub mod classify;
+pub mod clock;
+pub mod dataset;
+pub mod device;
+pub mod evaluate;
+pub mod profile;
+pub mod recorder;
+pub mod recording;
+pub mod servo;
+pub mod triggers;
