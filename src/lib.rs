@@ -17,6 +17,7 @@ pub mod dataset;
 pub mod device;
 pub mod doctor;
 pub mod evaluate;
+pub mod files;
 pub mod import;
 pub mod profile;
 pub mod recorder;

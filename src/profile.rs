@@ -147,7 +147,7 @@ impl LoadedProfile {
             return Ok(Self::thesis());
         }
         let origin = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| ProfileError {
+        let text = crate::files::read_input_to_string(path).map_err(|e| ProfileError {
             origin: origin.clone(),
             line: None,
             column: None,

@@ -74,7 +74,9 @@ impl RecordingError {
     pub fn is_bad_input(&self) -> bool {
         match self {
             Self::Malformed { .. } | Self::Compressed { .. } => true,
-            Self::Io { source, .. } => source.kind() == io::ErrorKind::NotFound,
+            Self::Io { source, .. } => {
+                source.kind() == io::ErrorKind::NotFound || crate::files::not_regular(source)
+            }
             _ => false,
         }
     }
@@ -166,7 +168,7 @@ pub fn read_columns(path: &Path, wanted: &[&str]) -> Result<Recording, Recording
 }
 
 fn read_selected(path: &Path, select: Select<'_>) -> Result<Recording, RecordingError> {
-    let bytes = fs::read(path).map_err(|source| RecordingError::Io {
+    let bytes = crate::files::read_input(path).map_err(|source| RecordingError::Io {
         path: path.to_path_buf(),
         source,
     })?;
@@ -282,8 +284,19 @@ pub fn collect_files(paths: &[PathBuf]) -> Result<Vec<PathBuf>, RecordingError> 
         })?;
         if metadata.is_dir() {
             walk(path, &mut found, &mut visited)?;
-        } else {
+        } else if metadata.is_file() {
             found.push(path.clone());
+        } else {
+            // Named on the command line: refused, never read (a FIFO would block).
+            return Err(RecordingError::Io {
+                path: path.clone(),
+                source: io::Error::new(
+                    io::ErrorKind::InvalidInput,
+                    crate::files::NotRegular {
+                        kind: crate::files::kind_of(&metadata),
+                    },
+                ),
+            });
         }
     }
     found.sort();

@@ -249,7 +249,7 @@ impl ProbeTrace {
 
 /// Read `x_m,height_m` rows (a header line first; `#` comments allowed).
 pub fn read_surface_csv(path: &Path) -> Result<(Vec<f64>, Vec<f64>), SurfaceError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SurfaceError::Io {
+    let text = crate::files::read_input_to_string(path).map_err(|source| SurfaceError::Io {
         path: path.to_path_buf(),
         source,
     })?;
