@@ -24,6 +24,9 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use clap::Args;
 
+use crate::recording::files::{
+    check_output_kind, move_no_replace, not_regular, read_input, same_file_as,
+};
 use crate::recording::{Digits, RecordingError, RecordingWriter, time_decimals};
 use crate::support::Failure;
 
@@ -577,10 +580,10 @@ fn stage(
     staging: &Path,
 ) -> Result<Staged, Failure> {
     let origin = f.display().to_string();
-    let bytes = std::fs::read(f).map_err(|e| {
+    let bytes = read_input(f).map_err(|e| {
         let m = format!("{origin}: {e}");
-        // A file named that does not exist is the argument's fault.
-        if e.kind() == std::io::ErrorKind::NotFound {
+        // A file named that does not exist, or not a regular file, is the argument's fault.
+        if e.kind() == std::io::ErrorKind::NotFound || not_regular(&e) {
             Failure::BadInput(m)
         } else {
             Failure::Runtime(m)
@@ -606,6 +609,17 @@ fn stage(
         (csv.clone(), gz)
     };
     let (path, other) = (args.out.join(&name), args.out.join(other));
+    // --force or not: never a device or FIFO, never the file being read.
+    for p in [&path, &other] {
+        let kind = check_output_kind(p).map_err(bad)?;
+        if kind.is_some_and(|m| same_file_as(&m, std::slice::from_ref(&f.to_path_buf())).is_some())
+        {
+            return Err(bad(format!(
+                "{}: this is the input itself; nothing was imported: give another --out",
+                p.display()
+            )));
+        }
+    }
     if !args.force
         && let Some(there) = [&path, &other].into_iter().find(|p| p.exists())
     {
@@ -747,19 +761,56 @@ fn settle(
         return Ok(Vec::new());
     }
     crate::recording::sync_folder(staging).map_err(|e| Failure::Runtime(e.to_string()))?;
-    let mut written = Vec::new();
+    place(&staged, args.force)
+}
+
+/// Moves every staged recording in place. Without `force` each move is
+/// one atomic step that fails when the name is taken ([`move_no_replace`]),
+/// so of two imports of the same names at once one gets each name; the one
+/// that meets a name taken removes the recordings it placed itself and
+/// refuses, naming it: a folder never ends with a mix of two batches.
+fn place(staged: &[Staged], force: bool) -> Result<Vec<PathBuf>, Failure> {
+    let mut written = Vec::with_capacity(staged.len());
     for s in staged {
-        if let Some(d) = s.path.parent() {
-            std::fs::create_dir_all(d)
-                .map_err(|e| Failure::Runtime(format!("{}: {e}", d.display())))?;
+        if let Err(e) = place_one(s, force) {
+            // Only ours go: each was placed by this run a moment ago.
+            for p in &written {
+                let _ = std::fs::remove_file(p);
+            }
+            return Err(e);
         }
-        std::fs::rename(&s.staged, &s.path)
-            .map_err(|e| Failure::Runtime(format!("{}: {e}", s.path.display())))?;
-        if args.force && s.other.exists() {
-            std::fs::remove_file(&s.other)
-                .map_err(|e| Failure::Runtime(format!("{}: {e}", s.other.display())))?;
-        }
-        written.push(s.path);
+        written.push(s.path.clone());
     }
     Ok(written)
+}
+
+fn place_one(s: &Staged, force: bool) -> Result<(), Failure> {
+    let fail = |p: &Path, e: std::io::Error| Failure::Runtime(format!("{}: {e}", p.display()));
+    if let Some(d) = s.path.parent() {
+        std::fs::create_dir_all(d).map_err(|e| fail(d, e))?;
+    }
+    if force {
+        std::fs::rename(&s.staged, &s.path).map_err(|e| fail(&s.path, e))?;
+        if s.other.exists() {
+            std::fs::remove_file(&s.other).map_err(|e| fail(&s.other, e))?;
+        }
+        return Ok(());
+    }
+    let taken = |p: &Path| {
+        bad(format!(
+            "{}: already exists (placed by another import running at the same time, or there before); nothing was imported: import into another --out, or use --force to replace it",
+            p.display()
+        ))
+    };
+    match move_no_replace(&s.staged, &s.path) {
+        Ok(()) => {}
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => return Err(taken(&s.path)),
+        Err(e) => return Err(fail(&s.path, e)),
+    }
+    if s.other.exists() {
+        // The same recording under its other name (.csv beside .csv.gz).
+        let _ = std::fs::remove_file(&s.path);
+        return Err(taken(&s.other));
+    }
+    Ok(())
 }

@@ -154,26 +154,31 @@ pub fn warn_skipped(skipped: &[dataset::Skipped]) {
     }
 }
 
-/// Write to a temporary file beside `path`, then rename: never a half-written file.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), Failure> {
-    let dir = path
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    std::fs::create_dir_all(dir).map_err(|e| runtime(format!("{}: {e}", dir.display())))?;
-    let tmp = dir.join(format!(
-        ".{}.tmp",
-        path.file_name()
-            .map_or("out".into(), |n| n.to_string_lossy().into_owned())
-    ));
-    let write = || -> std::io::Result<()> {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    };
-    write().map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        runtime(format!("{}: cannot write: {e}", path.display()))
-    })
+/// Write `bytes` to `path` through a temporary file beside it, then
+/// rename: never a half-written file. Refused (exit code 2) when `path` is
+/// one of `inputs`, a recording or not a regular file
+/// ([`crate::recording::files::check_output`]).
+pub fn write_atomically(path: &Path, inputs: &[PathBuf], bytes: &[u8]) -> Result<(), Failure> {
+    crate::recording::files::write_output(path, inputs, |w| w.write_all(bytes))
+        .map_err(output_failure)
+}
+
+/// The files a command reads besides a model: the recordings under
+/// `paths` and the profile (a built-in name is no file and matches none).
+/// For [`crate::recording::files::check_output`] before any work, so a refused output
+/// costs nothing.
+pub fn inputs_of(profile: &ProfileArg, paths: &[PathBuf]) -> Result<Vec<PathBuf>, Failure> {
+    let mut inputs = find_recordings(paths)?;
+    inputs.push(profile.profile.clone());
+    Ok(inputs)
+}
+
+/// [`crate::recording::files::check_output`] as a [`Failure`].
+pub fn check_output(out: &Path, inputs: &[PathBuf]) -> Result<(), Failure> {
+    crate::recording::files::check_output(out, inputs).map_err(output_failure)
+}
+
+/// An output refused is bad input; one that could not be written, a runtime failure.
+pub fn output_failure(e: crate::recording::files::OutputError) -> Failure {
+    if e.is_bad_input() { bad(e) } else { runtime(e) }
 }

@@ -397,6 +397,15 @@ fn load_one(
         .collect();
     let rec = match recording::read_columns(file, &wanted) {
         Ok(r) => r,
+        // Only a walk finds one (a file named is refused by `find`): a
+        // FIFO or device named like a recording is passed over, never read.
+        Err(RecordingError::Io { source, .. }) if crate::recording::files::not_regular(&source) => {
+            return Outcome::Skipped(Skipped::Unusable {
+                file: name(),
+                reason: source.to_string(),
+                unreadable: true,
+            });
+        }
         Err(e) => return give_up(e.into(), true),
     };
     if !rec.is_complete() {

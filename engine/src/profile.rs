@@ -147,13 +147,14 @@ impl LoadedProfile {
             return Ok(Self::thesis());
         }
         let origin = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| ProfileError {
-            origin: origin.clone(),
-            line: None,
-            column: None,
-            key: None,
-            reason: format!("cannot read the profile: {e}"),
-        })?;
+        let text =
+            crate::recording::files::read_input_to_string(path).map_err(|e| ProfileError {
+                origin: origin.clone(),
+                line: None,
+                column: None,
+                key: None,
+                reason: format!("cannot read the profile: {e}"),
+            })?;
         let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
         Self::from_str(&text, &origin, &base)
     }

@@ -35,6 +35,7 @@ pub const ABORTED_KEY: &str = "aborted";
 const QUOTE_CHARS: usize = 24;
 const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
 
+pub mod files;
 mod label;
 mod number;
 mod reader;
@@ -74,7 +75,10 @@ impl RecordingError {
     pub fn is_bad_input(&self) -> bool {
         match self {
             Self::Malformed { .. } | Self::Compressed { .. } => true,
-            Self::Io { source, .. } => source.kind() == io::ErrorKind::NotFound,
+            Self::Io { source, .. } => {
+                source.kind() == io::ErrorKind::NotFound
+                    || crate::recording::files::not_regular(source)
+            }
             _ => false,
         }
     }
@@ -166,7 +170,7 @@ pub fn read_columns(path: &Path, wanted: &[&str]) -> Result<Recording, Recording
 }
 
 fn read_selected(path: &Path, select: Select<'_>) -> Result<Recording, RecordingError> {
-    let bytes = fs::read(path).map_err(|source| RecordingError::Io {
+    let bytes = crate::recording::files::read_input(path).map_err(|source| RecordingError::Io {
         path: path.to_path_buf(),
         source,
     })?;
@@ -282,8 +286,19 @@ pub fn collect_files(paths: &[PathBuf]) -> Result<Vec<PathBuf>, RecordingError> 
         })?;
         if metadata.is_dir() {
             walk(path, &mut found, &mut visited)?;
-        } else {
+        } else if metadata.is_file() {
             found.push(path.clone());
+        } else {
+            // Named on the command line: refused, never read (a FIFO would block).
+            return Err(RecordingError::Io {
+                path: path.clone(),
+                source: io::Error::new(
+                    io::ErrorKind::InvalidInput,
+                    crate::recording::files::NotRegular {
+                        kind: crate::recording::files::kind_of(&metadata),
+                    },
+                ),
+            });
         }
     }
     found.sort();

@@ -9,7 +9,7 @@ use crate::analysis::FeatureExtractor;
 use crate::classify::Model;
 use crate::dataset::{self, DatasetError};
 use crate::recording;
-use crate::support::{Failure, ProfileArg, bad, find_recordings, load_profile};
+use crate::support::{Failure, ProfileArg, bad, find_recordings, load_profile, warn_skipped};
 
 #[derive(Debug, Args)]
 pub struct ClassifyArgs {
@@ -56,7 +56,21 @@ fn classify(
     let files = find_recordings(files)?;
     let mut rows = Vec::new();
     for f in &files {
-        let rec = recording::read(f).map_err(DatasetError::from)?;
+        let rec = match recording::read(f) {
+            Ok(rec) => rec,
+            // Found in a folder (one named is refused by `find`): passed over.
+            Err(recording::RecordingError::Io { source, .. })
+                if crate::recording::files::not_regular(&source) =>
+            {
+                warn_skipped(&[dataset::Skipped::Unusable {
+                    file: f.display().to_string(),
+                    reason: source.to_string(),
+                    unreadable: true,
+                }]);
+                continue;
+            }
+            Err(e) => return Err(DatasetError::from(e).into()),
+        };
         // An incomplete scan is classified when its samples cover the
         // analysis; when they do not, one error says both things.
         let incomplete = (!rec.is_complete()).then(|| {

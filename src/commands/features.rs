@@ -7,7 +7,10 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 
 use crate::dataset;
-use crate::support::{Failure, ProfileArg, load_examples, load_profile, runtime, write_atomically};
+use crate::support::{
+    Failure, ProfileArg, check_output, inputs_of, load_examples, load_profile, runtime,
+    write_atomically,
+};
 
 #[derive(Debug, Args)]
 pub struct FeaturesArgs {
@@ -27,6 +30,14 @@ pub fn run(a: FeaturesArgs) -> Result<(), Failure> {
 
 fn features(profile: &ProfileArg, paths: &[PathBuf], out: Option<&Path>) -> Result<(), Failure> {
     let lp = load_profile(profile)?;
+    let inputs = match out {
+        Some(p) => {
+            let inputs = inputs_of(profile, paths)?;
+            check_output(p, &inputs)?;
+            inputs
+        }
+        None => Vec::new(),
+    };
     let examples = load_examples(paths, &lp.profile.analysis)?;
     let n = lp.profile.analysis.feature_count();
     // One row per sub-window, with its index, when `windows` is set.
@@ -59,7 +70,7 @@ fn features(profile: &ProfileArg, paths: &[PathBuf], out: Option<&Path>) -> Resu
     }
     match out {
         Some(p) => {
-            write_atomically(p, text.as_bytes())?;
+            write_atomically(p, &inputs, text.as_bytes())?;
             crate::errln!(
                 "wrote {} feature rows ({} features each) to {}",
                 examples.len(),

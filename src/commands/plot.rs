@@ -80,6 +80,22 @@ pub enum Figure {
     },
 }
 
+impl Figure {
+    /// The files and folders the figure is drawn from.
+    fn inputs(&self) -> Vec<PathBuf> {
+        match self {
+            Figure::Trace { profile, file } => vec![profile.profile.clone(), file.clone()],
+            Figure::Confusion { report } => vec![report.clone()],
+            Figure::Features { profile, paths, .. } => {
+                let mut v = paths.clone();
+                v.push(profile.profile.clone());
+                v
+            }
+            Figure::Sweep { sweep } => vec![sweep.clone()],
+        }
+    }
+}
+
 fn bad(m: impl std::fmt::Display) -> Failure {
     Failure::BadInput(m.to_string())
 }
@@ -132,6 +148,8 @@ pub fn run(args: &PlotArgs) -> Result<(), Failure> {
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
+    // Before any drawing: never over an input, a recording or a device.
+    crate::support::check_output(&out, &args.figure.inputs())?;
     let data = Data::load(&args.figure)?;
     if let Some(d) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(d)
@@ -188,8 +206,14 @@ enum Data {
 }
 
 fn read_json(p: &Path) -> Result<serde_json::Value, Failure> {
-    let text = std::fs::read_to_string(p)
-        .map_err(|e| Failure::Runtime(format!("{}: {e}", p.display())))?;
+    let text = crate::recording::files::read_input_to_string(p).map_err(|e| {
+        let m = format!("{}: {e}", p.display());
+        if crate::recording::files::not_regular(&e) || e.kind() == std::io::ErrorKind::NotFound {
+            bad(m)
+        } else {
+            Failure::Runtime(m)
+        }
+    })?;
     serde_json::from_str(&text).map_err(|e| bad(format!("{}: not JSON: {e}", p.display())))
 }
 

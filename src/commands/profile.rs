@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use clap::{Args, Subcommand};
 
 use crate::profile::LoadedProfile;
-use crate::support::{Failure, bad, runtime, write_atomically};
+use crate::support::{Failure, bad, check_output, runtime, write_atomically};
 
 pub mod draft;
 pub mod survey;
@@ -57,6 +57,8 @@ pub fn run(a: ProfileArgs) -> Result<(), Failure> {
 }
 
 fn new(a: &NewArgs) -> Result<(), Failure> {
+    // Refused before the survey, --overwrite or not: a recording, or not a regular file.
+    check_output(&a.out, &[])?;
     if a.out.exists() && !a.overwrite {
         return Err(bad(format!(
             "{} already exists: profile new does not replace it; give another --out, or --overwrite",
@@ -73,7 +75,7 @@ fn new(a: &NewArgs) -> Result<(), Failure> {
     let base = a.out.parent().unwrap_or(Path::new("."));
     LoadedProfile::from_str(&text, &a.out.display().to_string(), base)
         .map_err(|e| runtime(format!("the profile drafted is invalid (a bug): {e}")))?;
-    write_atomically(&a.out, text.as_bytes())?;
+    write_atomically(&a.out, &[], text.as_bytes())?;
     crate::outln!(
         "wrote {}: analysis only, {} along {} at {}, {} label(s) from {} complete recording(s){}",
         a.out.display(),

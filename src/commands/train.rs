@@ -6,7 +6,9 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 
 use crate::classify::{Model, plural};
-use crate::support::{Failure, ProfileArg, bad, load_examples, load_profile, runtime};
+use crate::support::{
+    Failure, ProfileArg, bad, check_output, inputs_of, load_examples, load_profile, output_failure,
+};
 
 #[derive(Debug, Args)]
 pub struct TrainArgs {
@@ -25,6 +27,8 @@ pub fn run(a: TrainArgs) -> Result<(), Failure> {
 
 fn train(profile: &ProfileArg, paths: &[PathBuf], out: &Path) -> Result<(), Failure> {
     let lp = load_profile(profile)?;
+    let inputs = inputs_of(profile, paths)?;
+    check_output(out, &inputs)?;
     let examples = load_examples(paths, &lp.profile.analysis)?;
     let n = examples.len();
     let model = Model::train_adapting_k(
@@ -37,7 +41,7 @@ fn train(profile: &ProfileArg, paths: &[PathBuf], out: &Path) -> Result<(), Fail
     if let Some(note) = model.k_notice() {
         crate::errln!("note: {note}");
     }
-    model.save(out).map_err(runtime)?;
+    model.save(out, &inputs).map_err(output_failure)?;
     crate::outln!(
         "trained k-NN (k = {}) on {} of {} ({}); model saved to {}",
         model.classifier.k,

@@ -228,7 +228,10 @@ impl Jobs {
         self.spawn(move || match train(&lp, &dir) {
             Ok((model, skipped)) => {
                 let file = dir.join(MODEL_FILE);
-                let saved = model.save(&file).map(|()| file).map_err(|e| e.to_string());
+                let saved = model
+                    .save(&file, &[])
+                    .map(|()| file)
+                    .map_err(|e| e.to_string());
                 JobResult::Trained {
                     model: Box::new(model),
                     skipped,

@@ -4,64 +4,83 @@
 //! them), and the check that a profile's analysis settings are the ones
 //! the model's features were made under. Never prints.
 
-use std::path::Path;
+use std::io::{BufReader, Read, Write};
+
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+use crate::recording::files::OutputError;
 
 use super::{ClassifyError, MODEL_FORMAT, Model, check_parts, json, sorted_labels};
 use crate::profile::Analysis;
 
 impl Model {
-    /// Write the model as pretty-printed JSON.
-    pub fn save(&self, path: &Path) -> Result<(), ClassifyError> {
-        let mut text = serde_json::to_string_pretty(self).map_err(|e| ClassifyError::Invalid {
-            path: path.to_path_buf(),
-            reason: e.to_string(),
-        })?;
-        text.push('\n');
-        std::fs::write(path, text).map_err(|source| ClassifyError::Io {
-            path: path.to_path_buf(),
-            source,
+    /// Write the model as pretty-printed JSON, streamed to a temporary file
+    /// then renamed ([`crate::recording::files::write_output`]): refused when `path`
+    /// is one of `inputs`, a recording or not a regular file.
+    pub fn save(&self, path: &Path, inputs: &[PathBuf]) -> Result<(), OutputError> {
+        crate::recording::files::write_output(path, inputs, |w| {
+            serde_json::to_writer_pretty(&mut *w, self).map_err(std::io::Error::other)?;
+            w.write_all(b"\n")
         })
     }
 
-    /// Read and check a model file.
+    /// Read and check a model file, streamed into the model (no copy of
+    /// its text or of a JSON tree is held; a huge model costs its
+    /// examples and their prepared matrix). Only a regular file is read.
     pub fn load(path: &Path) -> Result<Model, ClassifyError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ClassifyError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        Self::from_json(&text, path)
+        let open = || {
+            crate::recording::files::open_input(path)
+                .map(|f| BufReader::with_capacity(1 << 16, f))
+                .map_err(|source| ClassifyError::Io {
+                    path: path.to_path_buf(),
+                    source,
+                })
+        };
+        Self::parse(open()?, open, path)
     }
 
     /// Parse a model from its JSON text; `path` names it in errors.
     pub fn from_json(text: &str, path: &Path) -> Result<Model, ClassifyError> {
-        let value: serde_json::Value =
-            serde_json::from_str(text).map_err(|e| ClassifyError::Malformed {
-                path: path.to_path_buf(),
-                line: e.line(),
-                column: e.column(),
-                message: strip_position(&e),
-            })?;
-        match value.get("format") {
-            Some(serde_json::Value::String(f)) if f == MODEL_FORMAT => {}
-            Some(serde_json::Value::String(f)) => {
+        Self::parse(text.as_bytes(), || Ok(text.as_bytes()), path)
+    }
+
+    /// Parses `first` into a model; when it is not one, `again` reads the
+    /// same JSON once more for its `format` tag, so a file of another kind
+    /// or version is named as such rather than by its first odd field.
+    fn parse<R: Read>(
+        first: R,
+        again: impl FnOnce() -> Result<R, ClassifyError>,
+        path: &Path,
+    ) -> Result<Model, ClassifyError> {
+        let mut de = serde_json::Deserializer::from_reader(first);
+        let parsed = Model::deserialize(&mut de).and_then(|m| de.end().map(|()| m));
+        let mut model = match parsed {
+            Ok(m) if m.format == MODEL_FORMAT => m,
+            Ok(m) => {
                 return Err(ClassifyError::WrongFormat {
                     path: path.to_path_buf(),
-                    found: f.clone(),
+                    found: m.format,
                 });
             }
-            _ => {
-                return Err(ClassifyError::NotAModel {
+            Err(e) if e.is_data() => {
+                format_tag(again()?, path)?;
+                return Err(ClassifyError::Schema {
                     path: path.to_path_buf(),
+                    line: e.line(),
+                    column: e.column(),
+                    message: strip_position(&e),
                 });
             }
-        }
-        // Parse the text again (not the value) so schema errors carry a line and column.
-        let mut model: Model = serde_json::from_str(text).map_err(|e| ClassifyError::Schema {
-            path: path.to_path_buf(),
-            line: e.line(),
-            column: e.column(),
-            message: strip_position(&e),
-        })?;
+            Err(e) => {
+                return Err(ClassifyError::Malformed {
+                    path: path.to_path_buf(),
+                    line: e.line(),
+                    column: e.column(),
+                    message: strip_position(&e),
+                });
+            }
+        };
         let invalid = |reason: String| ClassifyError::Invalid {
             path: path.to_path_buf(),
             reason,
@@ -158,6 +177,30 @@ impl Model {
             );
         }
         Ok(())
+    }
+}
+
+/// The `format` tag of JSON that is not a valid model: an error unless it
+/// is this version's (then the model's own fields are at fault). The rest
+/// of the document is skipped, not kept.
+fn format_tag<R: Read>(r: R, path: &Path) -> Result<(), ClassifyError> {
+    #[derive(serde::Deserialize)]
+    struct Tag {
+        format: Option<serde_json::Value>,
+    }
+    match serde_json::from_reader::<_, Tag>(r) {
+        Ok(Tag {
+            format: Some(serde_json::Value::String(f)),
+        }) if f == MODEL_FORMAT => Ok(()),
+        Ok(Tag {
+            format: Some(serde_json::Value::String(found)),
+        }) => Err(ClassifyError::WrongFormat {
+            path: path.to_path_buf(),
+            found,
+        }),
+        _ => Err(ClassifyError::NotAModel {
+            path: path.to_path_buf(),
+        }),
     }
 }
 

@@ -172,7 +172,8 @@ impl RecordingWriter {
         let file = if new {
             File::create_new(path)
         } else {
-            File::create(path)
+            // Replacing a device or FIFO would write into it (or wait on it).
+            refuse_special(path).and_then(|()| File::create(path))
         }
         .map_err(io_error)?;
         let mut out = BufWriter::with_capacity(64 * 1024, file);
@@ -438,6 +439,20 @@ pub fn compress(path: &Path) -> Result<PathBuf, RecordingError> {
 /// each (a 5 s 44.1 kHz clip: about 3 s of CPU against 0.2 s).
 pub fn compress_quickly(path: &Path) -> Result<PathBuf, RecordingError> {
     compress_by(path, 0)
+}
+
+/// An error ([`crate::recording::files::NotRegular`]) when `path` exists and is not a
+/// regular file.
+fn refuse_special(path: &Path) -> io::Result<()> {
+    match fs::metadata(path) {
+        Ok(m) if !m.is_file() => Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            crate::recording::files::NotRegular {
+                kind: crate::recording::files::kind_of(&m),
+            },
+        )),
+        _ => Ok(()),
+    }
 }
 
 fn compress_by(path: &Path, zopfli_max: usize) -> Result<PathBuf, RecordingError> {

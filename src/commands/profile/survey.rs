@@ -8,7 +8,7 @@ use std::path::Path;
 
 use crate::dataset;
 use crate::recording::{self, Recording};
-use crate::support::{Failure, bad, progress_bar, runtime};
+use crate::support::{Failure, bad, progress_bar, runtime, warn_skipped};
 
 /// What one complete recording tells about the folder.
 #[derive(Debug, Clone)]
@@ -107,10 +107,23 @@ pub fn survey(dir: &Path) -> Result<Survey, Failure> {
     Ok(sum_up(&seen, incomplete))
 }
 
-/// One recording's summary; `None` when it is incomplete.
+/// One recording's summary; `None` when it is incomplete, or not a
+/// regular file (a FIFO named like a recording: warned about, never read).
 fn look_at(file: &Path) -> Result<Option<Seen>, Failure> {
-    let rec =
-        recording::read(file).map_err(|e| if e.is_bad_input() { bad(e) } else { runtime(e) })?;
+    let rec = match recording::read(file) {
+        Ok(rec) => rec,
+        Err(recording::RecordingError::Io { source, .. })
+            if crate::recording::files::not_regular(&source) =>
+        {
+            warn_skipped(&[dataset::Skipped::Unusable {
+                file: file.display().to_string(),
+                reason: source.to_string(),
+                unreadable: true,
+            }]);
+            return Ok(None);
+        }
+        Err(e) => return Err(if e.is_bad_input() { bad(e) } else { runtime(e) }),
+    };
     if !rec.is_complete() || rec.len() < 2 {
         return Ok(None);
     }
