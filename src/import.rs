@@ -24,7 +24,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
 use clap::Args;
 
-use crate::recording::{Digits, RecordingError, RecordingWriter, time_decimals};
+use crate::recording::{Digits, MAX_RATE_HZ, RecordingError, RecordingWriter, time_decimals};
 use crate::support::Failure;
 
 #[derive(Debug, Args, Clone, Default)]
@@ -121,6 +121,9 @@ pub fn parse_meta(kv: &str) -> Result<(String, toml::Value), Failure> {
 
 /// Parse a CSV file's text with the mapping in `args`.
 pub fn parse_csv(text: &str, origin: &str, args: &ImportArgs) -> Result<Imported, Failure> {
+    // Excel's "CSV UTF-8" starts with a byte-order mark, invisible in any
+    // message: read past it, as the recording reader does.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut lines = text
         .lines()
         .enumerate()
@@ -167,12 +170,29 @@ pub fn parse_csv(text: &str, origin: &str, args: &ImportArgs) -> Result<Imported
             .filter(|i| Some(*i) != time && Some(*i) != label_col)
             .collect()
     } else {
+        if let Some((i, c)) = args
+            .channels
+            .iter()
+            .enumerate()
+            .find(|(i, c)| args.channels[..*i].contains(c))
+        {
+            return Err(bad(format!(
+                "--channels names `{c}` twice (entries {} and {}): name each column once",
+                args.channels.iter().position(|x| x == c).unwrap_or(0) + 1,
+                i + 1
+            )));
+        }
         args.channels
             .iter()
             .map(|c| find(c, "channel"))
             .collect::<Result<_, _>>()?
     };
-    let burst = args.burst.max(1);
+    let burst = args.burst;
+    if burst == 0 {
+        return Err(bad(
+            "--burst 0: a row holds at least one sample of each channel (--burst 1, the default)",
+        ));
+    }
     if channel_idx.is_empty() || !channel_idx.len().is_multiple_of(burst) {
         return Err(bad(format!(
             "{origin}: {} channel column(s) cannot be split into bursts of {burst}",
@@ -342,6 +362,11 @@ pub fn parse_wav(bytes: &[u8], origin: &str) -> Result<Imported, Failure> {
         let len = u32_at(bytes, at + 4) as usize;
         let body = &bytes[at + 8..(at + 8 + len).min(bytes.len())];
         if id == b"fmt " {
+            if fmt.is_some() {
+                // Which one a reader takes is a guess: the samples' meaning
+                // would hang on it.
+                return Err(err("two fmt chunks (a file has one)"));
+            }
             if body.len() < 16 {
                 return Err(err("the fmt chunk is too short"));
             }
@@ -482,11 +507,19 @@ pub fn check_options(args: &ImportArgs) -> Result<Vec<(String, toml::Value)>, Fa
         .iter()
         .map(|m| parse_meta(m))
         .collect::<Result<_, _>>()?;
+    for (i, (k, _)) in extra.iter().enumerate() {
+        if extra[..i].iter().any(|(seen, _)| seen == k) {
+            return Err(bad(format!(
+                "--meta {k} is given twice: give each key once"
+            )));
+        }
+    }
     if let Some(r) = args.rate
-        && !(r.is_finite() && r > 0.0)
+        && !(r.is_finite() && r > 0.0 && r <= MAX_RATE_HZ)
     {
         return Err(bad(format!(
-            "--rate must be a positive number of Hz, got {r}"
+            "--rate must be a positive number of Hz up to {MAX_RATE_HZ:e} (beyond it `t_s` \
+             cannot be written apart sample by sample), got {r:e}"
         )));
     }
     if let Some(l) = &args.label {
@@ -530,6 +563,49 @@ pub fn parse_file(
     }
 }
 
+/// The flags that mean something for a CSV only, given for WAV inputs,
+/// which carry their own rate and channels: refused when every input is a
+/// WAV (nothing takes them), else a warning to print (they apply to the CSV
+/// files alone), so the user never believes they reached a WAV.
+fn csv_only_flags_for_wav(args: &ImportArgs) -> Result<Option<String>, Failure> {
+    let is_wav = |f: &PathBuf| {
+        f.extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("wav") || e.eq_ignore_ascii_case("wave"))
+    };
+    let Some(wav) = args.files.iter().find(|f| is_wav(f)) else {
+        return Ok(None);
+    };
+    let given = [
+        ("--rate", args.rate.is_some()),
+        ("--time-column", args.time_column.is_some()),
+        ("--channels", !args.channels.is_empty()),
+        ("--label-column", args.label_column.is_some()),
+        ("--burst", args.burst != 1),
+        ("--delimiter", args.delimiter.is_some()),
+    ];
+    let flags: Vec<&str> = given
+        .iter()
+        .filter(|(_, on)| *on)
+        .map(|(f, _)| *f)
+        .collect();
+    if flags.is_empty() {
+        return Ok(None);
+    }
+    let flags = flags.join(", ");
+    if args.files.iter().all(is_wav) {
+        return Err(bad(format!(
+            "{}: {flags} applies to CSV files only (a WAV file carries its own rate and \
+             channels): leave it out",
+            wav.display()
+        )));
+    }
+    Ok(Some(format!(
+        "warning: {flags} applies to the CSV files only; {} and any other WAV file keep \
+         their own rate and channels",
+        wav.display()
+    )))
+}
+
 /// One input converted into the staging folder, waiting to be moved in place.
 struct Staged {
     /// Where it goes, and the other name of the same recording (`.csv`
@@ -568,6 +644,40 @@ fn label_of(
     Ok(label)
 }
 
+/// Checks what the recording's head will hold (the channel names, the
+/// metadata keys) before it is written, so a fault is blamed on the input
+/// and the flag it came from, not on the staging file.
+fn check_written_names(
+    imp: &Imported,
+    extra: &[(String, toml::Value)],
+    origin: &str,
+    args: &ImportArgs,
+) -> Result<(), Failure> {
+    let mut columns = vec!["t_s"];
+    columns.extend(imp.names.iter().map(String::as_str));
+    if let Err(e) = crate::recording::check_columns(&columns) {
+        let from = if !args.names.is_empty() {
+            "--names"
+        } else if !args.channels.is_empty() {
+            "--channels"
+        } else {
+            "the header"
+        };
+        return Err(bad(format!(
+            "{origin}: the channel names ({from}): {e}; give others with --names A,B,…"
+        )));
+    }
+    if let Some((k, _)) = extra
+        .iter()
+        .find(|(k, _)| k == "device" || imp.meta.iter().any(|(m, _)| m == k))
+    {
+        return Err(bad(format!(
+            "{origin}: --meta {k}: the import writes `{k}` itself; choose another key"
+        )));
+    }
+    Ok(())
+}
+
 /// Reads, parses and writes input `f` under `staging` (as `<label>/<stem>.csv`
 /// or `.csv.gz`).
 fn stage(
@@ -590,14 +700,22 @@ fn stage(
         .extension()
         .map(|e| e.to_string_lossy().into_owned())
         .unwrap_or_default();
+    let stem = f
+        .file_stem()
+        .map_or("import".into(), |s| s.to_string_lossy().into_owned());
+    if stem.starts_with('.') {
+        // OUT/<label>/.name.csv would be hidden, and every command skips it.
+        return Err(bad(format!(
+            "{origin}: a hidden file name would give a hidden recording, which every \
+             command skips: rename the file without the leading '.'"
+        )));
+    }
     let mut imp = parse_file(bytes, &origin, &ext, args)?;
     let label = label_of(f, &origin, args, imp.label.take())?;
     imp.meta
         .push(("source".to_string(), toml::Value::String(origin.clone())));
+    check_written_names(&imp, extra, &origin, args)?;
     imp.meta.extend(extra.iter().cloned());
-    let stem = f
-        .file_stem()
-        .map_or("import".into(), |s| s.to_string_lossy().into_owned());
     let csv = Path::new(&label).join(format!("{stem}.csv"));
     let gz = Path::new(&label).join(format!("{stem}.csv.gz"));
     let (name, other) = if args.gzip {
@@ -675,11 +793,22 @@ fn run_jobs<T: Send>(
 /// number of threads.
 pub fn run(args: &ImportArgs) -> Result<Vec<PathBuf>, Failure> {
     let extra = check_options(args)?;
+    if let Some(warning) = csv_only_flags_for_wav(args)? {
+        crate::errln!("{warning}");
+    }
     let threads = match args.threads {
         None | Some(0) => crate::dataset::cores(),
         Some(t) => t,
     };
     let out_existed = args.out.exists();
+    if out_existed && !args.out.is_dir() {
+        // Said before the staging folder inside it is named; a runtime
+        // failure, as any folder that cannot be made.
+        return Err(Failure::Runtime(format!(
+            "--out {}: not a folder; name a folder (it is made if missing)",
+            args.out.display()
+        )));
+    }
     remove_abandoned_staging(&args.out);
     let staging = args.out.join(format!(".import-{}", std::process::id()));
     let pb = crate::support::progress_bar(args.files.len() as u64, "importing");

@@ -15,6 +15,7 @@ mod falcon_self_test;
 mod faults;
 mod first_session;
 mod import;
+mod import_refusals;
 mod plot;
 mod rigless;
 mod sweep_grid;
