@@ -17,6 +17,7 @@ mod first_session;
 mod import;
 mod import_refusals;
 mod plot;
+mod refusals;
 mod rigless;
 mod sweep_grid;
 mod sweep_simulated;
