@@ -27,6 +27,9 @@ use clap::Args;
 use crate::recording::{Digits, MAX_RATE_HZ, RecordingError, RecordingWriter, time_decimals};
 use crate::support::Failure;
 
+mod checks;
+use checks::{check_written_names, csv_only_flags_for_wav};
+
 #[derive(Debug, Args, Clone, Default)]
 pub struct ImportArgs {
     /// CSV or WAV files to import (the format is taken from the extension).
@@ -119,6 +122,35 @@ pub fn parse_meta(kv: &str) -> Result<(String, toml::Value), Failure> {
     Ok((k.to_string(), value))
 }
 
+/// The channel columns' indices: `--channels` in order (each named once),
+/// else every column but the time and label columns.
+fn channel_columns(
+    cols: &[String],
+    time: Option<usize>,
+    label_col: Option<usize>,
+    args: &ImportArgs,
+    find: &dyn Fn(&str, &str) -> Result<usize, Failure>,
+) -> Result<Vec<usize>, Failure> {
+    if args.channels.is_empty() {
+        return Ok((0..cols.len())
+            .filter(|i| Some(*i) != time && Some(*i) != label_col)
+            .collect());
+    }
+    if let Some((i, c)) = args
+        .channels
+        .iter()
+        .enumerate()
+        .find(|(i, c)| args.channels[..*i].contains(c))
+    {
+        return Err(bad(format!(
+            "--channels names `{c}` twice (entries {} and {}): name each column once",
+            args.channels.iter().position(|x| x == c).unwrap_or(0) + 1,
+            i + 1
+        )));
+    }
+    args.channels.iter().map(|c| find(c, "channel")).collect()
+}
+
 /// Parse a CSV file's text with the mapping in `args`.
 pub fn parse_csv(text: &str, origin: &str, args: &ImportArgs) -> Result<Imported, Failure> {
     // Excel's "CSV UTF-8" starts with a byte-order mark, invisible in any
@@ -165,28 +197,7 @@ pub fn parse_csv(text: &str, origin: &str, args: &ImportArgs) -> Result<Imported
         .as_deref()
         .map(|l| find(l, "label"))
         .transpose()?;
-    let channel_idx: Vec<usize> = if args.channels.is_empty() {
-        (0..cols.len())
-            .filter(|i| Some(*i) != time && Some(*i) != label_col)
-            .collect()
-    } else {
-        if let Some((i, c)) = args
-            .channels
-            .iter()
-            .enumerate()
-            .find(|(i, c)| args.channels[..*i].contains(c))
-        {
-            return Err(bad(format!(
-                "--channels names `{c}` twice (entries {} and {}): name each column once",
-                args.channels.iter().position(|x| x == c).unwrap_or(0) + 1,
-                i + 1
-            )));
-        }
-        args.channels
-            .iter()
-            .map(|c| find(c, "channel"))
-            .collect::<Result<_, _>>()?
-    };
+    let channel_idx = channel_columns(&cols, time, label_col, args, &find)?;
     let burst = args.burst;
     if burst == 0 {
         return Err(bad(
@@ -563,49 +574,6 @@ pub fn parse_file(
     }
 }
 
-/// The flags that mean something for a CSV only, given for WAV inputs,
-/// which carry their own rate and channels: refused when every input is a
-/// WAV (nothing takes them), else a warning to print (they apply to the CSV
-/// files alone), so the user never believes they reached a WAV.
-fn csv_only_flags_for_wav(args: &ImportArgs) -> Result<Option<String>, Failure> {
-    let is_wav = |f: &PathBuf| {
-        f.extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("wav") || e.eq_ignore_ascii_case("wave"))
-    };
-    let Some(wav) = args.files.iter().find(|f| is_wav(f)) else {
-        return Ok(None);
-    };
-    let given = [
-        ("--rate", args.rate.is_some()),
-        ("--time-column", args.time_column.is_some()),
-        ("--channels", !args.channels.is_empty()),
-        ("--label-column", args.label_column.is_some()),
-        ("--burst", args.burst != 1),
-        ("--delimiter", args.delimiter.is_some()),
-    ];
-    let flags: Vec<&str> = given
-        .iter()
-        .filter(|(_, on)| *on)
-        .map(|(f, _)| *f)
-        .collect();
-    if flags.is_empty() {
-        return Ok(None);
-    }
-    let flags = flags.join(", ");
-    if args.files.iter().all(is_wav) {
-        return Err(bad(format!(
-            "{}: {flags} applies to CSV files only (a WAV file carries its own rate and \
-             channels): leave it out",
-            wav.display()
-        )));
-    }
-    Ok(Some(format!(
-        "warning: {flags} applies to the CSV files only; {} and any other WAV file keep \
-         their own rate and channels",
-        wav.display()
-    )))
-}
-
 /// One input converted into the staging folder, waiting to be moved in place.
 struct Staged {
     /// Where it goes, and the other name of the same recording (`.csv`
@@ -642,40 +610,6 @@ fn label_of(
     crate::recording::check_label(&label)
         .map_err(|e| bad(format!("{origin}: label {label:?}: {e}")))?;
     Ok(label)
-}
-
-/// Checks what the recording's head will hold (the channel names, the
-/// metadata keys) before it is written, so a fault is blamed on the input
-/// and the flag it came from, not on the staging file.
-fn check_written_names(
-    imp: &Imported,
-    extra: &[(String, toml::Value)],
-    origin: &str,
-    args: &ImportArgs,
-) -> Result<(), Failure> {
-    let mut columns = vec!["t_s"];
-    columns.extend(imp.names.iter().map(String::as_str));
-    if let Err(e) = crate::recording::check_columns(&columns) {
-        let from = if !args.names.is_empty() {
-            "--names"
-        } else if !args.channels.is_empty() {
-            "--channels"
-        } else {
-            "the header"
-        };
-        return Err(bad(format!(
-            "{origin}: the channel names ({from}): {e}; give others with --names A,B,…"
-        )));
-    }
-    if let Some((k, _)) = extra
-        .iter()
-        .find(|(k, _)| k == "device" || imp.meta.iter().any(|(m, _)| m == k))
-    {
-        return Err(bad(format!(
-            "{origin}: --meta {k}: the import writes `{k}` itself; choose another key"
-        )));
-    }
-    Ok(())
 }
 
 /// Reads, parses and writes input `f` under `staging` (as `<label>/<stem>.csv`
