@@ -27,8 +27,11 @@ use clap::Args;
 use crate::recording::files::{
     check_output_kind, move_no_replace, not_regular, read_input, same_file_as,
 };
-use crate::recording::{Digits, RecordingError, RecordingWriter, time_decimals};
+use crate::recording::{Digits, MAX_RATE_HZ, RecordingError, RecordingWriter, time_decimals};
 use crate::support::Failure;
+
+mod checks;
+use checks::{check_written_names, csv_only_flags_for_wav};
 
 #[derive(Debug, Args, Clone, Default)]
 pub struct ImportArgs {
@@ -122,8 +125,40 @@ pub fn parse_meta(kv: &str) -> Result<(String, toml::Value), Failure> {
     Ok((k.to_string(), value))
 }
 
+/// The channel columns' indices: `--channels` in order (each named once),
+/// else every column but the time and label columns.
+fn channel_columns(
+    cols: &[String],
+    time: Option<usize>,
+    label_col: Option<usize>,
+    args: &ImportArgs,
+    find: &dyn Fn(&str, &str) -> Result<usize, Failure>,
+) -> Result<Vec<usize>, Failure> {
+    if args.channels.is_empty() {
+        return Ok((0..cols.len())
+            .filter(|i| Some(*i) != time && Some(*i) != label_col)
+            .collect());
+    }
+    if let Some((i, c)) = args
+        .channels
+        .iter()
+        .enumerate()
+        .find(|(i, c)| args.channels[..*i].contains(c))
+    {
+        return Err(bad(format!(
+            "--channels names `{c}` twice (entries {} and {}): name each column once",
+            args.channels.iter().position(|x| x == c).unwrap_or(0) + 1,
+            i + 1
+        )));
+    }
+    args.channels.iter().map(|c| find(c, "channel")).collect()
+}
+
 /// Parse a CSV file's text with the mapping in `args`.
 pub fn parse_csv(text: &str, origin: &str, args: &ImportArgs) -> Result<Imported, Failure> {
+    // Excel's "CSV UTF-8" starts with a byte-order mark, invisible in any
+    // message: read past it, as the recording reader does.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut lines = text
         .lines()
         .enumerate()
@@ -165,17 +200,13 @@ pub fn parse_csv(text: &str, origin: &str, args: &ImportArgs) -> Result<Imported
         .as_deref()
         .map(|l| find(l, "label"))
         .transpose()?;
-    let channel_idx: Vec<usize> = if args.channels.is_empty() {
-        (0..cols.len())
-            .filter(|i| Some(*i) != time && Some(*i) != label_col)
-            .collect()
-    } else {
-        args.channels
-            .iter()
-            .map(|c| find(c, "channel"))
-            .collect::<Result<_, _>>()?
-    };
-    let burst = args.burst.max(1);
+    let channel_idx = channel_columns(&cols, time, label_col, args, &find)?;
+    let burst = args.burst;
+    if burst == 0 {
+        return Err(bad(
+            "--burst 0: a row holds at least one sample of each channel (--burst 1, the default)",
+        ));
+    }
     if channel_idx.is_empty() || !channel_idx.len().is_multiple_of(burst) {
         return Err(bad(format!(
             "{origin}: {} channel column(s) cannot be split into bursts of {burst}",
@@ -345,6 +376,11 @@ pub fn parse_wav(bytes: &[u8], origin: &str) -> Result<Imported, Failure> {
         let len = u32_at(bytes, at + 4) as usize;
         let body = &bytes[at + 8..(at + 8 + len).min(bytes.len())];
         if id == b"fmt " {
+            if fmt.is_some() {
+                // Which one a reader takes is a guess: the samples' meaning
+                // would hang on it.
+                return Err(err("two fmt chunks (a file has one)"));
+            }
             if body.len() < 16 {
                 return Err(err("the fmt chunk is too short"));
             }
@@ -485,11 +521,19 @@ pub fn check_options(args: &ImportArgs) -> Result<Vec<(String, toml::Value)>, Fa
         .iter()
         .map(|m| parse_meta(m))
         .collect::<Result<_, _>>()?;
+    for (i, (k, _)) in extra.iter().enumerate() {
+        if extra[..i].iter().any(|(seen, _)| seen == k) {
+            return Err(bad(format!(
+                "--meta {k} is given twice: give each key once"
+            )));
+        }
+    }
     if let Some(r) = args.rate
-        && !(r.is_finite() && r > 0.0)
+        && !(r.is_finite() && r > 0.0 && r <= MAX_RATE_HZ)
     {
         return Err(bad(format!(
-            "--rate must be a positive number of Hz, got {r}"
+            "--rate must be a positive number of Hz up to {MAX_RATE_HZ:e} (beyond it `t_s` \
+             cannot be written apart sample by sample), got {r:e}"
         )));
     }
     if let Some(l) = &args.label {
@@ -593,14 +637,22 @@ fn stage(
         .extension()
         .map(|e| e.to_string_lossy().into_owned())
         .unwrap_or_default();
+    let stem = f
+        .file_stem()
+        .map_or("import".into(), |s| s.to_string_lossy().into_owned());
+    if stem.starts_with('.') {
+        // OUT/<label>/.name.csv would be hidden, and every command skips it.
+        return Err(bad(format!(
+            "{origin}: a hidden file name would give a hidden recording, which every \
+             command skips: rename the file without the leading '.'"
+        )));
+    }
     let mut imp = parse_file(bytes, &origin, &ext, args)?;
     let label = label_of(f, &origin, args, imp.label.take())?;
     imp.meta
         .push(("source".to_string(), toml::Value::String(origin.clone())));
+    check_written_names(&imp, extra, &origin, args)?;
     imp.meta.extend(extra.iter().cloned());
-    let stem = f
-        .file_stem()
-        .map_or("import".into(), |s| s.to_string_lossy().into_owned());
     let csv = Path::new(&label).join(format!("{stem}.csv"));
     let gz = Path::new(&label).join(format!("{stem}.csv.gz"));
     let (name, other) = if args.gzip {
@@ -689,11 +741,22 @@ fn run_jobs<T: Send>(
 /// number of threads.
 pub fn run(args: &ImportArgs) -> Result<Vec<PathBuf>, Failure> {
     let extra = check_options(args)?;
+    if let Some(warning) = csv_only_flags_for_wav(args)? {
+        crate::errln!("{warning}");
+    }
     let threads = match args.threads {
         None | Some(0) => crate::dataset::cores(),
         Some(t) => t,
     };
     let out_existed = args.out.exists();
+    if out_existed && !args.out.is_dir() {
+        // Said before the staging folder inside it is named; a runtime
+        // failure, as any folder that cannot be made.
+        return Err(Failure::Runtime(format!(
+            "--out {}: not a folder; name a folder (it is made if missing)",
+            args.out.display()
+        )));
+    }
     remove_abandoned_staging(&args.out);
     let staging = args.out.join(format!(".import-{}", std::process::id()));
     let pb = crate::support::progress_bar(args.files.len() as u64, "importing");

@@ -124,6 +124,22 @@ pub enum AnalysisError {
     },
     #[error("only {filled} grid point(s) along {axis} have samples; at least 2 are needed")]
     TooFewPoints { axis: String, filled: usize },
+    /// Samples too large for their spectrum (a power past f64's range):
+    /// every command that makes features refuses them alike.
+    #[error(
+        "feature {number} is not a finite number ({value}): the samples are too large for \
+         their spectrum; check the recording's values",
+        number = .index + 1
+    )]
+    FeatureNotFinite { index: usize, value: f64 },
+}
+
+/// The features, or the first one that is not a finite number.
+fn check_finite(features: &[f64]) -> Result<&[f64], AnalysisError> {
+    match features.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        Some((index, &value)) => Err(AnalysisError::FeatureNotFinite { index, value }),
+        None => Ok(features),
+    }
 }
 
 /// How an axis value is shown to people: metres as mm, seconds as s.
@@ -189,15 +205,7 @@ pub fn check_settings(settings: &Analysis) -> Result<(), String> {
     if let Some(w) = settings.windows {
         check_windows(settings, w).map_err(|reason| format!("analysis.windows {reason}"))?;
     }
-    if (w1 - w0) / settings.spacing > (1u64 << 20) as f64 {
-        return Err("analysis.spacing leaves more than 1048576 points in the window".into());
-    }
-    let n = settings.points();
-    if n < 4 {
-        return Err(format!(
-            "analysis.spacing leaves only {n} points in the window (need 4)"
-        ));
-    }
+    crate::profile::check_points(settings).map_err(|(key, reason)| format!("{key}: {reason}"))?;
     let [a, b] = settings.bins;
     let m = settings.dft_points();
     if settings.band.is_none() && settings.bands.is_none() && (a > b || b > m / 2) {
@@ -326,7 +334,7 @@ impl FeatureExtractor {
     /// signal (`settings.features_per_channel()` values).
     pub fn features(&mut self, axis: &[f64], signal: &[f64]) -> Result<&[f64], AnalysisError> {
         self.transform(axis, signal)?;
-        Ok(self.channel_features())
+        check_finite(self.channel_features())
     }
 
     /// The features of the spectrum last transformed: the kept bins, or the
@@ -384,7 +392,7 @@ impl FeatureExtractor {
             };
             self.features[c * per..(c + 1) * per].copy_from_slice(own);
         }
-        Ok(&self.features)
+        check_finite(&self.features)
     }
 
     /// The `[start, end]` of each sub-window along the axis, in order (the

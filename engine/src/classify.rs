@@ -207,8 +207,13 @@ pub enum ClassifyError {
     UnknownLabel { file: String, label: String },
     #[error("the scan has {found} features but the model expects {expected}")]
     QueryLength { expected: usize, found: usize },
-    #[error("feature {index} of the scan is not a finite number ({value})")]
+    #[error("feature {number} of the scan is not a finite number ({value})", number = .index + 1)]
     QueryNonFinite { index: usize, value: f64 },
+    #[error(
+        "the distance to training example {file} is not a finite number: the scan's \
+         features are too far from the model's range"
+    )]
+    Unmeasurable { file: String },
     #[error("the model's analysis settings are unusable: {0}")]
     Settings(String),
     #[error(
@@ -781,6 +786,17 @@ impl Model {
             .collect();
     }
 
+    /// The first example whose distance-ready features, squared and
+    /// summed, are not finite (a distance to it could overflow to NaN).
+    fn unmeasurable_example(&self) -> Option<&str> {
+        let d = self.feature_count().max(1);
+        self.matrix
+            .chunks_exact(d)
+            .zip(&self.examples)
+            .find(|(row, _)| !dot(row, row).is_finite())
+            .map(|(_, ex)| ex.file.as_str())
+    }
+
     /// Number of features a query must have.
     pub fn feature_count(&self) -> usize {
         self.analysis.feature_count()
@@ -846,6 +862,12 @@ impl Model {
             nearest.truncate(k);
         } else {
             nearest_rows(metric, q, &self.matrix, &self.norms, 0..n, k, &mut nearest);
+        }
+        if let Some(&(_, index)) = nearest.iter().find(|(r, _)| !r.is_finite()) {
+            // NaN sorts last and ties everything: no verdict from it.
+            return Err(ClassifyError::Unmeasurable {
+                file: self.examples[index].file.clone(),
+            });
         }
         let (order, count) = rank_classes(
             metric,

@@ -51,6 +51,13 @@ pub enum EvaluateError {
         train: usize,
         test: usize,
     },
+    /// Every test recording would be called the one label there is: a
+    /// score of 100 % that says nothing of the classifier.
+    #[error(
+        "every recording is labelled {label:?} ({file}, …): an evaluation needs recordings \
+         of at least two textures to tell apart; add another texture's recordings"
+    )]
+    OneLabel { label: String, file: String },
     #[error("there are no test examples")]
     NoTest,
     #[error("cannot make the folds: {0}")]
@@ -93,6 +100,19 @@ fn class_seed(seed: u64, label: &str) -> u64 {
         h = h.wrapping_mul(0x0100_0000_01b3);
     }
     seed ^ h
+}
+
+/// Refuses examples that all share one label ([`EvaluateError::OneLabel`]).
+pub fn check_two_labels(examples: &[TrainingExample]) -> Result<(), EvaluateError> {
+    match examples.first() {
+        Some(first) if examples.iter().all(|e| e.label == first.label) => {
+            Err(EvaluateError::OneLabel {
+                label: first.label.clone(),
+                file: first.file.clone(),
+            })
+        }
+        _ => Ok(()),
+    }
 }
 
 /// Split the examples per class (label): in the order given (callers sort

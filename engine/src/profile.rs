@@ -39,7 +39,7 @@ pub mod textures;
 pub use crate::recording::check_label;
 pub use analysis::{
     Analysis, BandScale, Bands, Detrend, LOG_FLOOR, SpectrumKind, Taper, Windows, check_options,
-    check_windows,
+    check_points, check_windows,
 };
 pub use classifier::{Classifier, K_AUTO, Metric, Weights};
 pub use console::{CONSOLE_ACTIONS, ConsoleSettings, KeySpec, NAMED_KEYS, parse_key};
@@ -177,6 +177,16 @@ impl LoadedProfile {
                 reason: e.message().trim().to_string(),
             }
         })?;
+        if let Some(v) = one_feature_choice(text) {
+            let (line, column) = locate_key(text, &v.key);
+            return Err(ProfileError {
+                origin: origin.to_string(),
+                line,
+                column,
+                key: Some(v.key),
+                reason: v.reason,
+            });
+        }
         let mut profile = profile;
         profile.resolve_window();
         if let Err(v) = profile.validate() {
@@ -215,6 +225,27 @@ impl LoadedProfile {
     }
 }
 
+/// `bins`, `band` and `bands` each choose the features kept, and `bins` has
+/// a default, so only the text tells whether it was written beside one of
+/// the others (which would silently win): the first pair written, refused.
+fn one_feature_choice(text: &str) -> Option<Invalid> {
+    let table: toml::Table = toml::from_str(text).ok()?;
+    let analysis = table.get("analysis")?.as_table()?;
+    let written: Vec<&str> = ["bins", "band", "bands"]
+        .into_iter()
+        .filter(|k| analysis.contains_key(*k))
+        .collect();
+    match written[..] {
+        [first, second, ..] => Some(Invalid {
+            key: format!("analysis.{second}"),
+            reason: format!(
+                "`{first}` and `{second}` both choose the features kept: keep one of them"
+            ),
+        }),
+        _ => None,
+    }
+}
+
 /// A value that fails validation: its dotted key and the reason.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Invalid {
@@ -229,16 +260,30 @@ fn bad(key: impl Into<String>, reason: impl Into<String>) -> Result<(), Invalid>
     })
 }
 
+/// A number as people read it when a value is echoed back: as written in
+/// the usual range, in exponent form beyond it (`1e-300`, not 300 zeros).
+pub fn compact(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 || !a.is_finite() || (1e-4..1e9).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
 fn finite_pos(key: &str, v: f64) -> Result<(), Invalid> {
     if !(v.is_finite() && v > 0.0) {
-        return bad(key, format!("must be a positive number, got {v}"));
+        return bad(
+            key,
+            format!("must be a positive number, got {}", compact(v)),
+        );
     }
     Ok(())
 }
 
 fn finite_nonneg(key: &str, v: f64) -> Result<(), Invalid> {
     if !(v.is_finite() && v >= 0.0) {
-        return bad(key, format!("must be zero or more, got {v}"));
+        return bad(key, format!("must be zero or more, got {}", compact(v)));
     }
     Ok(())
 }

@@ -43,7 +43,8 @@ mod writer;
 pub use label::check_label;
 use reader::{Select, gunzip, parse_text};
 pub use writer::{
-    Digits, RecordingWriter, compress, compress_quickly, decimals_for, sync_folder, time_decimals,
+    Digits, MAX_RATE_HZ, RecordingWriter, compress, compress_quickly, decimals_for, sync_folder,
+    time_decimals,
 };
 
 #[derive(Debug, thiserror::Error)]
@@ -237,7 +238,7 @@ pub(crate) fn quote(text: &str) -> String {
 }
 
 /// Checks a header's names; the reason when they break the format.
-pub(crate) fn check_columns(names: &[&str]) -> Result<(), String> {
+pub fn check_columns(names: &[&str]) -> Result<(), String> {
     match names.first() {
         Some(&"t_s") => {}
         Some(first) => {

@@ -97,7 +97,9 @@ fn classify(
             .map_err(Failure::from)
             .map_err(in_context)?;
         warn_incomplete();
-        let p = model.classify(&feats).map_err(bad)?;
+        let p = model
+            .classify(&feats)
+            .map_err(|e| bad(format!("{}: {e}", f.display())))?;
         if !json {
             let votes: Vec<String> = p.votes.iter().map(|(l, v)| format!("{l}:{v}")).collect();
             let truth = rec.label().map_or(String::new(), |l| {
@@ -139,7 +141,9 @@ fn classify_by_windows(
     json: bool,
 ) -> Result<serde_json::Value, Failure> {
     let windows = dataset::window_features_of(rec, f, ex)?;
-    let p = model.classify_windows(&windows).map_err(bad)?;
+    let p = model
+        .classify_windows(&windows)
+        .map_err(|e| bad(format!("{}: {e}", f.display())))?;
     let votes: Vec<(String, usize)> = p
         .tally
         .iter()

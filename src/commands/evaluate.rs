@@ -122,6 +122,7 @@ fn holdout(
 ) -> Result<(), Failure> {
     let lp = load_profile(profile)?;
     let examples = load_examples_on(paths, &lp.profile.analysis, threads)?;
+    evaluate::check_two_labels(&examples).map_err(bad)?;
     let mut eval = lp.profile.evaluation.clone();
     if shuffle_seed.is_some() {
         eval.shuffle_seed = shuffle_seed;

@@ -206,13 +206,22 @@ enum Data {
 }
 
 fn read_json(p: &Path) -> Result<serde_json::Value, Failure> {
-    let text = crate::recording::files::read_input_to_string(p).map_err(|e| {
+    let bytes = crate::recording::files::read_input(p).map_err(|e| {
         let m = format!("{}: {e}", p.display());
+        // Missing, or not a regular file (a FIFO would block): the argument's fault.
         if crate::recording::files::not_regular(&e) || e.kind() == std::io::ErrorKind::NotFound {
             bad(m)
         } else {
             Failure::Runtime(m)
         }
+    })?;
+    // Another encoding (UTF-16 from a Windows editor or PowerShell's `>`)
+    // is the file's fault, as any other malformed input.
+    let text = String::from_utf8(bytes).map_err(|_| {
+        bad(format!(
+            "{}: not UTF-8 JSON (saved in another encoding, UTF-16?): write it as UTF-8",
+            p.display()
+        ))
     })?;
     serde_json::from_str(&text).map_err(|e| bad(format!("{}: not JSON: {e}", p.display())))
 }

@@ -30,7 +30,21 @@ fn train(profile: &ProfileArg, paths: &[PathBuf], out: &Path) -> Result<(), Fail
     let inputs = inputs_of(profile, paths)?;
     check_output(out, &inputs)?;
     let examples = load_examples(paths, &lp.profile.analysis)?;
-    let n = examples.len();
+    // With sub-windows, a recording gives several examples, consecutive.
+    let recordings = examples
+        .iter()
+        .enumerate()
+        .filter(|(i, e)| *i == 0 || examples[i - 1].file != e.file)
+        .count();
+    let trained_on = if lp.profile.analysis.windows.is_some() {
+        format!(
+            "{} ({})",
+            plural(recordings, "recording", "recordings"),
+            plural(examples.len(), "sub-window", "sub-windows")
+        )
+    } else {
+        plural(recordings, "recording", "recordings")
+    };
     let model = Model::train_adapting_k(
         &lp.profile.name,
         &lp.profile.analysis,
@@ -45,7 +59,7 @@ fn train(profile: &ProfileArg, paths: &[PathBuf], out: &Path) -> Result<(), Fail
     crate::outln!(
         "trained k-NN (k = {}) on {} of {} ({}); model saved to {}",
         model.classifier.k,
-        plural(n, "recording", "recordings"),
+        trained_on,
         plural(model.labels.len(), "class", "classes"),
         model.labels.join(", "),
         out.display()

@@ -139,7 +139,8 @@ fn k_auto_reads_and_writes_as_a_string() {
     assert!(toml::to_string(&c).unwrap().contains("k = \"auto\""));
     let err = toml::from_str::<Classifier>("k = \"many\"").unwrap_err();
     assert!(
-        err.to_string().contains("whole number or \"auto\""),
+        err.to_string()
+            .contains("k must be a whole number ≥ 1 or \"auto\", got \"many\""),
         "{err}"
     );
 }

@@ -126,6 +126,11 @@ fn broken_files_name_the_file_the_line_and_why() {
             "unsupported recording format v2",
         ),
         (
+            "cr_line_ends.csv",
+            Some(1),
+            "its lines end in a carriage return alone",
+        ),
+        (
             "bad_metadata.csv",
             Some(4),
             "metadata `device`: the value is not valid TOML",

@@ -92,19 +92,42 @@ impl Model {
                 "its labels are not the sorted distinct labels of its examples".to_string(),
             ));
         }
-        if let Some(sc) = &model.scaling {
-            let n = model.feature_count();
-            if sc.mean.len() != n
-                || sc.scale.len() != n
-                || sc.scale.iter().any(|v| !(v.is_finite() && *v > 0.0))
-                || sc.mean.iter().any(|v| !v.is_finite())
-            {
-                return Err(invalid(format!(
-                    "its scaling must have {n} finite means and {n} positive scales"
-                )));
+        match (&model.scaling, model.classifier.standardize) {
+            (Some(sc), true) => {
+                let n = model.feature_count();
+                if sc.mean.len() != n
+                    || sc.scale.len() != n
+                    || sc.scale.iter().any(|v| !(v.is_finite() && *v > 0.0))
+                    || sc.mean.iter().any(|v| !v.is_finite())
+                {
+                    return Err(invalid(format!(
+                        "its scaling must have {n} finite means and {n} positive finite scales"
+                    )));
+                }
+            }
+            (None, false) => {}
+            // Classifying unscaled under `standardize = true` (or scaled
+            // without it) is not the model that was trained.
+            (None, true) => {
+                return Err(invalid(
+                    "classifier.standardize = true but it has no scaling; train it again".into(),
+                ));
+            }
+            (Some(_), false) => {
+                return Err(invalid(
+                    "it has a scaling but classifier.standardize = false; train it again".into(),
+                ));
             }
         }
         model.prepare();
+        // Scaled features so large that their distances overflow would
+        // make every recording equally near: refused here, not met as NaN.
+        if let Some(file) = model.unmeasurable_example() {
+            return Err(invalid(format!(
+                "example {file}'s features, scaled by its scaling, are too large to measure \
+                 distances with (the means and scales are out of range); train it again"
+            )));
+        }
         Ok(model)
     }
 

@@ -262,6 +262,7 @@ pub fn validate_with_votes(
     groups: Option<&[String]>,
     plan: &Plan,
 ) -> Result<Validated, EvaluateError> {
+    super::check_two_labels(&examples)?;
     if profile.analysis.windows.is_some() {
         return validate_windows(profile, examples, groups, plan);
     }

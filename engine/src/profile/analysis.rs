@@ -8,7 +8,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::path::PathSpec;
-use super::{Invalid, bad, dist, finite_pos, is_default};
+use super::{Invalid, bad, compact, dist, finite_pos, is_default};
 
 #[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "kebab-case")]
@@ -307,7 +307,9 @@ impl Analysis {
             Some(w) => w.length,
             None => self.window[1] - self.window[0],
         };
-        (span / self.spacing + 1e-6).floor() as usize + 1
+        // Saturating: an absurd window must read as too many points, never
+        // wrap around to none.
+        ((span / self.spacing + 1e-6).floor() as usize).saturating_add(1)
     }
     /// The `[start, end]` of every sub-window in order (the whole window
     /// alone when `windows` is not set); empty when none fits.
@@ -598,27 +600,76 @@ pub fn check_windows(s: &Analysis, w: Windows) -> Result<(), String> {
     if !(w.length.is_finite() && w.length > 0.0) {
         return Err(format!(
             "length must be a positive number (in the axis unit), got {}",
-            w.length
+            compact(w.length)
         ));
     }
     if !(w.hop.is_finite() && w.hop > 0.0) {
         return Err(format!(
             "hop must be a positive number (in the axis unit), got {}",
-            w.hop
+            compact(w.hop)
         ));
     }
     let [w0, w1] = s.window;
     if w0 + w.length > w1 + 1e-9 * w.length {
         return Err(format!(
-            "length {}{unit} is longer than the window [{w0}, {w1}] ({}{unit}): no sub-window fits",
-            w.length,
-            w1 - w0
+            "length {}{unit} is longer than the window [{}, {}] ({}{unit}): no sub-window fits",
+            compact(w.length),
+            compact(w0),
+            compact(w1),
+            compact(w1 - w0)
         ));
     }
     if (w1 - w0 - w.length) / w.hop > 100_000.0 {
         return Err(format!(
             "hop {}{unit} cuts the window into more than 100000 sub-windows",
-            w.hop
+            compact(w.hop)
+        ));
+    }
+    Ok(())
+}
+
+/// The window (or sub-window) must hold 4 to 2^20 resampled points: the
+/// key to blame and why, naming the window and the spacing. A window
+/// shorter than the spacing, or one beyond any recording, is the window's
+/// fault, not the spacing's.
+pub fn check_points(an: &Analysis) -> Result<(), (String, String)> {
+    let (key, what, span) = match an.windows {
+        Some(w) => ("analysis.windows", "sub-window length", w.length),
+        None => ("analysis.window", "window", an.window[1] - an.window[0]),
+    };
+    let n = an.points();
+    let spacing = compact(an.spacing);
+    if n < 4 {
+        let key = if span < an.spacing {
+            key
+        } else {
+            "analysis.spacing"
+        };
+        return Err((
+            key.into(),
+            format!(
+                "the {what} ({}) holds only {n} point(s) at spacing {spacing} (need 4): \
+                 lengthen the {what} or shrink the spacing",
+                compact(span)
+            ),
+        ));
+    }
+    if n > 1 << 20 {
+        // No rig strokes a kilometre or records for 1000 s of one window:
+        // past that the window is absurd; short of it, the spacing is fine.
+        let key = if span > 1.0e3 {
+            key
+        } else {
+            "analysis.spacing"
+        };
+        return Err((
+            key.into(),
+            format!(
+                "the {what} ({}) holds {} points at spacing {spacing} (at most 1048576): \
+                 shorten the {what} to the recordings' extent, or widen the spacing",
+                compact(span),
+                compact((span / an.spacing).floor() + 1.0)
+            ),
         ));
     }
     Ok(())
@@ -664,8 +715,9 @@ pub(super) fn validate(an: &Analysis, p: Option<&PathSpec>) -> Result<(), Invali
         return bad(
             "analysis.window",
             format!(
-                "must be [start, end] with 0 <= start < end, got {:?}",
-                an.window
+                "must be [start, end] with 0 <= start < end, got [{}, {}]",
+                compact(an.window[0]),
+                compact(an.window[1])
             ),
         );
     }
@@ -675,18 +727,8 @@ pub(super) fn validate(an: &Analysis, p: Option<&PathSpec>) -> Result<(), Invali
     if let Some(p) = p {
         check_against_scan_leg(an, p, axis_index)?;
     }
-    let n = an.points();
-    if n < 4 {
-        return bad(
-            "analysis.spacing",
-            format!("leaves only {n} points in the window (need 4)"),
-        );
-    }
-    if n > 1 << 20 {
-        return bad(
-            "analysis.spacing",
-            format!("leaves {n} points in the window (at most 1048576)"),
-        );
+    if let Err((key, reason)) = check_points(an) {
+        return bad(key, reason);
     }
     let m = an.dft_points();
     if an.band.is_none() && an.bands.is_none() && (an.bins[0] > an.bins[1] || an.bins[1] > m / 2) {
@@ -696,7 +738,11 @@ pub(super) fn validate(an: &Analysis, p: Option<&PathSpec>) -> Result<(), Invali
                 "must be [first, last] with first <= last <= {} (half the {} {} points), got {:?}",
                 m / 2,
                 m,
-                if m == n { "window" } else { "Welch segment" },
+                if m == an.points() {
+                    "window"
+                } else {
+                    "Welch segment"
+                },
                 an.bins
             ),
         );

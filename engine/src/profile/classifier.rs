@@ -78,21 +78,46 @@ impl Classifier {
     }
 }
 
+/// What `k` may be, said the same way wherever a `k` is read (a profile, a
+/// model, a sweep's value).
+const K_EXPECTED: &str = "k must be a whole number ≥ 1 or \"auto\"";
+
 fn k_or_auto<'de, D: serde::Deserializer<'de>>(d: D) -> Result<usize, D::Error> {
-    #[derive(Deserialize)]
-    #[serde(untagged)]
-    enum K {
-        N(usize),
-        S(String),
+    struct KVisitor;
+    impl serde::de::Visitor<'_> for KVisitor {
+        type Value = usize;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a whole number ≥ 1 or \"auto\"")
+        }
+        fn visit_u64<E: serde::de::Error>(self, n: u64) -> Result<usize, E> {
+            match usize::try_from(n) {
+                Ok(n) if n != K_AUTO => Ok(n),
+                _ => Err(E::custom(format!(
+                    "{K_EXPECTED}, got {n}, which is too large"
+                ))),
+            }
+        }
+        fn visit_i64<E: serde::de::Error>(self, n: i64) -> Result<usize, E> {
+            match u64::try_from(n) {
+                Ok(n) => self.visit_u64(n),
+                Err(_) => Err(E::custom(format!("{K_EXPECTED}, got {n}"))),
+            }
+        }
+        fn visit_f64<E: serde::de::Error>(self, v: f64) -> Result<usize, E> {
+            Err(E::custom(format!(
+                "{K_EXPECTED}, got {}",
+                crate::profile::compact(v)
+            )))
+        }
+        fn visit_str<E: serde::de::Error>(self, s: &str) -> Result<usize, E> {
+            if s == "auto" {
+                Ok(K_AUTO)
+            } else {
+                Err(E::custom(format!("{K_EXPECTED}, got {s:?}")))
+            }
+        }
     }
-    match K::deserialize(d)? {
-        K::N(n) if n == K_AUTO => Err(serde::de::Error::custom("k is too large")),
-        K::N(n) => Ok(n),
-        K::S(s) if s == "auto" => Ok(K_AUTO),
-        K::S(s) => Err(serde::de::Error::custom(format!(
-            "k must be a whole number or \"auto\", got {s:?}"
-        ))),
-    }
+    d.deserialize_any(KVisitor)
 }
 
 fn write_k<S: serde::Serializer>(k: &usize, s: S) -> Result<S::Ok, S::Error> {

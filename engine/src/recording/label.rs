@@ -6,11 +6,19 @@
 /// A label names a folder: 1 to 64 characters, none of them a control
 /// character or a path separator (`/`, `\`), not starting with `.` (so
 /// never `.`, `..` or a hidden folder). Spaces and letters of any script are
-/// fine ("cork board", "Cartón").
+/// fine inside ("cork board", "Cartón"), not at either end (a blank label
+/// would name a folder " ").
 pub fn check_label(label: &str) -> Result<(), String> {
     let chars = label.chars().count();
     if chars == 0 || chars > 64 {
         return Err(format!("label {label:?} must have 1 to 64 characters"));
+    }
+    if label.trim() != label {
+        // A blank label, or one that differs from another by a space, reads
+        // the same to a person and names a different folder.
+        return Err(format!(
+            "label {label:?} must not start or end with a space"
+        ));
     }
     if label.starts_with('.') {
         return Err(format!("label {label:?} must not start with '.'"));
@@ -38,6 +46,9 @@ mod tests {
         assert!(check_label("a/b").is_err());
         assert!(check_label("a\\b").is_err());
         assert!(check_label("").is_err());
+        assert!(check_label(" ").is_err());
+        assert!(check_label("S2 ").is_err());
+        assert!(check_label("S 2").is_ok());
         assert!(check_label(".hidden").is_err());
         assert!(check_label("S\n2").is_err());
         assert!(check_label("S\t2").is_err());

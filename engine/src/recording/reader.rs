@@ -240,6 +240,13 @@ impl<'a> Parser<'a> {
         if first == FORMAT_LINE {
             return Ok(());
         }
+        if first.starts_with(FORMAT_LINE) && first.contains('\r') {
+            // Classic Mac OS line ends: the whole file reads as one line.
+            return Err(self.error(
+                "its lines end in a carriage return alone (CR, old Mac OS style): \
+                 convert the line ends to LF or CRLF",
+            ));
+        }
         Err(self.error(match first.strip_prefix(FORMAT_PREFIX) {
             Some(version) => format!(
                 "unsupported recording format v{} (this build reads v1)",

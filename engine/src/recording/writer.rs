@@ -36,6 +36,10 @@ pub enum Digits {
     ShortestF32,
 }
 
+/// The highest rate whose `t_s` the writer keeps within 0.5 % of a sample
+/// period (see [`time_decimals`]); past it, times would be written alike.
+pub const MAX_RATE_HZ: f64 = 1e15;
+
 /// Decimals for `t_s` at `rate_hz`: a written time is within half a unit
 /// of the last decimal of the true one, so `ceil(log10(rate)) + 2` decimals
 /// keep it within 0.5 % of a sample period at any rate; never fewer than 6

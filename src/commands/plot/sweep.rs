@@ -72,6 +72,21 @@ impl SweepFigure {
         if points.is_empty() {
             return Err(bad(format!("{}: the sweep has no points", path.display())));
         }
+        // NaN stands for a point not evaluated; anything else must be a
+        // share, or the axis would clamp it to 0 % or 100 % unseen.
+        if let Some((i, p)) = points.iter().enumerate().find(|(_, p)| {
+            !(p.accuracy.is_nan() || (0.0..=1.0).contains(&p.accuracy))
+                || !(p.accuracy_std.is_finite() && (0.0..=1.0).contains(&p.accuracy_std))
+        }) {
+            return Err(bad(format!(
+                "{}: points[{i}] ({}): accuracy {} ± {} is not a share from 0 to 1 \
+                 (expected `evaluate --sweep … --json` output)",
+                path.display(),
+                p.values.join(", "),
+                crate::profile::compact(p.accuracy),
+                crate::profile::compact(p.accuracy_std)
+            )));
+        }
         if let Some(p) = points.iter().find(|p| p.values.len() != keys.len()) {
             return Err(bad(format!(
                 "{}: a point has {} values for {} keys ({})",

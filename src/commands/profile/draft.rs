@@ -69,6 +69,19 @@ pub fn draft(s: &Survey, name: &str, from: &Path) -> Result<String, String> {
     let choice = s.choice();
     let axis = choice.axis.as_str();
     let Some((signal, more)) = choice.signals.split_first() else {
+        if let Some([(a, a_cols), (b, b_cols)]) = &s.differing {
+            return Err(format!(
+                "the recordings share no channel to analyse (in common only: {}): {a} has {} but \
+                 {b} has {}; survey recordings of one kind together",
+                if s.columns.is_empty() {
+                    "nothing".to_string()
+                } else {
+                    s.columns.join(", ")
+                },
+                a_cols.join(", "),
+                b_cols.join(", ")
+            ));
+        }
         return Err(format!(
             "{}: no column varies besides the axis ({}): nothing to analyse",
             from.display(),

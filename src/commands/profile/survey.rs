@@ -44,6 +44,10 @@ pub struct Survey {
     pub spread: BTreeMap<String, f64>,
     /// Metadata keys that take more than one value (session, trial, …).
     pub varying_meta: Vec<String>,
+    /// The first recording and the first whose columns differ from its,
+    /// each with its columns: named when the shared columns leave nothing
+    /// to analyse.
+    pub differing: Option<[(String, Vec<String>); 2]>,
 }
 
 /// Read every recording under `dir` (on every core) and sum them up.
@@ -199,6 +203,12 @@ fn sum_up(seen: &[Seen], incomplete: Vec<String>) -> Survey {
         complete: seen.len(),
         incomplete,
         columns: columns.clone(),
+        differing: seen.iter().find(|r| r.columns != seen[0].columns).map(|r| {
+            [
+                (seen[0].file.clone(), seen[0].columns.clone()),
+                (r.file.clone(), r.columns.clone()),
+            ]
+        }),
         ..Survey::default()
     };
     for r in seen {

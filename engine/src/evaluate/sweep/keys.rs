@@ -156,11 +156,25 @@ impl SweepKey {
 /// `field.y`.
 pub fn resolve_key(profile: &Profile, key: &str) -> Result<SweepKey, EvaluateError> {
     let doc = toml::Table::try_from(profile).map_err(bad)?;
+    // Examples only of keys that apply: an analysis-only profile has no
+    // rig to simulate, so no rig key to offer.
+    let rig = !profile.is_analysis_only();
     let unknown = || {
+        let (rig_keys, examples) = if rig {
+            (
+                " nor of [controller], [path], [simulator] or [device] (with --simulate)",
+                ", controller.stiffness_n_per_m[1], path.speed_m_per_s",
+            )
+        } else {
+            (
+                "; this profile has no [controller], [path], [simulator] or [device] to \
+                 simulate with",
+                "",
+            )
+        };
         bad(format!(
-            "--sweep {key}: not a key of [analysis], [classifier] or [evaluation] (evaluated on the \
-             recordings) nor of [controller], [path], [simulator] or [device] (with --simulate); \
-             e.g. k, spacing, taper, controller.stiffness_n_per_m[1], path.speed_m_per_s"
+            "--sweep {key}: not a key of [analysis], [classifier] or [evaluation] (evaluated on \
+             the recordings){rig_keys}; e.g. k, spacing, taper{examples}"
         ))
     };
     let mut rest = key.trim();

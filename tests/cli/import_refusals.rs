@@ -1,0 +1,201 @@
+//! `hapticlab import` refuses what it would otherwise get silently wrong
+//! (a second WAV `fmt` chunk, a hidden input name, CSV-only flags on a WAV,
+//! a rate `t_s` cannot be written at, `--burst 0`, a blank label), reads a
+//! CSV's byte-order mark, and blames a bad name on the input and the flag,
+//! never on its staging folder. Inputs live in `tests/data/import/`.
+
+use std::path::Path;
+
+use hapticlab::recording;
+
+use crate::common::run::Run;
+use crate::common::{REPO, p, run};
+
+const DATA: &str = "tests/data/import";
+
+/// `import ARGS --out OUT` must refuse with exit 2, a one-line message that
+/// holds each of `says`, and leave nothing under `--out`.
+fn refused(args: &[&str], says: &[&str]) -> Run {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let mut all = vec!["import", "--out", p(&out)];
+    all.extend(args);
+    let r = run(&all);
+    assert_eq!(r.code, Some(2), "{all:?}: {r:?}");
+    assert_eq!(r.stderr.lines().count(), 1, "one line: {r:?}");
+    for s in says {
+        assert!(r.stderr.contains(s), "{s:?} missing: {r:?}");
+    }
+    assert!(
+        !r.stderr.contains(".import-"),
+        "names the staging folder: {r:?}"
+    );
+    assert!(!out.exists(), "left {out:?} behind");
+    r
+}
+
+#[test]
+fn a_wav_with_two_fmt_chunks_is_refused_naming_the_file() {
+    let f = format!("{DATA}/two_fmt_chunks.wav");
+    refused(&["--label", "S", &f], &[&f, "two fmt chunks"]);
+}
+
+#[test]
+fn a_hidden_input_name_is_refused_as_it_would_make_a_hidden_recording() {
+    let dir = tempfile::tempdir().unwrap();
+    let hidden = dir.path().join(".hidden.wav");
+    std::fs::copy(Path::new(REPO).join(DATA).join("mono.wav"), &hidden).unwrap();
+    refused(
+        &["--label", "S", p(&hidden)],
+        &[".hidden.wav", "hidden", "rename"],
+    );
+}
+
+#[test]
+fn csv_only_flags_given_for_a_wav_are_refused_by_name() {
+    let f = format!("{DATA}/mono.wav");
+    for (flag, value) in [
+        ("--rate", "1000"),
+        ("--channels", "a"),
+        ("--label-column", "label"),
+        ("--time-column", "t"),
+        ("--burst", "2"),
+    ] {
+        let mut args = vec!["--label", "S", flag, value, &f];
+        if flag == "--label-column" {
+            args.drain(0..2);
+        }
+        refused(&args, &[&f, flag, "CSV files only"]);
+    }
+    // Beside a CSV they apply to it, and the WAV is named in a warning.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let csv = format!("{DATA}/bom.csv");
+    let r = run(&[
+        "import",
+        "--label",
+        "S",
+        "--rate",
+        "1000",
+        "--out",
+        p(&out),
+        &f,
+        &csv,
+    ]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(
+        r.stderr
+            .contains("warning: --rate applies to the CSV files only; tests/data/import/mono.wav"),
+        "{r:?}"
+    );
+    // Without them the same file imports.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let r = run(&["import", "--label", "S", "--out", p(&out), &f]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+}
+
+#[test]
+fn rates_whose_times_cannot_be_written_and_burst_zero_are_refused() {
+    let f = format!("{DATA}/bom.csv");
+    for rate in ["1e308", "1e16", "inf", "0"] {
+        refused(&["--label", "S", "--rate", rate, &f], &["--rate", "1e15"]);
+    }
+    refused(
+        &["--label", "S", "--rate", "1000", "--burst", "0", &f],
+        &["--burst 0"],
+    );
+}
+
+#[test]
+fn a_blank_label_or_one_with_spaces_at_its_ends_is_refused() {
+    let f = format!("{DATA}/bom.csv");
+    for label in [" ", "  ", " S2", "S2 "] {
+        refused(
+            &["--rate", "1000", "--label", label, &f],
+            &["--label", "space"],
+        );
+    }
+}
+
+#[test]
+fn a_csv_with_a_byte_order_mark_imports_as_without() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let f = format!("{DATA}/bom.csv");
+    let r = run(&[
+        "import",
+        "--time-column",
+        "time",
+        "--label",
+        "S",
+        "--out",
+        p(&out),
+        &f,
+    ]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let rec = recording::read(&out.join("S/bom.csv")).unwrap();
+    assert_eq!(rec.columns, ["t_s", "acc"]);
+    assert_eq!(rec.column("acc").unwrap(), [1.0, 2.0, 3.0]);
+}
+
+#[test]
+fn bad_names_are_blamed_on_the_input_and_the_flag_not_the_staging_folder() {
+    let dup = format!("{DATA}/duplicate_column_names.csv");
+    let empty = format!("{DATA}/empty_column_name.csv");
+    let csv = format!("{DATA}/bom.csv");
+    let t = ["--time-column", "time", "--label", "S"];
+    let with = |more: &[&'static str], f: &str| -> Vec<String> {
+        t.iter()
+            .chain(more)
+            .map(|s| s.to_string())
+            .chain([f.to_string()])
+            .collect()
+    };
+    let cases: Vec<(Vec<String>, Vec<&str>)> = vec![
+        (with(&[], &dup), vec![&dup, "acc", "twice"]),
+        (with(&[], &empty), vec![&empty, "no name"]),
+        (
+            with(&["--names", "x,x"], &dup),
+            vec![&dup, "--names", "twice"],
+        ),
+        (
+            with(&["--channels", "acc,acc"], &csv),
+            vec!["--channels", "`acc` twice"],
+        ),
+        (
+            with(&["--meta", "a=1", "--meta", "a=2"], &csv),
+            vec!["--meta a", "twice"],
+        ),
+        (
+            with(&["--meta", "source=x"], &csv),
+            vec![&csv, "--meta source"],
+        ),
+    ];
+    for (args, says) in &cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        refused(&args, says);
+    }
+    // An --out that is a file: named, and left as it was (a runtime
+    // failure, as any folder that cannot be made).
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("taken");
+    std::fs::write(&file, "mine").unwrap();
+    let r = run(&[
+        "import",
+        "--rate",
+        "1000",
+        "--label",
+        "S",
+        "--out",
+        p(&file),
+        &csv,
+    ]);
+    assert_eq!(r.code, Some(1), "{r:?}");
+    assert!(
+        r.stderr.contains("--out") && r.stderr.contains("not a folder"),
+        "{r:?}"
+    );
+    assert!(!r.stderr.contains(".import-"), "{r:?}");
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "mine");
+}
