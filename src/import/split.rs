@@ -51,7 +51,7 @@ pub fn split(
     }
     let span = last - t0 + dt;
     let whole = ((span + dt * 1e-3 - length) / hop).floor();
-    if !(whole >= 0.0) {
+    if whole < 0.0 {
         return Err(bad(format!(
             "{origin}: it lasts {span} s, shorter than one --split {length} s trial: give a shorter --split"
         )));

@@ -42,6 +42,9 @@ fn recording(label: &str, tone: f64, n: usize, rate: f64, meta: &str, seed: u64)
     s
 }
 
+/// Recording `i`'s samples, rate and metadata lines.
+type Shape = Box<dyn Fn(usize) -> (usize, f64, String)>;
+
 /// Two labels × `per` recordings, each (samples, rate) from `shape(i)`.
 fn folder(dir: &Path, per: usize, shape: impl Fn(usize) -> (usize, f64, String)) {
     for (l, label) in ["a", "b"].iter().enumerate() {
@@ -130,7 +133,7 @@ fn every_line_checks(rec: &Path, dir: &Path) -> (String, usize) {
 fn every_line_profile_new_writes_passes_check_on_folders_of_every_kind() {
     let dir = tempfile::tempdir().unwrap();
     let plain = |n: usize, rate: f64| move |i: usize| (n, rate, format!("# trial = {i}\n"));
-    let kinds: Vec<(&str, usize, Box<dyn Fn(usize) -> (usize, f64, String)>)> = vec![
+    let kinds: Vec<(&str, usize, Shape)> = vec![
         ("short", 3, Box::new(plain(20, 1000.0))),
         ("long", 2, Box::new(plain(200_000, 1000.0))),
         ("sound", 3, Box::new(plain(22_050, 44_100.0))),
