@@ -2,7 +2,7 @@
 """Test data of other rigs' character (issue 13), written deterministically:
 not committed, generated. Needs numpy and scipy.
 
-    contrib/rig-sets.py OUT_DIR [--seed S] [--only sound|fingertip]
+    contrib/rig-sets.py OUT_DIR [--seed S] [--only sound|fingertip|long]
 
 OUT_DIR/sound/<label>/<label>-clipN.wav
     A stylus-sound set: 14 materials x 4 clips, 5 s each, 44.1 kHz, 16-bit
@@ -11,11 +11,16 @@ OUT_DIR/fingertip/<label>/<label>-trialNN.csv
     A fingertip-vibration set: 20 materials x 10 trials, 6 s each at 2.2 kHz
     (13,200 samples), one column `vib` (sensor counts), trials numbered in
     the order they were recorded, so file-name order is time order.
+OUT_DIR/long/<label>/<label>.csv
+    One long recording per material: 5 materials x one 60 s trace at
+    100 Hz (6,000 samples), one column `acc` (an IMU on a probe), the gain
+    drifting about 3 dB over the minute; cut into trials at import.
 
 Import them with
 
     hapticlab import OUT_DIR/sound/*/*.wav --out rec/sound
     hapticlab import OUT_DIR/fingertip/*/*.csv --rate 2200 --out rec/fingertip
+    hapticlab import OUT_DIR/long/*/*.csv --rate 100 --split 2 --out rec/long
 
 and the first 5 trials of each fingertip material are the earliest
 (`train_per_class = 5, test_per_class = 5` is the time split).
@@ -147,16 +152,33 @@ def fingertip_set(out, seed):
             path.write_text("vib\n" + "\n".join(map(str, counts)) + "\n")
 
 
+def long_set(out, seed):
+    rng = np.random.default_rng([seed, 3])
+    rate, seconds = 100, 60.0
+    for i in range(5):
+        m = material(rng, 3.0, 40.0)
+        label = f"L{i + 1}"
+        (out / label).mkdir(parents=True, exist_ok=True)
+        crng = np.random.default_rng([seed, 3, i])
+        x = take(crng, m, rate, seconds, crng.uniform(5, 15), 1.0)
+        # The grip loosens over the minute: about +3 dB from start to end.
+        x *= 10 ** (np.linspace(0, 3, len(x)) / 20)
+        counts = np.rint(x * 400).astype(np.int64)
+        (out / label / f"{label}.csv").write_text("acc\n" + "\n".join(map(str, counts)) + "\n")
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("out", type=Path)
     p.add_argument("--seed", type=int, default=13)
-    p.add_argument("--only", choices=["sound", "fingertip"])
+    p.add_argument("--only", choices=["sound", "fingertip", "long"])
     args = p.parse_args()
-    if args.only != "fingertip":
+    if args.only in (None, "sound"):
         sound_set(args.out / "sound", args.seed)
-    if args.only != "sound":
+    if args.only in (None, "fingertip"):
         fingertip_set(args.out / "fingertip", args.seed)
+    if args.only in (None, "long"):
+        long_set(args.out / "long", args.seed)
 
 
 if __name__ == "__main__":

@@ -31,6 +31,10 @@ use crate::recording::{Digits, MAX_RATE_HZ, RecordingError, RecordingWriter, tim
 use crate::support::Failure;
 
 mod checks;
+mod mat;
+mod npy;
+mod split;
+mod text;
 use checks::{check_written_names, csv_only_flags_for_wav};
 
 #[derive(Debug, Args, Clone, Default)]
@@ -74,6 +78,14 @@ pub struct ImportArgs {
     /// Compress each recording to OUT/<label>/<file stem>.csv.gz (Zopfli; gzip -9 past 4 MiB of text).
     #[arg(long)]
     pub gzip: bool,
+    /// Cut each input into consecutive trials this many seconds long
+    /// (<stem>-seg001.csv, …, in time order), for one long recording per material.
+    #[arg(long, value_name = "SECONDS")]
+    pub split: Option<f64>,
+    /// With --split: seconds from one trial's start to the next (default: the
+    /// trial's length, no overlap).
+    #[arg(long, value_name = "SECONDS", requires = "split")]
+    pub split_hop: Option<f64>,
     /// Files converted at once (default: the number of cores; 0 means the same).
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
@@ -539,11 +551,15 @@ pub fn check_options(args: &ImportArgs) -> Result<Vec<(String, toml::Value)>, Fa
     if let Some(l) = &args.label {
         crate::recording::check_label(l).map_err(|e| bad(format!("--label: {e}")))?;
     }
+    if let Some(length) = args.split {
+        split::check(length, args.split_hop)?;
+    }
     Ok(extra)
 }
 
 /// Parses one input file's bytes, in the format its extension `ext` names
-/// (`csv`, `txt`, `tsv`, `wav`, `wave`; any case), with the mapping in `args`.
+/// (`csv`, `txt`, `tsv`, `dat`, `wav`, `wave`, `npy`, `npz`, `mat`; any case), with
+/// the mapping in `args`; text whose first line is all numbers is headerless.
 /// `origin` names it in messages.
 pub fn parse_file(
     bytes: Vec<u8>,
@@ -566,13 +582,20 @@ pub fn parse_file(
             }
             Ok(w)
         }
-        "csv" | "txt" | "tsv" => {
+        "csv" | "txt" | "tsv" | "dat" => {
             let text =
                 String::from_utf8(bytes).map_err(|_| bad(format!("{origin}: not UTF-8 text")))?;
-            parse_csv(&text, origin, args)
+            if text::is_headerless(&text) {
+                text::parse(&text, origin, args)
+            } else {
+                parse_csv(&text, origin, args)
+            }
         }
+        "npy" => npy::parse_npy_file(&bytes, origin, args),
+        "npz" => npy::parse_npz_file(&bytes, origin, args),
+        "mat" => mat::parse_mat_file(&bytes, origin, args),
         _ => Err(bad(format!(
-            "{origin}: unknown format (expected .csv or .wav)"
+            "{origin}: unknown format (expected .csv, .txt, .dat, .wav, .npy, .npz or .mat)"
         ))),
     }
 }
@@ -616,13 +639,13 @@ fn label_of(
 }
 
 /// Reads, parses and writes input `f` under `staging` (as `<label>/<stem>.csv`
-/// or `.csv.gz`).
+/// or `.csv.gz`; with `--split`, one `<stem>-segNNN` per trial).
 fn stage(
     f: &Path,
     args: &ImportArgs,
     extra: &[(String, toml::Value)],
     staging: &Path,
-) -> Result<Staged, Failure> {
+) -> Result<Vec<Staged>, Failure> {
     let origin = f.display().to_string();
     let bytes = read_input(f).map_err(|e| {
         let m = format!("{origin}: {e}");
@@ -653,8 +676,33 @@ fn stage(
         .push(("source".to_string(), toml::Value::String(origin.clone())));
     check_written_names(&imp, extra, &origin, args)?;
     imp.meta.extend(extra.iter().cloned());
-    let csv = Path::new(&label).join(format!("{stem}.csv"));
-    let gz = Path::new(&label).join(format!("{stem}.csv.gz"));
+    let Some(length) = args.split else {
+        return Ok(vec![stage_one(f, &imp, &label, &stem, args, staging)?]);
+    };
+    let (length, hop) = split::check(length, args.split_hop)?;
+    let parts = split::split(&imp, &origin, length, hop)?;
+    parts
+        .iter()
+        .enumerate()
+        .map(|(j, part)| {
+            let name = split::stem(&stem, j, parts.len());
+            stage_one(f, part, &label, &name, args, staging)
+        })
+        .collect()
+}
+
+/// Writes `imp` under `staging` as `<label>/<stem>.csv` (or `.csv.gz`),
+/// unless the place it goes is taken.
+fn stage_one(
+    f: &Path,
+    imp: &Imported,
+    label: &str,
+    stem: &str,
+    args: &ImportArgs,
+    staging: &Path,
+) -> Result<Staged, Failure> {
+    let csv = Path::new(label).join(format!("{stem}.csv"));
+    let gz = Path::new(label).join(format!("{stem}.csv.gz"));
     let (name, other) = if args.gzip {
         (gz, csv.clone())
     } else {
@@ -680,7 +728,7 @@ fn stage(
             there.display()
         )));
     }
-    let staged = write_recording(&staging.join(&csv), &imp, &label, args.gzip)?;
+    let staged = write_recording(&staging.join(&csv), imp, label, args.gzip)?;
     Ok(Staged {
         path,
         other,
@@ -806,19 +854,21 @@ fn remove_abandoned_staging(out: &Path) {
 fn settle(
     args: &ImportArgs,
     staging: &Path,
-    results: Vec<Option<Result<Staged, Failure>>>,
+    results: Vec<Option<Result<Vec<Staged>, Failure>>>,
 ) -> Result<Vec<PathBuf>, Failure> {
     let mut staged: Vec<Staged> = Vec::new();
+    let mut places = std::collections::HashSet::new();
     for r in results {
         // A job not taken comes after a failure, which is met first.
-        let s = r.ok_or_else(|| Failure::Runtime("an input was skipped".into()))??;
-        if staged.iter().any(|o| o.path == s.path) {
-            return Err(bad(format!(
-                "two inputs would both write {}",
-                s.path.display()
-            )));
+        for s in r.ok_or_else(|| Failure::Runtime("an input was skipped".into()))?? {
+            if !places.insert(s.path.clone()) {
+                return Err(bad(format!(
+                    "two inputs would both write {}",
+                    s.path.display()
+                )));
+            }
+            staged.push(s);
         }
-        staged.push(s);
     }
     if staged.is_empty() {
         return Ok(Vec::new());

@@ -353,7 +353,12 @@ proptest::proptest! {
         let groups: Vec<String> = rows.iter().map(|(_, g)| format!("g{g}")).collect();
         let n_groups = groups.iter().collect::<BTreeSet<_>>().len();
         let made = make_folds(&labels, Some(&groups), SplitMethod::KFold, folds, seed);
-        if folds > n_groups {
+        // A label in one group only is tested with nothing of it to train on: refused.
+        let mut per_label: BTreeMap<&str, BTreeSet<&str>> = BTreeMap::new();
+        for (l, g) in labels.iter().zip(&groups) {
+            per_label.entry(*l).or_default().insert(g.as_str());
+        }
+        if folds > n_groups || per_label.values().any(|g| g.len() < 2) {
             proptest::prop_assert!(made.is_err());
             return Ok(());
         }

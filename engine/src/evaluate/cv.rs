@@ -40,6 +40,9 @@ pub fn make_folds(
     if n == 0 {
         return Err(EvaluateError::NoExamples);
     }
+    if method != SplitMethod::Holdout {
+        every_label_testable(labels, groups)?;
+    }
     match (method, groups) {
         (SplitMethod::Holdout, _) => Err(EvaluateError::Folds(
             "a holdout split has no folds".to_string(),
@@ -100,6 +103,36 @@ pub fn make_folds(
             Ok(stratified_groups(labels, groups, folds, seed))
         }
     }
+}
+
+/// Refuses folds in which a label could be tested but never trained: a
+/// label with a single recording (or a single group) is tested with
+/// nothing of its own to learn from, and always missed.
+fn every_label_testable(labels: &[&str], groups: Option<&[String]>) -> Result<(), EvaluateError> {
+    let mut by: BTreeMap<&str, std::collections::BTreeSet<usize>> = BTreeMap::new();
+    let mut names: BTreeMap<&str, usize> = BTreeMap::new();
+    for (i, l) in labels.iter().enumerate() {
+        let key = match groups {
+            Some(g) => {
+                let next = names.len();
+                *names.entry(g[i].as_str()).or_insert(next)
+            }
+            None => i,
+        };
+        by.entry(l).or_default().insert(key);
+    }
+    let Some((label, _)) = by.iter().find(|(_, v)| v.len() < 2) else {
+        return Ok(());
+    };
+    let what = if groups.is_some() {
+        "one group (`group_by`)"
+    } else {
+        "one recording"
+    };
+    Err(EvaluateError::Folds(format!(
+        "label {label:?} has only {what}: it would be tested with nothing of it left to train on; \
+         record more of it, or cut long recordings into trials with `hapticlab import FILES --split SECONDS`"
+    )))
 }
 
 /// Deal whole groups into `folds` folds so that each fold's class mix

@@ -9,7 +9,7 @@ use std::path::Path;
 use super::survey::Survey;
 #[cfg(test)]
 use crate::profile::LoadedProfile;
-use crate::profile::{Analysis, Bands, SpectrumKind, check_options};
+use crate::profile::{Analysis, Bands, SpectrumKind, Taper, check_options};
 
 /// Round down to three significant digits, as text TOML reads back exactly.
 fn floor3(x: f64) -> (f64, String) {
@@ -46,6 +46,21 @@ fn float(v: f64) -> String {
     }
 }
 
+/// One `key = value` line, with why it was chosen (a trailing comment).
+struct Line {
+    key: &'static str,
+    value: String,
+    why: String,
+}
+
+fn line(key: &'static str, value: impl Into<String>, why: impl Into<String>) -> Line {
+    Line {
+        key,
+        value: value.into(),
+        why: why.into(),
+    }
+}
+
 /// One commented option group: what it is for, and its `key = value` lines.
 struct Group {
     when: String,
@@ -53,8 +68,9 @@ struct Group {
 }
 
 /// The keys a spectrum group replaces (the group sets the spectrum anew).
-pub const SPECTRUM_KEYS: [&str; 8] = [
+pub const SPECTRUM_KEYS: [&str; 9] = [
     "spectrum",
+    "taper",
     "bins",
     "band",
     "bands",
@@ -64,8 +80,118 @@ pub const SPECTRUM_KEYS: [&str; 8] = [
     "drop_level",
 ];
 
-/// The profile's text for the survey `s` of `from`.
-pub fn draft(s: &Survey, name: &str, from: &Path) -> Result<String, String> {
+/// The TOML text being written: tables, commented lines, option groups.
+#[derive(Default)]
+struct Doc(String);
+
+impl Doc {
+    fn comment(&mut self, text: &str) {
+        for l in text.lines() {
+            let _ = writeln!(self.0, "# {l}");
+        }
+    }
+    fn blank(&mut self) {
+        self.0.push('\n');
+    }
+    fn table(&mut self, name: &str) {
+        let _ = writeln!(self.0, "[{name}]");
+    }
+    fn lines(&mut self, lines: &[Line]) {
+        for l in lines {
+            if l.why.is_empty() {
+                let _ = writeln!(self.0, "{} = {}", l.key, l.value);
+            } else {
+                let _ = writeln!(self.0, "{} = {}   # {}", l.key, l.value, l.why);
+            }
+        }
+    }
+    fn groups(&mut self, groups: &[Group]) {
+        for g in groups {
+            let _ = writeln!(self.0, "# -- {}", g.when);
+            for (k, v) in &g.keys {
+                let _ = writeln!(self.0, "# {k} = {v}");
+            }
+            self.blank();
+        }
+    }
+}
+
+/// What the survey decides before any text: the axis, rate, spacing,
+/// window and spectrum sizes every section derives from.
+struct Plan<'a> {
+    s: &'a Survey,
+    from: &'a Path,
+    signal: String,
+    more: Vec<String>,
+    time: bool,
+    unit: &'static str,
+    spacing_text: String,
+    spacing_why: String,
+    extent: f64,
+    shortest_file: String,
+    end_text: String,
+    /// Points in the window, and the window's analysis (log-Welch).
+    n: usize,
+    analysis: Analysis,
+    /// The Welch segment, and whether Welch is the first choice.
+    segment: usize,
+    welch_active: bool,
+    magnitude_bins: usize,
+    min_count: usize,
+    /// The recordings are consecutive segments of longer ones (`import --split`).
+    segments: bool,
+}
+
+/// The spacing along the axis: one sample period of the slowest rate in
+/// time (so every point holds a sample of every recording), the thesis's
+/// 0.3 mm or ten steps along a position axis. (value, text, why).
+fn spacing_of(s: &Survey, axis: &str, time: bool) -> (f64, String, String) {
+    if time {
+        let slowest = s.rates.first().map_or(s.rate_hz, |r| r.0);
+        let why = if s.rates.len() > 1 {
+            format!(
+                "one sample period of the slowest rate, 1 / {} Hz: the recordings' rates differ (see above), and every point must hold a sample of each",
+                float(slowest)
+            )
+        } else {
+            format!("one sample period, 1 / {} Hz", float(slowest))
+        };
+        return (1.0 / slowest, float(1.0 / slowest), why);
+    }
+    let step = s.step.get(axis).copied().unwrap_or(0.0);
+    if step * 10.0 <= 0.0003 {
+        let why = format!(
+            "0.3 mm, the thesis's: about {:.0} samples per point at the recordings' {:.4} mm per sample",
+            0.0003 / step.max(1e-12),
+            step * 1000.0
+        );
+        return (0.0003, "0.0003".into(), why);
+    }
+    let (v, t) = ceil3(step * 10.0);
+    (
+        v,
+        t,
+        "ten of the recordings' steps along the axis, so every point holds samples".into(),
+    )
+}
+
+/// The Welch segment in points: on a time axis about a tenth of a second
+/// (10 Hz bins: textures' spectra are broad, and many segments average),
+/// at least 64 points (32 bins); elsewhere an eighth of the window; never
+/// more than a quarter of the window, so at least seven half-overlapping
+/// segments average. A power of two (a fast DFT).
+fn welch_segment(n: usize, time: bool, rate: f64) -> usize {
+    let target = if time {
+        (rate * 0.1).max(64.0)
+    } else {
+        n as f64 / 8.0
+    };
+    let nearest = 2f64.powf(target.max(1.0).log2().round()) as usize;
+    let cap = (n / 4).max(1);
+    nearest.min(1usize << (usize::BITS - 1 - cap.leading_zeros()))
+}
+
+fn plan<'a>(s: &'a Survey, from: &'a Path) -> Result<Plan<'a>, String> {
     let choice = s.choice();
     let axis = choice.axis.as_str();
     let Some((signal, more)) = choice.signals.split_first() else {
@@ -89,34 +215,7 @@ pub fn draft(s: &Survey, name: &str, from: &Path) -> Result<String, String> {
         ));
     };
     let time = axis == "t_s";
-    let (spacing, spacing_text, spacing_why) = if time {
-        let sp = 1.0 / s.rate_hz;
-        (
-            sp,
-            float(sp),
-            format!("one sample period, 1 / {} Hz", s.rate_hz),
-        )
-    } else {
-        let step = s.step.get(axis).copied().unwrap_or(0.0);
-        if step * 10.0 <= 0.0003 {
-            (
-                0.0003,
-                "0.0003".to_string(),
-                format!(
-                    "0.3 mm, the thesis's: about {:.0} samples per point at the recordings' {:.4} mm per sample",
-                    0.0003 / step.max(1e-12),
-                    step * 1000.0
-                ),
-            )
-        } else {
-            let (v, t) = ceil3(step * 10.0);
-            (
-                v,
-                t,
-                "ten of the recordings' steps along the axis, so every point holds samples".into(),
-            )
-        }
-    };
+    let (spacing, spacing_text, spacing_why) = spacing_of(s, axis, time);
     let (extent, shortest_file) = s.shortest.get(axis).cloned().unwrap_or_default();
     let too_short = || {
         format!(
@@ -139,348 +238,506 @@ pub fn draft(s: &Survey, name: &str, from: &Path) -> Result<String, String> {
     if n < 8 {
         return Err(too_short());
     }
-    let unit = if time { "s" } else { "m" };
-    let fu = analysis.frequency_unit();
-    // The DFT length of a Welch segment: a power of two, at most 2048 and a
-    // quarter of the window, so several segments average.
-    let segment = (n / 4).clamp(1, 2048);
-    let segment = 1usize << (usize::BITS - 1 - segment.leading_zeros());
-    let welch_ok = segment >= 16;
-    // Log-Welch for other rigs' signals in time (vibration, sound: the
-    // issue's reference reached its best with it) and for long windows;
-    // the thesis's |DFT| for a short stroke resampled by position.
-    let welch_active = (time || n > 4096) && welch_ok;
-    let magnitude_bins = (n / 2).min(128);
-    let mut groups: Vec<Group> = Vec::new();
-    let mag = |kind: &str| {
-        vec![
-            ("spectrum", format!("{kind:?}")),
-            ("bins", format!("[1, {magnitude_bins}]")),
-        ]
-    };
-    let welch = |kind: &str| {
-        vec![
-            ("spectrum", format!("{kind:?}")),
-            ("welch_segment", segment.to_string()),
-            ("bins", format!("[1, {}]", segment / 2)),
-        ]
-    };
-    let active = if welch_active {
-        welch("log-welch")
-    } else {
-        mag("magnitude")
-    };
-    let top = |bins: usize, m: usize| {
-        bins as f64 / (m as f64 * spacing) / if time { 1.0 } else { 1000.0 }
-    };
-    groups.push(Group {
-        when: format!(
-            "|DFT| of the whole window (the thesis): a few strong periodic peaks, a short window; bins 1–{magnitude_bins} reach {} {fu}",
-            floor3(top(magnitude_bins, n)).1
-        ),
-        keys: mag("magnitude"),
-    });
-    groups.push(Group {
-        when: "the power (|X|² / n) of each bin: as magnitude, with energy rather than amplitude"
-            .into(),
-        keys: mag("power"),
-    });
-    groups.push(Group {
-        when: "log10 of the power: textures that differ over a wide range of levels, or a gain that drifts between trials".into(),
-        keys: mag("log-power"),
-    });
-    if welch_ok {
-        groups.push(Group {
-            when: format!(
-                "Welch's average over {segment}-point segments: noisy, broadband textures (vibration, sound); smoother than one DFT"
-            ),
-            keys: welch("welch"),
-        });
-        groups.push(Group {
-            when: "log10 of the Welch spectrum: other rigs' signals whose level drifts between trials (accelerometers, microphones)".into(),
-            keys: welch("log-welch"),
-        });
-        analysis.spectrum = SpectrumKind::LogWelch;
-        analysis.welch_segment = Some(segment);
-        if let Some(b) = fitting_bands(&analysis) {
-            let bands = format!(
-                "{{ count = {}, from = {}, to = {}, scale = \"log\" }}",
-                b.count,
-                float(b.from),
-                float(b.to)
-            );
-            let mut k = welch("log-welch");
-            k.retain(|(key, _)| *key != "bins");
-            k.push(("bands", bands));
-            groups.push(Group {
-                when: format!(
-                    "{} log-spaced band energies ({}–{} {fu}) of the log-Welch spectrum: fewer, steadier features over a wide band (sound, vibration)",
-                    b.count,
-                    float(b.from),
-                    float(b.to)
-                ),
-                keys: k.clone(),
-            });
-            let c = b.count.min(13);
-            k.push(("cepstra", c.to_string()));
-            k.push(("drop_level", "true".into()));
-            groups.push(Group {
-                when: format!(
-                    "{c} cepstra of those bands without c0 (as MFCCs, the tool-mediated texture literature's features): drop_level when the gain drifts between trials"
-                ),
-                keys: k,
-            });
-        }
-    }
-    let min_count = s.labels.values().copied().min().unwrap_or(0);
-    let mut text = String::new();
-    let w = &mut text;
-    let _ = writeln!(
-        w,
-        "# An analysis-only profile for the recordings in {}, written by `hapticlab profile new`.",
+    let segment = welch_segment(n, time, 1.0 / spacing);
+    // Log-Welch for other rigs' signals in time (vibration, sound) and for
+    // long windows; the thesis's |DFT| for a short stroke resampled by position.
+    let welch_active = (time || n > 4096) && segment >= 16;
+    analysis.spectrum = SpectrumKind::LogWelch;
+    analysis.welch_segment = Some(segment);
+    analysis.taper = Taper::Hann;
+    Ok(Plan {
+        s,
+        from,
+        signal: signal.clone(),
+        more: more.to_vec(),
+        time,
+        unit: if time { "s" } else { "m" },
+        spacing_text,
+        spacing_why,
+        extent,
+        shortest_file,
+        end_text,
+        n,
+        analysis,
+        segment,
+        welch_active,
+        magnitude_bins: (n / 2).min(128),
+        min_count: s.labels.values().copied().min().unwrap_or(0),
+        segments: s.varying_meta.iter().any(|k| k == "segment"),
+    })
+}
+
+/// The profile's text for the survey `s` of `from`.
+pub fn draft(s: &Survey, name: &str, from: &Path) -> Result<String, String> {
+    let p = plan(s, from)?;
+    let mut doc = Doc::default();
+    header(&mut doc, &p);
+    let _ = writeln!(doc.0, "name = {name:?}");
+    let description = format!(
+        "Recordings of {} texture(s) from {}",
+        s.labels.len(),
         from.display()
     );
-    let _ = writeln!(
-        w,
-        "# It has no [device], [controller] or [path]: it evaluates, trains and classifies\n\
-         # recordings (`hapticlab evaluate {} -p THIS.toml`) and makes none.",
-        from.display()
-    );
-    let _ = writeln!(w, "#");
-    let _ = writeln!(
-        w,
-        "# Found: {} complete recording(s){}; columns {}; about {} samples a second.",
+    let _ = writeln!(doc.0, "description = {description:?}");
+    doc.blank();
+    analysis_table(&mut doc, &p);
+    classifier_table(&mut doc, &p);
+    evaluation_table(&mut doc, &p);
+    Ok(doc.0)
+}
+
+/// What was found, and how to use the option groups.
+fn header(doc: &mut Doc, p: &Plan) {
+    let s = p.s;
+    let from = p.from.display();
+    doc.comment(&format!(
+        "An analysis-only profile for the recordings in {from}, written by `hapticlab profile new`.\n\
+         It has no [device], [controller] or [path]: it evaluates, trains and classifies\n\
+         recordings (`hapticlab evaluate {from} -p THIS.toml`) and makes none.\n"
+    ));
+    let left_out = match s.incomplete.first() {
+        None => String::new(),
+        Some(f) => format!(" ({} incomplete left out, e.g. {f})", s.incomplete.len()),
+    };
+    doc.comment(&format!(
+        "Found: {} complete recording(s){left_out}; columns {}; about {} samples a second.",
         s.complete,
-        if s.incomplete.is_empty() {
-            String::new()
-        } else {
-            format!(
-                " ({} incomplete left out, e.g. {})",
-                s.incomplete.len(),
-                s.incomplete[0]
-            )
-        },
         s.columns.join(", "),
         float(s.rate_hz)
-    );
-    let _ = writeln!(w, "# Labels and recordings per label:");
+    ));
+    if s.rates.len() > 1 {
+        doc.comment("The recordings' rates differ (rate: recordings, e.g.):");
+        for (hz, count, file) in &s.rates {
+            doc.comment(&format!("  {} Hz: {count}, e.g. {file}", float(*hz)));
+        }
+    }
+    doc.comment("Labels and recordings per label:");
     for (label, count) in &s.labels {
-        let _ = writeln!(w, "#   {label}: {count}");
+        doc.comment(&format!("  {label}: {count}"));
     }
     if !s.varying_meta.is_empty() {
-        let _ = writeln!(
-            w,
-            "# Metadata that varies between recordings (for group_by below): {}",
+        doc.comment(&format!(
+            "Metadata that varies between recordings (for group_by below): {}",
             s.varying_meta.join(", ")
-        );
+        ));
     }
-    let _ = writeln!(w, "#");
-    let _ = writeln!(
-        w,
-        "# An option group below is a few `key = value` lines after a line saying when\n\
-         # to use it: uncomment the group's lines in place of the same keys above it\n\
-         # (a spectrum group replaces every spectrum line), then `hapticlab check`."
+    doc.comment(
+        "\nAn option group below is a few `key = value` lines after a line saying when\n\
+         to use it: uncomment the group's lines in place of the same keys above it\n\
+         (a spectrum group replaces every spectrum line), then `hapticlab check`.",
     );
-    let _ = writeln!(w);
-    let _ = writeln!(w, "name = {name:?}");
-    let _ = writeln!(
-        w,
-        "description = {:?}",
-        format!(
-            "Recordings of {} texture(s) from {}",
-            s.labels.len(),
-            from.display()
-        )
-    );
-    let _ = writeln!(w);
-    let _ = writeln!(w, "[analysis]");
-    let _ = writeln!(w, "# {}.", choice.why);
-    let others: Vec<&String> = s
+    doc.blank();
+}
+
+fn analysis_table(doc: &mut Doc, p: &Plan) {
+    let s = p.s;
+    let choice = s.choice();
+    let axis = p.analysis.axis.as_str();
+    doc.table("analysis");
+    doc.comment(&format!("{}.", choice.why));
+    let mut lines = vec![line("channel", format!("{:?}", p.signal), "")];
+    if !p.more.is_empty() {
+        let names: Vec<String> = p.more.iter().map(|c| format!("{c:?}")).collect();
+        lines.push(line(
+            "channels",
+            format!("[{}]", names.join(", ")),
+            "analysed like `channel`, features concatenated",
+        ));
+    }
+    doc.lines(&lines);
+    let others: Vec<&str> = s
         .columns
         .iter()
         .filter(|c| *c != axis && *c != "t_s" && !choice.signals.contains(c))
+        .map(String::as_str)
         .collect();
-    let _ = writeln!(w, "channel = {signal:?}");
-    if !more.is_empty() {
-        let _ = writeln!(
-            w,
-            "channels = [{}]   # analysed like `channel`, features concatenated",
-            more.iter()
-                .map(|c| format!("{c:?}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-    }
     if !others.is_empty() {
-        let _ = writeln!(
-            w,
-            "# Other columns (name one as channel, or add it to channels = [...]): {}",
-            others
-                .iter()
-                .map(|c| c.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
+        doc.comment(&format!(
+            "Other columns (name one as channel, or add it to channels = [...]): {}",
+            others.join(", ")
+        ));
     }
-    let _ = writeln!(w, "axis = {axis:?}");
-    let _ = writeln!(
-        w,
-        "# The whole of the shortest complete recording ({shortest_file}: {} {unit} along {axis}), {n} points.",
-        float(extent)
-    );
-    let _ = writeln!(w, "window = [0.0, {end_text}]");
-    let _ = writeln!(w, "spacing = {spacing_text}   # {spacing_why}");
-    let _ = writeln!(w, "detrend = \"mean\"");
-    for (k, v) in &active {
-        let _ = writeln!(w, "{k} = {v}");
+    doc.lines(&[line("axis", format!("{axis:?}"), "")]);
+    doc.comment(&format!(
+        "The whole of the shortest complete recording ({}: {} {} along {axis}), {} points.",
+        p.shortest_file,
+        float(p.extent),
+        p.unit,
+        p.n
+    ));
+    doc.lines(&[
+        line("window", format!("[0.0, {}]", p.end_text), ""),
+        line("spacing", p.spacing_text.clone(), p.spacing_why.clone()),
+        line(
+            "detrend",
+            "\"mean\"",
+            "the sensor's offset is no texture: the mean is removed",
+        ),
+    ]);
+    doc.lines(&first_spectrum(p));
+    doc.blank();
+    doc.comment("Other spectra and features (one group replaces the spectrum lines above):");
+    doc.groups(&spectrum_groups(p));
+    doc.comment("Sub-windows that vote:");
+    match windows_group(p) {
+        Ok(g) => doc.groups(&[g]),
+        Err(why) => {
+            doc.comment(&format!("(none offered: {why})"));
+            doc.blank();
+        }
     }
-    let _ = writeln!(w);
-    let _ = writeln!(
-        w,
-        "# Other spectra and features (one group replaces the spectrum lines above):"
+}
+
+/// The spectrum lines of the first choice, each with its reason.
+fn first_spectrum(p: &Plan) -> Vec<Line> {
+    if !p.welch_active {
+        return vec![
+            line(
+                "spectrum",
+                "\"magnitude\"",
+                "|DFT| of the whole window, the thesis's: a short stroke resampled by position",
+            ),
+            line(
+                "bins",
+                format!("[1, {}]", p.magnitude_bins),
+                "DC dropped; the first bins hold a stroke's texture periods",
+            ),
+        ];
+    }
+    let m = p.segment;
+    let seconds = m as f64 * p.analysis.spacing;
+    vec![
+        line(
+            "spectrum",
+            "\"log-welch\"",
+            "log10 of Welch's averaged spectrum: noisy, broadband signals whose level drifts between trials",
+        ),
+        line(
+            "taper",
+            "\"hann\"",
+            "each segment tapered, as scipy's welch: without it leakage smears the log spectrum",
+        ),
+        line(
+            "welch_segment",
+            m.to_string(),
+            format!(
+                "{} {}, {} {}-wide bins; {} segments half-overlapping in the window",
+                floor3(seconds).1,
+                p.unit,
+                floor3(p.analysis.bin_width()).1,
+                p.analysis.frequency_unit(),
+                2 * p.n / m - 1
+            ),
+        ),
+        line(
+            "bins",
+            format!("[1, {}]", m / 2),
+            "every bin but DC, up to the Nyquist frequency",
+        ),
+    ]
+}
+
+fn hann() -> (&'static str, String) {
+    ("taper", "\"hann\"".into())
+}
+
+fn magnitude_keys(p: &Plan, kind: &str) -> Vec<(&'static str, String)> {
+    let mut k = vec![("spectrum", format!("{kind:?}"))];
+    if kind != "magnitude" {
+        k.push(hann());
+    }
+    k.push(("bins", format!("[1, {}]", p.magnitude_bins)));
+    k
+}
+
+fn welch_keys(p: &Plan, kind: &str) -> Vec<(&'static str, String)> {
+    vec![
+        ("spectrum", format!("{kind:?}")),
+        hann(),
+        ("welch_segment", p.segment.to_string()),
+        ("bins", format!("[1, {}]", p.segment / 2)),
+    ]
+}
+
+/// Every other spectrum that fits the window, with when to use it.
+fn spectrum_groups(p: &Plan) -> Vec<Group> {
+    let top = p.magnitude_bins as f64
+        / (p.n as f64 * p.analysis.spacing)
+        / if p.time { 1.0 } else { 1000.0 };
+    let fu = p.analysis.frequency_unit();
+    let mut groups = vec![
+        Group {
+            when: format!(
+                "|DFT| of the whole window (the thesis), no taper: a few strong periodic peaks, a short window; bins 1–{} reach {} {fu}",
+                p.magnitude_bins,
+                floor3(top).1
+            ),
+            keys: magnitude_keys(p, "magnitude"),
+        },
+        Group {
+            when: "the power (|X|² / n) of each bin, Hann-tapered: as magnitude, with energy rather than amplitude".into(),
+            keys: magnitude_keys(p, "power"),
+        },
+        Group {
+            when: "log10 of the power, Hann-tapered: textures that differ over a wide range of levels, or a gain that drifts between trials".into(),
+            keys: magnitude_keys(p, "log-power"),
+        },
+    ];
+    if p.segment < 16 {
+        return groups;
+    }
+    groups.push(Group {
+        when: format!(
+            "Welch's average over {}-point Hann-tapered segments: noisy, broadband textures (vibration, sound); smoother than one DFT",
+            p.segment
+        ),
+        keys: welch_keys(p, "welch"),
+    });
+    groups.push(Group {
+        when: "log10 of the Welch spectrum: other rigs' signals whose level drifts between trials (accelerometers, microphones)".into(),
+        keys: welch_keys(p, "log-welch"),
+    });
+    groups.extend(band_groups(p));
+    groups
+}
+
+/// Band energies and their cepstra, when log-spaced bands fit the spectrum.
+fn band_groups(p: &Plan) -> Vec<Group> {
+    let Some(b) = fitting_bands(&p.analysis) else {
+        return Vec::new();
+    };
+    let fu = p.analysis.frequency_unit();
+    let bands = format!(
+        "{{ count = {}, from = {}, to = {}, scale = \"log\" }}",
+        b.count,
+        float(b.from),
+        float(b.to)
     );
-    write_groups(w, &groups);
-    // Sub-windows, half-overlapping, each a vote: about a tenth of the
-    // window (the generated stylus-sound set of contrib/rig-sets.py, 5 s
-    // clips, gave 98 % at 0.5 s and 93 % at 1.24 s), but at least two Welch
-    // segments, so each sub-window still averages, and at most half the
-    // window.
-    let least = if welch_active {
-        2.0 * segment as f64 * spacing
+    let mut k = welch_keys(p, "log-welch");
+    k.retain(|(key, _)| *key != "bins");
+    k.push(("bands", bands));
+    let c = b.count.min(13);
+    let mut cepstra = k.clone();
+    cepstra.push(("cepstra", c.to_string()));
+    cepstra.push(("drop_level", "true".into()));
+    vec![
+        Group {
+            when: format!(
+                "{} log-spaced band energies ({}–{} {fu}) of the log-Welch spectrum: fewer, steadier features over a wide band (sound, vibration)",
+                b.count,
+                float(b.from),
+                float(b.to)
+            ),
+            keys: k,
+        },
+        Group {
+            when: format!(
+                "{c} cepstra of those bands without c0 (as MFCCs, the tool-mediated texture literature's features): drop_level when the gain drifts between trials"
+            ),
+            keys: cepstra,
+        },
+    ]
+}
+
+/// Sub-windows, half-overlapping, each a vote: about a tenth of the window
+/// (the generated stylus-sound set of contrib/rig-sets.py, 5 s clips, gave
+/// 98 % at 0.5 s and 93 % at 1.24 s), but at least two Welch segments (or
+/// 16 points of one DFT) so each still averages, and at most half the
+/// window so at least three fit. `Err`: why none fits.
+fn windows_group(p: &Plan) -> Result<Group, String> {
+    let least = if p.welch_active { 2 * p.segment } else { 16 };
+    let points = (p.n / 10).max(least);
+    if points > p.n / 2 {
+        return Err(format!(
+            "the window's {} points hold no three sub-windows of {least} points",
+            p.n
+        ));
+    }
+    let spacing = p.analysis.spacing;
+    // Rounded up, so the sub-window keeps its points; the hop down, but
+    // never below the spacing.
+    let (length, length_text) = ceil3(points as f64 * spacing);
+    let (hop, hop_text) = floor3(length / 2.0);
+    let (hop, hop_text) = if hop < spacing {
+        (spacing, p.spacing_text.clone())
     } else {
-        0.0
+        (hop, hop_text)
     };
-    let (length, length_text) = floor3((end / 10.0).max(least).min(end / 2.0));
-    let (_, hop_text) = floor3(length / 2.0);
+    let w = crate::profile::Windows { length, hop };
     let sub = Analysis {
-        windows: Some(crate::profile::Windows {
-            length,
-            hop: length / 2.0,
-        }),
-        ..analysis.clone()
+        windows: Some(w),
+        spectrum: if p.welch_active {
+            SpectrumKind::LogWelch
+        } else {
+            SpectrumKind::Magnitude
+        },
+        welch_segment: p.welch_active.then_some(p.segment),
+        ..p.analysis.clone()
     };
-    let mut windows = vec![(
+    let mut keys = vec![(
         "windows",
         format!("{{ length = {length_text}, hop = {hop_text} }}"),
     )];
-    if !welch_active {
-        windows.push((
-            "bins",
-            format!("[1, {}]", (sub.points() / 2).min(magnitude_bins)),
-        ));
+    if !p.welch_active {
+        let bins = (sub.points() / 2).min(p.magnitude_bins);
+        keys.push(("bins", format!("[1, {bins}]")));
     }
-    let _ = writeln!(w, "# Sub-windows that vote:");
-    write_groups(
-        w,
-        &[Group {
-            when: format!(
-                "cut the window into {length_text} {unit} windows every {hop_text} {unit}: more examples from few recordings, each recording classified by its windows' vote"
-            ),
-            keys: windows,
-        }],
-    );
-    let few = min_count < 5;
-    let k = if min_count <= 10 { 1 } else { 5 };
-    let _ = writeln!(w, "[classifier]");
-    let _ = writeln!(
-        w,
-        "k = {k}   # {}",
-        if k == 1 {
-            "the nearest recording decides: few recordings per label"
-        } else {
-            "five neighbours vote: enough recordings per label to outvote a stray one"
-        }
-    );
-    let _ = writeln!(w, "metric = \"euclidean\"");
-    let _ = writeln!(w);
-    write_groups(
-        w,
-        &[
-            Group {
-                when: "z-score every feature over the training set: features of very different sizes (several channels, log and linear)".into(),
-                keys: vec![("standardize", "true".into())],
-            },
-            Group {
-                when: "k chosen by cross-validation inside the training set: when unsure which k".into(),
-                keys: vec![("k", "\"auto\"".into())],
-            },
-            Group {
-                when: "the angle between spectra, not their size: recordings whose overall level differs".into(),
-                keys: vec![("metric", "\"cosine\"".into())],
-            },
-        ],
-    );
-    let _ = writeln!(w, "[evaluation]");
-    let folds = min_count.clamp(2, 10);
-    if few {
-        let _ = writeln!(
-            w,
-            "# Fewer than 5 recordings of some label ({min_count}): each is tested against all the others."
-        );
-        let _ = writeln!(w, "method = \"leave-one-out\"");
-    } else {
-        let _ = writeln!(
-            w,
-            "# {min_count} or more recordings per label: stratified {folds}-fold cross-validation."
-        );
-        let _ = writeln!(w, "method = \"k-fold\"");
-        let _ = writeln!(w, "folds = {folds}");
-    }
-    let _ = writeln!(w);
-    let mut eval_groups = vec![if few {
-        Group {
-            when: format!(
-                "{folds}-fold cross-validation: once there are more recordings per label"
-            ),
-            keys: vec![
-                ("method", "\"k-fold\"".into()),
-                ("folds", folds.to_string()),
-            ],
-        }
-    } else {
-        Group {
-            when: "each recording tested against all the others: few recordings per label".into(),
-            keys: vec![("method", "\"leave-one-out\"".into())],
-        }
-    }];
-    if min_count >= 2 {
-        // Half and half: the time split of recordings made over days (the
-        // thesis's own split was 20 + 10 of 30).
-        let train = min_count.div_ceil(2);
-        eval_groups.push(Group {
-            when: format!(
-                "a fixed split in time: per label the first {train} recordings (file-name order) train and the next {} test; for recordings made in order over days, the later ones drifting",
-                min_count - train
-            ),
-            keys: vec![
-                ("method", "\"holdout\"".into()),
-                ("train_per_class", train.to_string()),
-                ("test_per_class", (min_count - train).to_string()),
-            ],
-        });
-    }
-    if let Some(key) = s.varying_meta.first() {
-        let mut keys = vec![("method", "\"leave-one-out\"".into())];
-        keys.push(("group_by", format!("{key:?}")));
-        eval_groups.push(Group {
-            when: format!(
-                "recordings sharing a {key} stay on one side of every split: trials or sessions that resemble each other"
-            ),
-            keys,
-        });
-    }
-    write_groups(w, &eval_groups);
-    Ok(text)
+    crate::profile::check_windows(&sub, w)?;
+    check_options(&sub).map_err(|(k, why)| format!("{k} {why}"))?;
+    let unit = p.unit;
+    Ok(Group {
+        when: format!(
+            "cut the window into {length_text} {unit} windows every {hop_text} {unit}: more examples from few recordings, each recording classified by its windows' vote"
+        ),
+        keys,
+    })
 }
 
-fn write_groups(w: &mut String, groups: &[Group]) {
-    for g in groups {
-        let _ = writeln!(w, "# -- {}", g.when);
-        for (k, v) in &g.keys {
-            let _ = writeln!(w, "# {k} = {v}");
-        }
-        let _ = writeln!(w);
+fn classifier_table(doc: &mut Doc, p: &Plan) {
+    doc.table("classifier");
+    let k = if p.min_count <= 10 { 1 } else { 5 };
+    let why = if k == 1 {
+        "the nearest recording decides: few recordings per label"
+    } else {
+        "five neighbours vote: enough recordings per label to outvote a stray one"
+    };
+    doc.lines(&[
+        line("k", k.to_string(), why),
+        line("metric", "\"euclidean\"", "the distance between spectra"),
+    ]);
+    doc.blank();
+    let mut groups = vec![Group {
+        when: "z-score every feature over the training set: features of very different sizes (several channels, log and linear)".into(),
+        keys: vec![("standardize", "true".into())],
+    }];
+    if p.min_count >= 3 {
+        groups.push(Group {
+            when: "k chosen by cross-validation inside the training set: when unsure which k"
+                .into(),
+            keys: vec![("k", "\"auto\"".into())],
+        });
     }
+    groups.push(Group {
+        when: "the angle between spectra, not their size: recordings whose overall level differs"
+            .into(),
+        keys: vec![("metric", "\"cosine\"".into())],
+    });
+    doc.groups(&groups);
+}
+
+/// The evaluation methods that can test every label, the first choice
+/// written out and the others as groups.
+fn evaluation_table(doc: &mut Doc, p: &Plan) {
+    let min = p.min_count;
+    let folds = min.clamp(2, 10);
+    let (train, test) = time_split(p);
+    let loo = Group {
+        when: "each recording tested against all the others: few recordings per label".into(),
+        keys: vec![("method", "\"leave-one-out\"".into())],
+    };
+    let kfold = Group {
+        when: format!("stratified {folds}-fold cross-validation: several recordings per label"),
+        keys: vec![
+            ("method", "\"k-fold\"".into()),
+            ("folds", folds.to_string()),
+        ],
+    };
+    let holdout = Group {
+        when: format!(
+            "a fixed split in time: per label the first {train} recordings (file-name order) train and the next {test} test; for recordings made in order, the later ones drifting"
+        ),
+        keys: vec![
+            ("method", "\"holdout\"".into()),
+            ("train_per_class", train.to_string()),
+            ("test_per_class", test.to_string()),
+        ],
+    };
+    let (why, first, others) = if min < 2 {
+        (
+            format!(
+                "Only {min} recording of some label: nothing to test it against. Record more, or cut\n\
+                 long recordings into trials: `hapticlab import … --split SECONDS` (evaluate refuses this)."
+            ),
+            loo,
+            Vec::new(),
+        )
+    } else if p.segments {
+        (
+            format!(
+                "The recordings are consecutive segments of longer ones (`import --split`): neighbours\n\
+                 resemble each other, so the first {train} segments of each label train and the next {test} test."
+            ),
+            holdout,
+            vec![kfold, loo],
+        )
+    } else if min < 5 {
+        (
+            format!(
+                "Fewer than 5 recordings of some label ({min}): each is tested against all the others."
+            ),
+            loo,
+            vec![kfold, holdout],
+        )
+    } else {
+        (
+            format!(
+                "{min} or more recordings per label: stratified {folds}-fold cross-validation."
+            ),
+            kfold,
+            vec![loo, holdout],
+        )
+    };
+    doc.table("evaluation");
+    doc.comment(&why);
+    for (k, v) in &first.keys {
+        let _ = writeln!(doc.0, "{k} = {v}");
+    }
+    doc.blank();
+    let mut groups = others;
+    groups.extend(group_by_group(p));
+    doc.groups(&groups);
+}
+
+/// The time split: half and half (the thesis's own split was 20 + 10 of
+/// 30); 70 / 30 for segments of long recordings, so more of each trains.
+fn time_split(p: &Plan) -> (usize, usize) {
+    let min = p.min_count;
+    let train = if p.segments {
+        (min * 7).div_ceil(10).min(min.saturating_sub(1)).max(1)
+    } else {
+        min.div_ceil(2)
+    };
+    (train, min.saturating_sub(train))
+}
+
+/// Leave-one-out keeping together the recordings that share a metadata
+/// value: offered for a key that groups recordings (some share a value)
+/// and gives every label at least two groups (so each can be tested);
+/// the source file first (segments of one recording).
+fn group_by_group(p: &Plan) -> Option<Group> {
+    // A segment's index or start is shared across recordings by position,
+    // not by what makes them alike.
+    let fits = |k: &&String| {
+        !k.starts_with("segment")
+            && p.s
+                .groups
+                .get(*k)
+                .is_some_and(|(fewest, shared)| *fewest >= 2 && *shared)
+    };
+    let key =
+        p.s.varying_meta
+            .iter()
+            .filter(fits)
+            .min_by_key(|k| k.as_str() != "source")?;
+    Some(Group {
+        when: format!(
+            "recordings sharing a {key} stay on one side of every split: trials or sessions that resemble each other"
+        ),
+        keys: vec![
+            ("method", "\"leave-one-out\"".into()),
+            ("group_by", format!("{key:?}")),
+        ],
+    })
 }
 
 /// Log-spaced bands from a few bins up to Nyquist that each hold a bin:
@@ -615,7 +872,8 @@ mod tests {
         let s = survey_of(&["t_s", "mic"], &[("glass", 4), ("wood", 4)], 44100.0, 4.9);
         let text = draft(&s, "sound", Path::new("rec")).unwrap();
         assert!(text.contains("spectrum = \"log-welch\""), "{text}");
-        assert!(text.contains("welch_segment = 2048"), "{text}");
+        assert!(text.contains("welch_segment = 4096   # 0.0928 s"), "{text}");
+        assert!(text.contains("taper = \"hann\"   # "), "{text}");
         assert!(text.contains("window = [0.0, 4.90]"), "{text}");
         assert!(text.contains("method = \"leave-one-out\""), "{text}");
         assert!(text.contains("#   glass: 4"), "{text}");

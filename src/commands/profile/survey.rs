@@ -48,6 +48,12 @@ pub struct Survey {
     /// each with its columns: named when the shared columns leave nothing
     /// to analyse.
     pub differing: Option<[(String, Vec<String>); 2]>,
+    /// Per varying key: the fewest distinct values any label has, and
+    /// whether some value is shared by two recordings (so the key groups).
+    pub groups: BTreeMap<String, (usize, bool)>,
+    /// The distinct sample rates (within 1 %), slowest first: the rate, how
+    /// many recordings have it, and one of them.
+    pub rates: Vec<(f64, usize, String)>,
 }
 
 /// Read every recording under `dir` (on every core) and sum them up.
@@ -231,6 +237,7 @@ fn sum_up(seen: &[Seen], incomplete: Vec<String>) -> Survey {
         let spread = seen.iter().map(|r| r.spread[at(r)]).sum::<f64>() / seen.len() as f64;
         s.spread.insert(c.clone(), spread);
     }
+    s.rates = distinct_rates(seen);
     let mut keys: BTreeMap<&str, std::collections::BTreeSet<&str>> = BTreeMap::new();
     for r in seen {
         for (k, v) in &r.meta {
@@ -238,11 +245,54 @@ fn sum_up(seen: &[Seen], incomplete: Vec<String>) -> Survey {
         }
     }
     s.varying_meta = keys
-        .into_iter()
+        .iter()
         .filter(|(k, v)| v.len() > 1 && !PLAIN_META.contains(k))
         .map(|(k, _)| k.to_string())
         .collect();
+    for key in &s.varying_meta {
+        s.groups.insert(key.clone(), grouping(seen, key));
+    }
     s
+}
+
+/// For metadata `key`: the fewest distinct values a label has, and whether
+/// two recordings share a value (a recording without the key is its own).
+fn grouping(seen: &[Seen], key: &str) -> (usize, bool) {
+    fn value<'a>(r: &'a Seen, key: &str) -> Option<&'a str> {
+        r.meta
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, v)| v.as_str())
+    }
+    let mut per_label: BTreeMap<&str, std::collections::BTreeSet<&str>> = BTreeMap::new();
+    let mut all = std::collections::BTreeSet::new();
+    let mut with = 0;
+    for r in seen {
+        if let Some(v) = value(r, key) {
+            per_label.entry(&r.label).or_default().insert(v);
+            all.insert(v);
+            with += 1;
+        }
+    }
+    let fewest = per_label.values().map(|v| v.len()).min().unwrap_or(0);
+    (fewest, all.len() < with)
+}
+
+/// The recordings' rates, those within 1 % of each other counted as one.
+fn distinct_rates(seen: &[Seen]) -> Vec<(f64, usize, String)> {
+    let mut rated: Vec<(f64, &str)> = seen
+        .iter()
+        .filter_map(|r| r.rate_hz.map(|h| (h, r.file.as_str())))
+        .collect();
+    rated.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut out: Vec<(f64, usize, String)> = Vec::new();
+    for (hz, file) in rated {
+        match out.last_mut() {
+            Some(last) if hz <= last.0 * 1.01 => last.1 += 1,
+            _ => out.push((hz, 1, file.to_string())),
+        }
+    }
+    out
 }
 
 /// The axis and channels chosen, and why.

@@ -1,0 +1,372 @@
+//! NumPy `.npy` (format 1.0 to 3.0) and `.npz` (a zip of `.npy` files, as
+//! `np.savez` and `np.savez_compressed` write them), read by hand: the
+//! header is a Python dict literal, the zip is read from its central
+//! directory (stored or deflated entries). A 1-D array is one channel; a
+//! 2-D array's channels are its columns (samples × channels), or its rows
+//! when `--names` counts them, or when there are fewer rows than columns.
+//! An `.npz` of several arrays takes each 1-D array as a channel named by
+//! it; a scalar (0-d) array becomes metadata.
+
+use std::io::Read as _;
+
+use super::{ImportArgs, Imported, bad};
+use crate::recording::{Digits, time_decimals};
+use crate::support::Failure;
+
+/// One array read from a `.npy`: its shape, its values in C order, how they
+/// are written back (integers as integers).
+pub(super) struct Array {
+    pub shape: Vec<usize>,
+    pub values: Vec<f64>,
+    pub digits: Digits,
+}
+
+/// Parses the bytes of a `.npy` file.
+pub(super) fn parse_npy(b: &[u8], origin: &str) -> Result<Array, Failure> {
+    let err = |m: String| bad(format!("{origin}: not a .npy file this reads: {m}"));
+    if b.len() < 10 || &b[..6] != b"\x93NUMPY" {
+        return Err(err("no \\x93NUMPY magic".into()));
+    }
+    let (len, start) = match b[6] {
+        1 => (usize::from(u16::from_le_bytes([b[8], b[9]])), 10),
+        2 | 3 if b.len() >= 12 => (u32::from_le_bytes([b[8], b[9], b[10], b[11]]) as usize, 12),
+        v => return Err(err(format!("format version {v}"))),
+    };
+    let header = b
+        .get(start..start + len)
+        .and_then(|h| std::str::from_utf8(h).ok())
+        .ok_or_else(|| err("the header is cut short".into()))?;
+    let descr =
+        dict_value(header, "descr").ok_or_else(|| err("no 'descr' in the header".into()))?;
+    let descr = descr.trim_matches(['\'', '"']);
+    let fortran = dict_value(header, "fortran_order").is_some_and(|v| v.starts_with("True"));
+    let shape_text =
+        dict_value(header, "shape").ok_or_else(|| err("no 'shape' in the header".into()))?;
+    let shape: Vec<usize> = shape_text
+        .trim_start_matches('(')
+        .split(')')
+        .next()
+        .unwrap_or("")
+        .split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(|s| {
+            s.parse::<usize>()
+                .map_err(|_| err(format!("shape {shape_text}")))
+        })
+        .collect::<Result<_, _>>()?;
+    let (width, kind) = element(descr).ok_or_else(|| {
+        err(format!(
+            "dtype {descr:?} (integers, unsigned integers and floats of 1 to 8 bytes only)"
+        ))
+    })?;
+    let count = shape.iter().try_fold(1usize, |a, &d| a.checked_mul(d));
+    let data = &b[start + len..];
+    let count = count
+        .filter(|c| {
+            c.checked_mul(width)
+                .is_some_and(|bytes| bytes <= data.len())
+        })
+        .ok_or_else(|| {
+            err(format!(
+                "shape {shape:?} needs more data than the file holds"
+            ))
+        })?;
+    let big = descr.starts_with('>');
+    let mut values: Vec<f64> = data[..count * width]
+        .chunks_exact(width)
+        .map(|c| number(c, kind, big))
+        .collect();
+    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+        return Err(err(format!("element {i} is not a finite number")));
+    }
+    if fortran && shape.len() == 2 {
+        values = transpose(&values, shape[1], shape[0]);
+    }
+    let digits = match (kind, width) {
+        ('f', 4) => Digits::ShortestF32,
+        ('f', _) => Digits::Shortest,
+        _ => Digits::Decimals(0),
+    };
+    Ok(Array {
+        shape,
+        values,
+        digits,
+    })
+}
+
+/// The text of `key`'s value in a Python dict literal (up to the next
+/// top-level comma).
+fn dict_value<'a>(header: &'a str, key: &str) -> Option<&'a str> {
+    let at = header
+        .find(&format!("'{key}'"))
+        .or_else(|| header.find(&format!("\"{key}\"")))?;
+    let rest = header[at + key.len() + 2..]
+        .trim_start()
+        .strip_prefix(':')?
+        .trim_start();
+    let mut depth = 0;
+    for (i, c) in rest.char_indices() {
+        match c {
+            '(' | '[' => depth += 1,
+            ')' | ']' => depth -= 1,
+            ',' | '}' if depth == 0 => return Some(rest[..i].trim()),
+            _ => {}
+        }
+    }
+    Some(rest.trim())
+}
+
+/// Width in bytes and kind (`i`, `u`, `f`) of a dtype such as `<f8`.
+fn element(descr: &str) -> Option<(usize, char)> {
+    let d = descr.trim_start_matches(['<', '>', '|', '=']);
+    let kind = d.chars().next()?;
+    let width: usize = d[1..].parse().ok()?;
+    let ok = match kind {
+        'i' | 'u' => matches!(width, 1 | 2 | 4 | 8),
+        'f' => matches!(width, 4 | 8),
+        _ => false,
+    };
+    ok.then_some((width, kind))
+}
+
+fn number(c: &[u8], kind: char, big: bool) -> f64 {
+    let mut b = [0u8; 8];
+    b[..c.len()].copy_from_slice(c);
+    if big {
+        b[..c.len()].reverse();
+    }
+    let w = c.len();
+    match (kind, w) {
+        ('f', 4) => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+        ('f', _) => f64::from_le_bytes(b),
+        ('u', _) => u64::from_le_bytes(b) as f64,
+        // Sign-extend from the element's width.
+        (_, _) => ((i64::from_le_bytes(b) << (64 - 8 * w)) >> (64 - 8 * w)) as f64,
+    }
+}
+
+/// `values` of `rows × cols` in column-major order, as row-major.
+fn transpose(values: &[f64], cols: usize, rows: usize) -> Vec<f64> {
+    let mut out = vec![0.0; values.len()];
+    for r in 0..rows {
+        for c in 0..cols {
+            out[r * cols + c] = values[c * rows + r];
+        }
+    }
+    out
+}
+
+/// The channels of a 1-D or 2-D array (see the module's note), named `name`,
+/// `name_1`, `name_2`, … or by `--names`.
+pub(super) fn channels_of(
+    a: &Array,
+    name: &str,
+    args: &ImportArgs,
+    origin: &str,
+) -> Result<Vec<(String, Vec<f64>)>, Failure> {
+    match a.shape[..] {
+        [n] => Ok(vec![(name.to_string(), a.values[..n].to_vec())]),
+        [rows, cols] => {
+            let given = args.names.len();
+            let by_rows = if given > 0 {
+                given == rows && given != cols
+            } else {
+                rows < cols
+            };
+            let (count, len) = if by_rows { (rows, cols) } else { (cols, rows) };
+            let at = |ch: usize, i: usize| {
+                if by_rows {
+                    a.values[ch * cols + i]
+                } else {
+                    a.values[i * cols + ch]
+                }
+            };
+            Ok((0..count)
+                .map(|ch| {
+                    let v = (0..len).map(|i| at(ch, i)).collect();
+                    (format!("{name}_{}", ch + 1), v)
+                })
+                .collect())
+        }
+        _ => Err(bad(format!(
+            "{origin}: array {name:?} has shape {:?}: import takes 1-D arrays, or 2-D ones of samples × channels",
+            a.shape
+        ))),
+    }
+}
+
+/// The recording of named channels sampled at `--rate`, renamed by
+/// `--names`; every channel the same length.
+pub(super) fn signal(
+    channels: Vec<(String, Vec<f64>)>,
+    digits: Vec<Digits>,
+    meta: Vec<(String, toml::Value)>,
+    args: &ImportArgs,
+    origin: &str,
+    what: &str,
+) -> Result<Imported, Failure> {
+    let rate = args.rate.ok_or_else(|| {
+        bad(format!(
+            "{origin}: {what} carries no sample rate: give --rate HZ"
+        ))
+    })?;
+    let n = channels.first().map_or(0, |c| c.1.len());
+    if n == 0 {
+        return Err(bad(format!("{origin}: no samples")));
+    }
+    if let Some((name, v)) = channels.iter().find(|c| c.1.len() != n) {
+        return Err(bad(format!(
+            "{origin}: {name:?} has {} samples but {:?} has {n}: one recording's channels share their samples",
+            v.len(),
+            channels[0].0
+        )));
+    }
+    let mut names: Vec<String> = channels.iter().map(|c| c.0.clone()).collect();
+    if !args.names.is_empty() {
+        if args.names.len() != names.len() {
+            return Err(bad(format!(
+                "--names gives {} name(s) but {origin} has {} channel(s) ({})",
+                args.names.len(),
+                names.len(),
+                names.join(", ")
+            )));
+        }
+        names = args.names.clone();
+    }
+    let mut all_meta = vec![("rate_hz".to_string(), toml::Value::Float(rate))];
+    all_meta.extend(meta);
+    Ok(Imported {
+        label: None,
+        time: (0..n).map(|i| i as f64 / rate).collect(),
+        names,
+        channels: channels.into_iter().map(|c| c.1).collect(),
+        meta: all_meta,
+        time_digits: Digits::Decimals(time_decimals(rate)),
+        channel_digits: digits,
+    })
+}
+
+/// A `.npy` file's recording.
+pub fn parse_npy_file(bytes: &[u8], origin: &str, args: &ImportArgs) -> Result<Imported, Failure> {
+    let a = parse_npy(bytes, origin)?;
+    let chans = channels_of(&a, "ch", args, origin)?;
+    let names: Vec<(String, Vec<f64>)> = if chans.len() == 1 {
+        vec![(
+            "ch1".into(),
+            chans.into_iter().next().map(|c| c.1).unwrap_or_default(),
+        )]
+    } else {
+        chans
+            .into_iter()
+            .map(|(n, v)| (n.replace("ch_", "ch"), v))
+            .collect()
+    };
+    let digits = vec![a.digits; names.len()];
+    signal(names, digits, Vec::new(), args, origin, "a .npy file")
+}
+
+/// A `.npz` file's recording: its arrays by name (see the module's note).
+pub fn parse_npz_file(bytes: &[u8], origin: &str, args: &ImportArgs) -> Result<Imported, Failure> {
+    let entries = unzip(bytes, origin)?;
+    let mut channels = Vec::new();
+    let mut digits = Vec::new();
+    let mut meta = Vec::new();
+    let several = entries.len() > 1;
+    for (file, data) in &entries {
+        let name = file.strip_suffix(".npy").unwrap_or(file);
+        let a = parse_npy(data, &format!("{origin}: {file}"))?;
+        if a.shape.is_empty() && several {
+            meta.push((name.to_string(), toml::Value::Float(a.values[0])));
+            continue;
+        }
+        if several && a.shape.len() != 1 {
+            return Err(bad(format!(
+                "{origin}: array {name:?} has shape {:?}: an .npz of several arrays takes 1-D ones, one per channel",
+                a.shape
+            )));
+        }
+        for (n, v) in channels_of(&a, name, args, origin)? {
+            channels.push((n, v));
+            digits.push(a.digits);
+        }
+    }
+    meta.retain(|(k, _)| scalar_key(k));
+    signal(channels, digits, meta, args, origin, "an .npz file")
+}
+
+/// Whether a scalar array or variable named `k` can be metadata: a key
+/// `--meta` would take, and none the import sets itself.
+pub(super) fn scalar_key(k: &str) -> bool {
+    const SET: [&str; 7] = [
+        "source",
+        "device",
+        "segment",
+        "segment_start_s",
+        "segment_length_s",
+        "wav_format",
+        "full_scale",
+    ];
+    super::parse_meta(&format!("{k}=0")).is_ok() && !SET.contains(&k)
+}
+
+/// The entries of a zip archive (name, bytes), stored or deflated, in the
+/// central directory's order.
+fn unzip(b: &[u8], origin: &str) -> Result<Vec<(String, Vec<u8>)>, Failure> {
+    let err = |m: &str| bad(format!("{origin}: not an .npz (zip) file this reads: {m}"));
+    let u16_at = |i: usize| {
+        b.get(i..i + 2)
+            .map(|s| u16::from_le_bytes([s[0], s[1]]) as usize)
+    };
+    let u32_at = |i: usize| {
+        b.get(i..i + 4)
+            .map(|s| u32::from_le_bytes([s[0], s[1], s[2], s[3]]) as usize)
+    };
+    // The end of central directory record: within the last 64 KiB + 22 bytes.
+    let eocd = (0..b.len().saturating_sub(21))
+        .rev()
+        .take(65_557)
+        .find(|&i| b[i..].starts_with(b"PK\x05\x06"))
+        .ok_or_else(|| err("no end of central directory"))?;
+    let count = u16_at(eocd + 10).ok_or_else(|| err("cut short"))?;
+    let mut at = u32_at(eocd + 16).ok_or_else(|| err("cut short"))?;
+    let mut out = Vec::new();
+    for _ in 0..count {
+        if !b.get(at..).is_some_and(|s| s.starts_with(b"PK\x01\x02")) {
+            return Err(err("a central directory entry is damaged"));
+        }
+        let field = |o: usize| u16_at(at + o).ok_or_else(|| err("cut short"));
+        let (method, name_len, extra, comment) = (field(10)?, field(28)?, field(30)?, field(32)?);
+        let size = u32_at(at + 20).ok_or_else(|| err("cut short"))?;
+        let full = u32_at(at + 24).ok_or_else(|| err("cut short"))?;
+        let local = u32_at(at + 42).ok_or_else(|| err("cut short"))?;
+        if size == 0xFFFF_FFFF || local == 0xFFFF_FFFF {
+            return Err(err("a zip64 entry over 4 GiB"));
+        }
+        let name =
+            String::from_utf8_lossy(b.get(at + 46..at + 46 + name_len).unwrap_or(&[])).into_owned();
+        let data_at =
+            local + 30 + u16_at(local + 26).unwrap_or(0) + u16_at(local + 28).unwrap_or(0);
+        let raw = b
+            .get(data_at..data_at + size)
+            .ok_or_else(|| err(&format!("entry {name:?} is cut short")))?;
+        let data = match method {
+            0 => raw.to_vec(),
+            8 => {
+                let mut v = Vec::with_capacity(full.min(1 << 30));
+                flate2::read::DeflateDecoder::new(raw)
+                    .take(full as u64 + 1)
+                    .read_to_end(&mut v)
+                    .map_err(|e| err(&format!("entry {name:?}: {e}")))?;
+                v
+            }
+            m => return Err(err(&format!("entry {name:?} uses compression method {m}"))),
+        };
+        out.push((name, data));
+        at += 46 + name_len + extra + comment;
+    }
+    if out.is_empty() {
+        return Err(err("no arrays"));
+    }
+    Ok(out)
+}

@@ -1,0 +1,102 @@
+//! `import --split`: one long recording per material cut into trials in
+//! time order; `profile new` then offers the time split, and `evaluate`
+//! refuses a plan that cannot test a label.
+
+use std::fmt::Write as _;
+use std::fs;
+use std::path::Path;
+
+use hapticlab::recording;
+
+use crate::common::{p, run};
+
+/// One 60 s trace at 100 Hz per label in `dir/<label>/<label>.csv`
+/// (header `acc`, no time column): a tone by label, with noise.
+fn long_traces(dir: &Path) -> Vec<String> {
+    let mut files = Vec::new();
+    for (l, (label, f)) in [("L1", 7.0), ("L2", 19.0), ("L3", 31.0)].iter().enumerate() {
+        let mut s = String::from("acc\n");
+        let mut x: u64 = 99 + l as u64;
+        for i in 0..6000 {
+            x = x
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            let noise = ((x >> 11) as f64 / (1u64 << 53) as f64) - 0.5;
+            let v = (std::f64::consts::TAU * f * i as f64 / 100.0).sin() + noise;
+            let _ = writeln!(s, "{:.0}", v * 400.0);
+        }
+        fs::create_dir_all(dir.join(label)).unwrap();
+        let file = dir.join(label).join(format!("{label}.csv"));
+        fs::write(&file, s).unwrap();
+        files.push(p(&file).to_string());
+    }
+    files
+}
+
+#[test]
+fn a_long_recording_per_material_is_cut_into_trials_and_evaluated_on_a_time_split() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = long_traces(&dir.path().join("in"));
+    let rec = dir.path().join("rec");
+    let mut args = vec!["import", "--rate", "100", "--split", "2", "--out", p(&rec)];
+    args.extend(files.iter().map(String::as_str));
+    let r = run(&args);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(r.stderr.contains("imported 90 recording(s)"), "{r:?}");
+    let mut names: Vec<String> = fs::read_dir(rec.join("L2"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names.len(), 30);
+    assert_eq!(
+        (names[0].as_str(), names[29].as_str()),
+        ("L2-seg001.csv", "L2-seg030.csv")
+    );
+    let r10 = recording::read(&rec.join("L2").join("L2-seg010.csv")).unwrap();
+    assert_eq!(r10.len(), 200);
+    assert_eq!(r10.meta_f64("segment"), Some(10.0));
+    assert_eq!(r10.meta_f64("segment_start_s"), Some(18.0));
+    assert_eq!(r10.data[0][0], 18.0, "the trial keeps the input's times");
+    assert!(
+        r10.meta_str("source")
+            .is_some_and(|s| s.ends_with("L2.csv"))
+    );
+
+    let profile = dir.path().join("long.toml");
+    let r = run(&["profile", "new", "--from", p(&rec), "--out", p(&profile)]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let text = fs::read_to_string(&profile).unwrap();
+    for line in [
+        "method = \"holdout\"\n",
+        "train_per_class = 21\n",
+        "test_per_class = 9\n",
+    ] {
+        assert!(text.contains(line), "{line:?} missing:\n{text}");
+    }
+    let r = run(&["evaluate", p(&rec), "-p", p(&profile)]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(r.stdout.contains("accuracy: 27/27"), "{r:?}");
+}
+
+#[test]
+fn evaluate_refuses_leave_one_out_with_one_recording_of_a_label() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = long_traces(&dir.path().join("in"));
+    let rec = dir.path().join("whole");
+    let mut args = vec!["import", "--rate", "100", "--out", p(&rec)];
+    args.extend(files.iter().map(String::as_str));
+    assert_eq!(run(&args).code, Some(0));
+    let profile = dir.path().join("whole.toml");
+    let r = run(&["profile", "new", "--from", p(&rec), "--out", p(&profile)]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let text = fs::read_to_string(&profile).unwrap();
+    assert!(text.contains("--split SECONDS"), "{text}");
+    let r = run(&["evaluate", p(&rec), "-p", p(&profile)]);
+    assert_eq!(r.code, Some(2), "{r:?}");
+    assert!(
+        r.stderr.contains("\"L1\" has only one recording") && r.stderr.contains("--split"),
+        "{r:?}"
+    );
+    assert_eq!(r.stderr.trim().lines().count(), 1, "{r:?}");
+}

@@ -1,0 +1,189 @@
+//! `profile new` on folders of different character (short, long, sound-rate,
+//! low-rate, mixed rates, segments of long recordings): every line it writes,
+//! commented or not, passes `check` once put in place, as a person would
+//! put it (the group's lines uncommented, the lines they replace removed).
+
+use std::fmt::Write as _;
+use std::fs;
+use std::path::Path;
+
+use crate::common::{p, run};
+
+/// The keys a spectrum group replaces: every spectrum line above it.
+const SPECTRUM_KEYS: [&str; 9] = [
+    "spectrum",
+    "taper",
+    "bins",
+    "band",
+    "bands",
+    "welch_segment",
+    "welch_overlap",
+    "cepstra",
+    "drop_level",
+];
+
+/// A recording v1 of `n` samples at `rate` Hz: a tone that differs by
+/// label, with noise, and the metadata `meta` (TOML lines).
+fn recording(label: &str, tone: f64, n: usize, rate: f64, meta: &str, seed: u64) -> String {
+    let mut s = format!(
+        "# hapticlab recording v1\n# label = \"{label}\"\n# device = \"test\"\n# rate_hz = {rate:.1}\n{meta}t_s,acc\n"
+    );
+    let mut x = seed.wrapping_mul(2_654_435_761).wrapping_add(7);
+    for i in 0..n {
+        x = x
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        let noise = ((x >> 11) as f64 / (1u64 << 53) as f64) - 0.5;
+        let t = i as f64 / rate;
+        let v = (std::f64::consts::TAU * tone * rate * t).sin() + 0.5 * noise;
+        let _ = writeln!(s, "{t:.7},{v:.5}");
+    }
+    let _ = writeln!(s, "# end samples = {n}");
+    s
+}
+
+/// Recording `i`'s samples, rate and metadata lines.
+type Shape = Box<dyn Fn(usize) -> (usize, f64, String)>;
+
+/// Two labels × `per` recordings, each (samples, rate) from `shape(i)`.
+fn folder(dir: &Path, per: usize, shape: impl Fn(usize) -> (usize, f64, String)) {
+    for (l, label) in ["a", "b"].iter().enumerate() {
+        fs::create_dir_all(dir.join(label)).unwrap();
+        for i in 0..per {
+            let (n, rate, meta) = shape(i);
+            let tone = [0.05, 0.17][l];
+            let text = recording(label, tone, n, rate, &meta, (l * 100 + i) as u64);
+            fs::write(dir.join(label).join(format!("{label}-{i:03}.csv")), text).unwrap();
+        }
+    }
+}
+
+/// `text` with option group `g` (its `# -- ` line's index) in place.
+fn with_group(text: &str, g: usize) -> String {
+    let lines: Vec<&str> = text.lines().collect();
+    let keys: Vec<(&str, &str)> = lines[g + 1..]
+        .iter()
+        .map_while(|l| l.strip_prefix("# ")?.split_once(" = "))
+        .collect();
+    let table = lines[..g]
+        .iter()
+        .rev()
+        .find(|l| l.starts_with('['))
+        .unwrap()
+        .trim_matches(['[', ']']);
+    let replaces = |key: &str| {
+        keys.iter().any(|(k, _)| *k == key)
+            || (keys.iter().any(|(k, _)| *k == "spectrum") && SPECTRUM_KEYS.contains(&key))
+            || (table == "evaluation" && keys.iter().any(|(k, _)| *k == "method"))
+    };
+    let mut out = String::new();
+    let mut current = "";
+    for (i, l) in lines.iter().enumerate() {
+        if l.starts_with('[') {
+            current = l.trim_matches(['[', ']']);
+        }
+        let key = l.split_once(" = ").map(|(k, _)| k.trim());
+        if current == table && !l.starts_with('#') && key.is_some_and(replaces) {
+            continue;
+        }
+        if i > g && i <= g + keys.len() {
+            out.push_str(&l[2..]);
+        } else {
+            out.push_str(l);
+        }
+        out.push('\n');
+    }
+    out
+}
+
+/// `profile new` on `rec`, then `check` of the profile and of each of its
+/// option groups in place; the number of groups.
+fn every_line_checks(rec: &Path, dir: &Path) -> (String, usize) {
+    let out = dir.join(format!(
+        "{}.toml",
+        rec.file_name().unwrap().to_string_lossy()
+    ));
+    let r = run(&["profile", "new", "--from", p(rec), "--out", p(&out)]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let text = fs::read_to_string(&out).unwrap();
+    let r = run(&["check", p(&out)]);
+    assert_eq!(r.code, Some(0), "{r:?}\n{text}");
+    let starts: Vec<usize> = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| l.starts_with("# -- "))
+        .map(|(i, _)| i)
+        .collect();
+    for &g in &starts {
+        let t = with_group(&text, g);
+        let f = dir.join("group.toml");
+        fs::write(&f, &t).unwrap();
+        let r = run(&["check", p(&f)]);
+        assert_eq!(
+            r.code,
+            Some(0),
+            "{}\n{r:?}\n{t}",
+            text.lines().nth(g).unwrap()
+        );
+    }
+    (text, starts.len())
+}
+
+#[test]
+fn every_line_profile_new_writes_passes_check_on_folders_of_every_kind() {
+    let dir = tempfile::tempdir().unwrap();
+    let plain = |n: usize, rate: f64| move |i: usize| (n, rate, format!("# trial = {i}\n"));
+    let kinds: Vec<(&str, usize, Shape)> = vec![
+        ("short", 3, Box::new(plain(20, 1000.0))),
+        ("long", 2, Box::new(plain(200_000, 1000.0))),
+        ("sound", 3, Box::new(plain(22_050, 44_100.0))),
+        ("low-rate", 6, Box::new(plain(200, 100.0))),
+        (
+            "mixed",
+            4,
+            Box::new(|i: usize| (3000, [1000.0, 2000.0][i % 2], String::new())),
+        ),
+        (
+            "segments",
+            12,
+            Box::new(|i: usize| {
+                let meta = format!(
+                    "# source = \"s{}.csv\"\n# segment = {i}\n# segment_start_s = {}\n",
+                    i / 6,
+                    i % 6
+                );
+                (400, 200.0, meta)
+            }),
+        ),
+    ];
+    for (name, per, shape) in kinds {
+        let rec = dir.path().join(name);
+        folder(&rec, per, shape);
+        let (text, groups) = every_line_checks(&rec, dir.path());
+        assert!(groups >= 4, "{name}: {groups} groups\n{text}");
+        match name {
+            "short" => assert!(text.contains("(none offered: "), "{text}"),
+            "long" | "sound" => {
+                assert!(text.contains("taper = \"hann\""), "{text}");
+                assert!(text.contains("# windows = "), "{text}");
+            }
+            "mixed" => {
+                assert!(text.contains("#   1000.0 Hz: 4"), "{text}");
+                assert!(text.contains("spacing = 0.001 "), "{text}");
+            }
+            "segments" => {
+                assert!(text.contains("method = \"holdout\"\n"), "{text}");
+                assert!(text.contains("# group_by = \"source\""), "{text}");
+            }
+            _ => {}
+        }
+    }
+    // The mixed rates' profile evaluates (every point holds samples).
+    let r = run(&[
+        "evaluate",
+        p(&dir.path().join("mixed")),
+        "-p",
+        p(&dir.path().join("mixed.toml")),
+    ]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+}
