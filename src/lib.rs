@@ -26,3 +26,4 @@ pub mod servo;
 pub mod support;
 pub mod terminal;
 pub mod triggers;
+pub mod tune;
