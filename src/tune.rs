@@ -26,6 +26,8 @@
 
 pub mod score;
 pub mod space;
+#[cfg(test)]
+mod tests;
 pub mod text;
 
 use std::collections::BTreeMap;
@@ -104,6 +106,9 @@ pub struct TuneReport {
     pub grid: usize,
     /// Distinct feature settings computed.
     pub feature_settings: usize,
+    /// Each of them: the feature options' values (`contrib/tune_reference.py`
+    /// searches the same settings).
+    pub feature_settings_scored: Vec<Described>,
     /// The outer validation: "holdout", "5-fold", "leave-one-out", …
     pub method: String,
     pub inner_folds: usize,
@@ -539,10 +544,15 @@ pub fn tune(
         SplitMethod::LeaveOneOut => "leave-one-out".to_string(),
     };
     let feature_settings = by_features.len();
+    let feature_settings_scored = by_features
+        .values()
+        .map(|m| settings[m[0]].describe_features())
+        .collect();
     Ok(TuneReport {
         configurations: settings.len(),
         grid: all.len(),
         feature_settings,
+        feature_settings_scored,
         method,
         inner_folds: inner[final_part].len(),
         outer_accuracy: outer.accuracy,

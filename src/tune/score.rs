@@ -222,9 +222,10 @@ mod tests {
         let examples: Vec<TrainingExample> = train
             .iter()
             .flat_map(|&r| {
+                let label = labels[classes[r]];
                 features[r].iter().map(move |w| TrainingExample {
                     file: format!("r{r}"),
-                    label: labels[classes[r]].to_string(),
+                    label: label.to_string(),
                     features: w.clone(),
                 })
             })

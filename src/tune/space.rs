@@ -120,6 +120,19 @@ impl Setting {
             .collect()
     }
 
+    /// The feature options only, with their values.
+    pub fn describe_features(&self) -> Described {
+        let all = self.describe();
+        Described(
+            SPACE
+                .iter()
+                .zip(all.0)
+                .filter(|(s, _)| s.features)
+                .map(|(_, d)| d)
+                .collect(),
+        )
+    }
+
     /// Each option with the value this setting gives it.
     pub fn describe(&self) -> Described {
         let a = &self.analysis;
