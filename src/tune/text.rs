@@ -9,9 +9,12 @@ use std::fmt::Write as _;
 use super::TuneReport;
 use super::space::{Setting, kebab, trim};
 
+/// A key and the value written for it (`None`: the key must not be set).
+type Line = (&'static str, Option<String>);
+
 /// The keys `tune` decides, per section, and what the chosen setting
-/// writes for each (`None`: the key must not be set).
-fn decided(setting: &Setting) -> Vec<(&'static str, Vec<(&'static str, Option<String>)>)> {
+/// writes for each.
+fn decided(setting: &Setting) -> Vec<(&'static str, Vec<Line>)> {
     let a = &setting.analysis;
     let c = &setting.classifier;
     let analysis = vec![
