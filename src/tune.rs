@@ -224,7 +224,7 @@ pub fn check_plan(scans: &[Entry], plan: &Plan) -> Result<(), TuneError> {
                     "recording"
                 };
                 return Err(plan_error(format!(
-                    "label {label:?} has only one {unit}: leave-one-out would test it with none of its kind to train on; record more, or cut long recordings into trials (import --split)"
+                    "label {label:?} has only one {unit}: leave-one-out would test it with none of its kind to train on; record more of it, or cut its long recordings into shorter trials"
                 )));
             }
         }
