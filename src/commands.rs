@@ -25,6 +25,7 @@ pub mod replay;
 pub mod scan;
 pub mod simulate;
 pub mod train;
+pub mod tune;
 
 /// Every command, each holding its arguments.
 #[derive(Debug, Subcommand)]
@@ -64,6 +65,11 @@ pub enum Command {
         after_help = "Examples:\n  hapticlab evaluate recordings/thesis-sim --json > report.json\n  hapticlab evaluate recordings/thesis-sim --folds 10 --seed 1\n  hapticlab evaluate recordings/lab --folds 5 --group-by session\n  hapticlab evaluate recordings/thesis-sim --folds 10 --sweep k=1..15\n  hapticlab evaluate recordings/thesis-sim --folds 5 --sweep spectrum=magnitude,welch   # welch: not evaluated, with the reason\n  hapticlab evaluate recordings/thesis-sim --folds 5 --sweep 'bins=[1,1],[1,2]' --sweep k=1,10   # a grid\n  hapticlab evaluate --profile thesis --simulate --folds 5 --sweep controller.stiffness_n_per_m[1]=90..540:90"
     )]
     Evaluate(evaluate::EvaluateArgs),
+    /// Choose the analysis and classifier settings by nested validation; write them to a profile with the outer estimate.
+    #[command(
+        after_help = "Each setting is scored by 5-fold cross-validation inside the training part only; the best is tested once on what the profile's [evaluation] holds out (holdout: its test part; k-fold and leave-one-out: each outer fold tuned on its own training part). The accuracy reported is that outer estimate, never an inner score.\n\nExamples:\n  hapticlab tune rec/finger -p finger.toml --out finger-tuned.toml\n  hapticlab tune rec/sound -p sound.toml --out sound-tuned.toml --budget 480 --seed 3 --json"
+    )]
+    Tune(tune::TuneArgs),
     /// Play recordings back through the console's dashboard (1×, 4×, 16×, single steps).
     #[command(
         after_help = "Keys: ↑/↓ recording, space pause, +/- speed, . step, ← restart, p predict, q quit.\n\nExample:\n  hapticlab replay recordings/thesis-sim\n  hapticlab replay recordings/thesis-sim/S2/S2_003.csv"
@@ -115,6 +121,7 @@ pub fn run(cmd: Command) -> Result<(), Failure> {
         Command::Train(a) => train::run(a),
         Command::Classify(a) => classify::run(a),
         Command::Evaluate(a) => evaluate::run(a),
+        Command::Tune(a) => tune::run(a),
         Command::Check(a) => check::run(a),
         Command::Profile(a) => profile::run(a),
         Command::Devices(a) => devices::run(a),

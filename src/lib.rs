@@ -13,7 +13,7 @@
 
 pub use hapticlab_engine::{
     acquire, analysis, classify, clock, dataset, device, evaluate, profile, recorder, recording,
-    servo, triggers,
+    servo, triggers, tune,
 };
 
 pub mod cli;

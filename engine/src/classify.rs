@@ -336,7 +336,7 @@ fn manhattan(a: &[f64], b: &[f64]) -> f64 {
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     let mut acc = [0.0f64; 4];
     let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
     let (ra, rb) = (ca.remainder(), cb.remainder());
@@ -351,7 +351,13 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 
 /// The value the neighbour search ranks by (squared for Euclidean), and how
 /// it turns into the reported distance.
-fn rank_value(metric: Metric, q: &[f64], q_norm: f64, row: &[f64], row_norm: f64) -> f64 {
+pub(crate) fn rank_value(
+    metric: Metric,
+    q: &[f64],
+    q_norm: f64,
+    row: &[f64],
+    row_norm: f64,
+) -> f64 {
     match metric {
         Metric::Euclidean => squared_distance(q, row),
         Metric::Manhattan => manhattan(q, row),
@@ -365,7 +371,7 @@ fn rank_value(metric: Metric, q: &[f64], q_norm: f64, row: &[f64], row_norm: f64
     }
 }
 
-fn to_distance(metric: Metric, r: f64) -> f64 {
+pub(crate) fn to_distance(metric: Metric, r: f64) -> f64 {
     if metric == Metric::Euclidean {
         r.sqrt()
     } else {
@@ -413,7 +419,7 @@ fn nearest_rows(
 
 /// The classes in the order that decides the vote (most weight first, then
 /// the smaller summed distance, then the label order), with vote counts.
-fn rank_classes(
+pub(crate) fn rank_classes(
     metric: Metric,
     weights: Weights,
     nearest: &[(f64, usize)],

@@ -6,6 +6,7 @@
 //! Layers, each using only those below it (no module imports one above):
 //!
 //! ```text
+//! tune                             the nested search over analysis and k-NN settings
 //! acquire · evaluate               simulate / scan; holdout, folds, sweeps
 //! dataset                          recordings → labelled feature vectors, on every core
 //! servo · recorder · classify      the 1 kHz loop; samples to disk; k-NN and its model file
@@ -32,3 +33,4 @@ pub mod recorder;
 pub mod recording;
 pub mod servo;
 pub mod triggers;
+pub mod tune;

@@ -1,0 +1,615 @@
+//! `tune`: an honest search over the analysis and classifier options by
+//! nested validation, as scikit-learn's user guide describes it.
+//!
+//! The outer split is the profile's `[evaluation]` (the plan `evaluate`
+//! makes): a holdout's test part, or each fold of k-fold and leave-one-out.
+//! Inside each outer training part, every setting of the search
+//! ([`space::SPACE`], sampled by [`Options::budget`]) is scored by 5-fold
+//! cross-validation over that part only: recordings, never sub-windows,
+//! are dealt into the inner folds (stratified; whole groups with
+//! `group_by`), and the score is the mean of the folds' accuracies. The
+//! best setting (ties to the simplest, [`space::Setting::simplicity`]) is
+//! then trained on the whole outer training part and tested once on its
+//! outer test part; the outer accuracy, pooled over the outer test parts,
+//! is the estimate reported, never an inner score. For k-fold and
+//! leave-one-out the setting written to the profile is chosen by one more
+//! search over every recording (scikit-learn's refit): the outer estimate
+//! is of that procedure.
+//!
+//! Speed: the recordings are read once; feature vectors are made once per
+//! distinct feature setting and serve every outer and inner fold and every
+//! k, metric, vote weighting and standardisation ([`score`]). The budget
+//! samples feature settings (seeded), each scored with every classifier
+//! setting, since those cost almost nothing once the features exist.
+//! Like the rest of the engine this never prints: progress goes to a
+//! callback.
+
+pub mod score;
+pub mod space;
+#[cfg(test)]
+mod tests;
+pub mod text;
+
+use std::collections::BTreeMap;
+
+use rand::SeedableRng;
+use rand::seq::SliceRandom;
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+use thiserror::Error;
+
+use crate::classify::{ClassifyError, Model, TrainingExample, plural};
+use crate::dataset::{DatasetError, Entry};
+use crate::evaluate::cv::{Folds, make_folds};
+use crate::evaluate::plan::{Overrides, Plan};
+use crate::evaluate::{EvaluateError, PredictionRow, Report, count, split};
+use crate::profile::{Profile, SplitMethod};
+use score::{Fold, extract, fold_correct, par_map};
+use space::{Described, Setting, grid};
+
+/// Inner folds (fewer when the training part has fewer recordings or groups).
+pub const INNER_FOLDS: usize = 5;
+
+/// Why a search cannot run.
+#[derive(Debug, Error)]
+pub enum TuneError {
+    /// A plan that cannot test, or a setting the data does not fit: the
+    /// user's to change (exit code 2).
+    #[error("{0}")]
+    Plan(String),
+    #[error(transparent)]
+    Evaluate(#[from] EvaluateError),
+    #[error(transparent)]
+    Dataset(#[from] DatasetError),
+    #[error(transparent)]
+    Classify(#[from] ClassifyError),
+}
+
+impl TuneError {
+    pub fn is_bad_input(&self) -> bool {
+        match self {
+            TuneError::Evaluate(e) => e.is_bad_input(),
+            TuneError::Dataset(e) => e.is_bad_input(),
+            _ => true,
+        }
+    }
+}
+
+fn plan_error(m: impl std::fmt::Display) -> TuneError {
+    TuneError::Plan(m.to_string())
+}
+
+/// How to search.
+#[derive(Debug, Clone, Copy)]
+pub struct Options {
+    /// Settings scored at most (all of the grid when it is no larger).
+    pub budget: usize,
+    /// Seeds the sampling of the grid and the inner folds.
+    pub seed: u64,
+    pub threads: usize,
+}
+
+/// A setting with its inner score.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Scored {
+    pub options: Described,
+    /// Mean accuracy over the inner folds (0..1).
+    pub inner_accuracy: f64,
+}
+
+/// A search's outcome; its JSON is `tune --json`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TuneReport {
+    /// Settings scored in each search.
+    pub configurations: usize,
+    /// Settings in the whole grid (those the data fits).
+    pub grid: usize,
+    /// Distinct feature settings computed.
+    pub feature_settings: usize,
+    /// Each of them: the feature options' values (`contrib/tune_reference.py`
+    /// searches the same settings).
+    pub feature_settings_scored: Vec<Described>,
+    /// The outer validation: "holdout", "5-fold", "leave-one-out", …
+    pub method: String,
+    pub inner_folds: usize,
+    /// The outer estimate: the chosen settings tested on what each search
+    /// never saw, pooled (0..1).
+    pub outer_accuracy: f64,
+    /// The outer test predictions, counted (labels, confusion, per class).
+    pub outer: Report,
+    /// The setting written to the profile.
+    pub chosen: Scored,
+    /// The best settings of the search that chose it, best first.
+    pub table: Vec<Scored>,
+    /// For k-fold and leave-one-out: each outer fold's own choice and its
+    /// test accuracy.
+    pub outer_folds: Vec<OuterFold>,
+    #[serde(skip)]
+    pub chosen_setting: Option<Setting>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OuterFold {
+    pub chosen: Scored,
+    pub tested: usize,
+    pub accuracy: f64,
+}
+
+/// Training and test recordings of one outer part (indices into the scans).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Part {
+    pub train: Vec<usize>,
+    pub test: Vec<usize>,
+}
+
+/// The recordings' labels (sorted, distinct), each scan's class index and
+/// its group (with `group_by`).
+struct Data<'a> {
+    scans: &'a [Entry],
+    labels: Vec<String>,
+    classes: Vec<usize>,
+    groups: Option<Vec<String>>,
+}
+
+impl<'a> Data<'a> {
+    fn new(scans: &'a [Entry], group_by: Option<&str>) -> Result<Data<'a>, TuneError> {
+        let mut labels: Vec<String> = scans.iter().map(|s| s.label.clone()).collect();
+        labels.sort();
+        labels.dedup();
+        let classes = scans
+            .iter()
+            .map(|s| labels.binary_search(&s.label).unwrap_or(0))
+            .collect();
+        let groups = match group_by {
+            Some(key) => Some(
+                scans
+                    .iter()
+                    .map(|s| {
+                        s.meta_text(key).ok_or_else(|| {
+                            plan_error(format!(
+                                "{}: no metadata key `{key}` to group by ([evaluation] group_by)",
+                                s.file
+                            ))
+                        })
+                    })
+                    .collect::<Result<Vec<_>, _>>()?,
+            ),
+            None => None,
+        };
+        Ok(Data {
+            scans,
+            labels,
+            classes,
+            groups,
+        })
+    }
+
+    fn label_refs(&self, idx: &[usize]) -> Vec<&str> {
+        idx.iter().map(|&i| self.scans[i].label.as_str()).collect()
+    }
+
+    fn group_of(&self, idx: &[usize]) -> Option<Vec<String>> {
+        self.groups
+            .as_ref()
+            .map(|g| idx.iter().map(|&i| g[i].clone()).collect())
+    }
+}
+
+/// Refuse, in one line, a plan that cannot test: one label, a label that
+/// leave-one-out would leave with no training recording, fewer
+/// recordings (or groups) than folds.
+pub fn check_plan(scans: &[Entry], plan: &Plan) -> Result<(), TuneError> {
+    let data = Data::new(scans, plan.group_by.as_deref())?;
+    if data.labels.len() < 2 {
+        return Err(plan_error(format!(
+            "the recordings have a single label ({}): there is nothing to tell apart; add recordings of another label",
+            data.labels.first().map_or("none", String::as_str)
+        )));
+    }
+    if plan.method == SplitMethod::LeaveOneOut {
+        for (c, label) in data.labels.iter().enumerate() {
+            let mut units: Vec<&str> = (0..scans.len())
+                .filter(|&i| data.classes[i] == c)
+                .map(|i| match &data.groups {
+                    Some(g) => g[i].as_str(),
+                    None => scans[i].file.as_str(),
+                })
+                .collect();
+            units.sort_unstable();
+            units.dedup();
+            if units.len() < 2 {
+                let unit = if data.groups.is_some() {
+                    "group"
+                } else {
+                    "recording"
+                };
+                return Err(plan_error(format!(
+                    "label {label:?} has only one {unit}: leave-one-out would test it with none of its kind to train on; record more of it, or cut its long recordings into shorter trials"
+                )));
+            }
+        }
+    }
+    if plan.method == SplitMethod::KFold {
+        let units = match &data.groups {
+            Some(g) => {
+                let mut g: Vec<&String> = g.iter().collect();
+                g.sort_unstable();
+                g.dedup();
+                g.len()
+            }
+            None => scans.len(),
+        };
+        if units < plan.folds {
+            let what = if data.groups.is_some() {
+                "groups"
+            } else {
+                "recordings"
+            };
+            return Err(plan_error(format!(
+                "{} need at least as many {what}, and there are {units}: set [evaluation] folds to {units} or fewer",
+                plural(plan.folds, "fold", "folds")
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The outer parts of the profile's plan over the scans (one per outer
+/// fold; a holdout has one).
+pub fn outer_parts(
+    profile: &Profile,
+    scans: &[Entry],
+    plan: &Plan,
+) -> Result<Vec<Part>, TuneError> {
+    let data = Data::new(scans, plan.group_by.as_deref())?;
+    let all: Vec<usize> = (0..scans.len()).collect();
+    if plan.method == SplitMethod::Holdout {
+        let stubs: Vec<TrainingExample> = scans
+            .iter()
+            .map(|s| TrainingExample {
+                file: s.file.clone(),
+                label: s.label.clone(),
+                features: Vec::new(),
+            })
+            .collect();
+        let mut eval = profile.evaluation.clone();
+        eval.shuffle_seed = plan.holdout_shuffle;
+        let sp = split(stubs, &eval)?;
+        let index: BTreeMap<&str, usize> = scans
+            .iter()
+            .enumerate()
+            .map(|(i, s)| (s.file.as_str(), i))
+            .collect();
+        let pick = |v: &[TrainingExample]| v.iter().map(|e| index[e.file.as_str()]).collect();
+        return Ok(vec![Part {
+            train: pick(&sp.train),
+            test: pick(&sp.test),
+        }]);
+    }
+    let folds = make_folds(
+        &data.label_refs(&all),
+        data.group_of(&all).as_deref(),
+        plan.method,
+        plan.folds,
+        plan.seed,
+    )?;
+    Ok(folds_to_parts(&all, &folds))
+}
+
+/// Folds (positions in `within`) as parts over `within`'s indices.
+fn folds_to_parts(within: &[usize], folds: &Folds) -> Vec<Part> {
+    folds
+        .iter()
+        .map(|f| {
+            let mut test_pos = vec![false; within.len()];
+            for &p in f {
+                test_pos[p] = true;
+            }
+            Part {
+                train: (0..within.len())
+                    .filter(|&p| !test_pos[p])
+                    .map(|p| within[p])
+                    .collect(),
+                test: f.iter().map(|&p| within[p]).collect(),
+            }
+        })
+        .collect()
+}
+
+/// The inner folds of a training part: stratified, grouped with groups,
+/// [`INNER_FOLDS`] of them or as many as there are recordings or groups.
+pub fn inner_parts(
+    scans: &[Entry],
+    group_by: Option<&str>,
+    train: &[usize],
+    seed: u64,
+) -> Result<Vec<Part>, TuneError> {
+    let data = Data::new(scans, group_by)?;
+    let groups = data.group_of(train);
+    let units = match &groups {
+        Some(g) => {
+            let mut g: Vec<&String> = g.iter().collect();
+            g.sort_unstable();
+            g.dedup();
+            g.len()
+        }
+        None => train.len(),
+    };
+    let folds = INNER_FOLDS.min(units);
+    if folds < 2 {
+        return Err(plan_error(format!(
+            "a training part has {}: the search needs at least 2 to score settings inside it; give the training part more",
+            plural(
+                units,
+                if groups.is_some() {
+                    "group"
+                } else {
+                    "recording"
+                },
+                if groups.is_some() {
+                    "groups"
+                } else {
+                    "recordings"
+                }
+            )
+        )));
+    }
+    let f = make_folds(
+        &data.label_refs(train),
+        groups.as_deref(),
+        SplitMethod::KFold,
+        folds,
+        seed,
+    )?;
+    Ok(folds_to_parts(train, &f))
+}
+
+/// The settings to score: the whole grid within the budget, else whole
+/// feature settings sampled with the seed (each with every classifier
+/// setting) up to the budget. In grid order.
+fn sample(grid: Vec<Setting>, budget: usize, seed: u64) -> Vec<Setting> {
+    if grid.len() <= budget {
+        return grid;
+    }
+    let mut by_features: BTreeMap<Vec<usize>, Vec<Setting>> = BTreeMap::new();
+    for s in grid {
+        by_features.entry(s.feature_key()).or_default().push(s);
+    }
+    let mut groups: Vec<Vec<Setting>> = by_features.into_values().collect();
+    groups.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
+    let mut out: Vec<Setting> = groups.into_iter().flatten().take(budget).collect();
+    out.sort_by(|a, b| a.values.cmp(&b.values));
+    out
+}
+
+/// The best of scored settings: the highest score, ties to the simplest.
+fn best(settings: &[Setting], scores: &[f64]) -> usize {
+    (0..settings.len())
+        .min_by(|&a, &b| {
+            scores[b]
+                .total_cmp(&scores[a])
+                .then_with(|| settings[a].simplicity().cmp(&settings[b].simplicity()))
+        })
+        .unwrap_or(0)
+}
+
+/// Run the search on the scans (read with [`crate::dataset::Keep::Samples`],
+/// one entry per recording). `progress(done, total)` hears each feature
+/// setting scored, in settings.
+pub fn tune(
+    name: &str,
+    profile: &Profile,
+    scans: &[Entry],
+    options: &Options,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<TuneReport, TuneError> {
+    let plan = Plan::new(profile, &Overrides::default());
+    check_plan(scans, &plan)?;
+    let data = Data::new(scans, plan.group_by.as_deref())?;
+    let group_by = plan.group_by.as_deref();
+    let mut parts = outer_parts(profile, scans, &plan)?;
+    // k-fold and leave-one-out: one more search over every recording
+    // chooses the setting written (its test part is empty).
+    if plan.method != SplitMethod::Holdout {
+        parts.push(Part {
+            train: (0..scans.len()).collect(),
+            test: Vec::new(),
+        });
+    }
+    let inner: Vec<Vec<Part>> = parts
+        .iter()
+        .map(|p| inner_parts(scans, group_by, &p.train, options.seed))
+        .collect::<Result<_, _>>()?;
+    let all = grid((&profile.analysis, &profile.classifier));
+    if all.is_empty() {
+        return Err(plan_error(
+            "no setting of the search fits the analysis window (Welch segments of at least 16 points): widen [analysis] window",
+        ));
+    }
+    let settings = sample(all.clone(), options.budget.max(1), options.seed);
+    // scores[part][setting]
+    let mut scores = vec![vec![0.0; settings.len()]; parts.len()];
+    let mut by_features: BTreeMap<Vec<usize>, Vec<usize>> = BTreeMap::new();
+    for (i, s) in settings.iter().enumerate() {
+        by_features.entry(s.feature_key()).or_default().push(i);
+    }
+    let mut done = 0;
+    progress(0, settings.len());
+    for members in by_features.values() {
+        let features = extract(scans, &settings[members[0]].analysis, options.threads)?;
+        // One task per (outer part, inner fold, metric, standardize).
+        let mut kinds: Vec<(crate::profile::Metric, bool)> = members
+            .iter()
+            .map(|&i| {
+                let c = &settings[i].classifier;
+                (c.metric, c.standardize)
+            })
+            .collect();
+        kinds.sort_by_key(|&(m, s)| (m as u8, s));
+        kinds.dedup();
+        let mut tasks = Vec::new();
+        for (p, folds) in inner.iter().enumerate() {
+            for f in 0..folds.len() {
+                for &kind in &kinds {
+                    tasks.push((p, f, kind));
+                }
+            }
+        }
+        let results = par_map(&tasks, options.threads, |&(p, f, (metric, standardize))| {
+            let voters: Vec<usize> = members
+                .iter()
+                .copied()
+                .filter(|&i| {
+                    let c = &settings[i].classifier;
+                    c.metric == metric && c.standardize == standardize
+                })
+                .collect();
+            let kw: Vec<_> = voters
+                .iter()
+                .map(|&i| (settings[i].classifier.k, settings[i].classifier.weights))
+                .collect();
+            let fold = Fold {
+                train: &inner[p][f].train,
+                test: &inner[p][f].test,
+            };
+            let correct = fold_correct(
+                &features,
+                &data.classes,
+                data.labels.len(),
+                &fold,
+                metric,
+                standardize,
+                &kw,
+            );
+            let tested = inner[p][f].test.len().max(1) as f64;
+            (p, voters, correct, tested)
+        });
+        for (p, voters, correct, tested) in results {
+            let n_folds = inner[p].len() as f64;
+            for (i, c) in voters.into_iter().zip(correct) {
+                scores[p][i] += c as f64 / tested / n_folds;
+            }
+        }
+        done += members.len();
+        progress(done, settings.len());
+    }
+    let scored = |i: usize, p: usize| Scored {
+        options: settings[i].describe(),
+        inner_accuracy: scores[p][i],
+    };
+    // Each outer part's choice, trained on its training part and tested
+    // once on its test part.
+    let mut predictions = Vec::new();
+    let mut outer_folds = Vec::new();
+    let mut made: BTreeMap<Vec<usize>, score::Features> = BTreeMap::new();
+    for (p, part) in parts.iter().enumerate() {
+        if part.test.is_empty() {
+            continue;
+        }
+        let chosen = best(&settings, &scores[p]);
+        let setting = &settings[chosen];
+        let features = match made.entry(setting.feature_key()) {
+            std::collections::btree_map::Entry::Occupied(e) => e.into_mut(),
+            std::collections::btree_map::Entry::Vacant(e) => {
+                e.insert(extract(scans, &setting.analysis, options.threads)?)
+            }
+        };
+        let rows = test_part(name, setting, scans, features, part)?;
+        let right = rows.iter().filter(|r| r.label == r.predicted).count();
+        outer_folds.push(OuterFold {
+            chosen: scored(chosen, p),
+            tested: rows.len(),
+            accuracy: right as f64 / rows.len().max(1) as f64,
+        });
+        predictions.extend(rows);
+    }
+    let final_part = parts.len() - 1;
+    let chosen = best(&settings, &scores[final_part]);
+    let mut order: Vec<usize> = (0..settings.len()).collect();
+    order.sort_by(|&a, &b| {
+        scores[final_part][b]
+            .total_cmp(&scores[final_part][a])
+            .then_with(|| settings[a].simplicity().cmp(&settings[b].simplicity()))
+    });
+    let train_files = parts[0]
+        .train
+        .iter()
+        .map(|&i| scans[i].file.clone())
+        .collect();
+    let outer = count(&data.labels, train_files, predictions);
+    let method = match plan.method {
+        SplitMethod::Holdout => "holdout".to_string(),
+        SplitMethod::KFold => format!("{}-fold", plan.folds),
+        SplitMethod::LeaveOneOut if group_by.is_some() => "leave-one-group-out".to_string(),
+        SplitMethod::LeaveOneOut => "leave-one-out".to_string(),
+    };
+    let feature_settings = by_features.len();
+    let feature_settings_scored = by_features
+        .values()
+        .map(|m| settings[m[0]].describe_features())
+        .collect();
+    Ok(TuneReport {
+        configurations: settings.len(),
+        grid: all.len(),
+        feature_settings,
+        feature_settings_scored,
+        method,
+        inner_folds: inner[final_part].len(),
+        outer_accuracy: outer.accuracy,
+        outer,
+        chosen: scored(chosen, final_part),
+        table: order
+            .iter()
+            .take(10)
+            .map(|&i| scored(i, final_part))
+            .collect(),
+        outer_folds: if plan.method == SplitMethod::Holdout {
+            Vec::new()
+        } else {
+            outer_folds
+        },
+        chosen_setting: Some(settings[chosen].clone()),
+    })
+}
+
+/// Train a model with the setting on the part's training recordings and
+/// classify each of its test recordings (by its sub-windows' vote): what
+/// `evaluate` does with that setting on that split.
+fn test_part(
+    name: &str,
+    setting: &Setting,
+    scans: &[Entry],
+    features: &score::Features,
+    part: &Part,
+) -> Result<Vec<PredictionRow>, TuneError> {
+    let examples: Vec<TrainingExample> = part
+        .train
+        .iter()
+        .flat_map(|&r| {
+            features[r].iter().map(move |w| TrainingExample {
+                file: scans[r].file.clone(),
+                label: scans[r].label.clone(),
+                features: w.clone(),
+            })
+        })
+        .collect();
+    let mut classifier = setting.classifier.clone();
+    classifier.k = classifier.k.min(examples.len().max(1));
+    let model = Model::train(name, &setting.analysis, &classifier, examples)?;
+    part.test
+        .iter()
+        .map(|&r| {
+            let p = model.classify_windows(&features[r])?;
+            Ok(PredictionRow {
+                file: scans[r].file.clone(),
+                label: scans[r].label.clone(),
+                predicted: p.label,
+                votes: p
+                    .tally
+                    .iter()
+                    .map(|t| (t.label.clone(), t.windows))
+                    .collect(),
+            })
+        })
+        .collect()
+}

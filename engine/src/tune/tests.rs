@@ -1,0 +1,275 @@
+//! The search's honesty: the outer score is reported (not the inner best),
+//! choices are made on training folds only, groups and sub-windows stay on
+//! one side, a seed gives one answer, and plans that cannot test are refused.
+
+use super::score::{Fold, extract, fold_correct};
+use super::*;
+use crate::dataset::Entry;
+use crate::profile::LoadedProfile;
+use std::path::Path;
+
+fn profile(evaluation: &str) -> Profile {
+    let text = format!(
+        "name = \"t\"\n[analysis]\nchannel = \"x\"\naxis = \"t_s\"\nwindow = [0.0, 0.999]\n\
+         spacing = 0.001\n[classifier]\nk = 1\n[evaluation]\n{evaluation}\n"
+    );
+    LoadedProfile::from_str(&text, "t.toml", Path::new("."))
+        .unwrap()
+        .profile
+}
+
+const HOLDOUT: &str = "method = \"holdout\"\ntrain_per_class = 5\ntest_per_class = 5";
+
+/// A small deterministic generator.
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    }
+}
+
+/// `classes` × `trials` one-second scans at 1 kHz; `signal(class, trial,
+/// rng)` gives each. Files are named trial first, so file-name order is
+/// trial order whatever the label.
+fn scans(
+    classes: usize,
+    trials: usize,
+    signal: impl Fn(usize, usize, &mut Lcg) -> Vec<f64>,
+) -> Vec<Entry> {
+    let mut rng = Lcg(99);
+    let mut out = Vec::new();
+    for c in 0..classes {
+        for t in 0..trials {
+            out.push(Entry {
+                file: format!("t{t:02}-c{c}.csv"),
+                label: format!("L{c}"),
+                meta: vec![("session".into(), toml::Value::Integer((t / 2) as i64))],
+                features: Vec::new(),
+                axis: (0..1000).map(|i| i as f64 * 0.001).collect(),
+                signals: vec![signal(c, t, &mut rng)],
+                window: None,
+            });
+        }
+    }
+    // Loaded recordings come in file-name order.
+    out.sort_by(|a, b| a.file.cmp(&b.file));
+    out
+}
+
+fn tone(freq: f64, gain: f64, noise: f64, rng: &mut Lcg) -> Vec<f64> {
+    (0..1000)
+        .map(|i| {
+            let t = i as f64 * 0.001;
+            gain * ((std::f64::consts::TAU * freq * t).sin() + noise * rng.next())
+        })
+        .collect()
+}
+
+/// Tones 40 + 25·class Hz in noise; the later (test) trials are 30 times
+/// louder and noisier, a drift no training trial shows.
+fn drifting() -> Vec<Entry> {
+    scans(3, 10, |c, t, rng| {
+        let late = t >= 5;
+        tone(
+            40.0 + 25.0 * c as f64,
+            if late { 30.0 } else { 1.0 },
+            if late { 6.0 } else { 3.0 },
+            rng,
+        )
+    })
+}
+
+fn options(budget: usize, seed: u64) -> Options {
+    Options {
+        budget,
+        seed,
+        threads: 2,
+    }
+}
+
+fn run(p: &Profile, s: &[Entry], budget: usize, seed: u64) -> TuneReport {
+    tune("t", p, s, &options(budget, seed), &|_, _| {}).unwrap()
+}
+
+#[test]
+fn the_outer_score_is_reported_not_the_inner_best() {
+    let p = profile(HOLDOUT);
+    let s = drifting();
+    let r = run(&p, &s, 10_000, 0);
+    assert_eq!(r.configurations, r.grid, "the whole grid fits the budget");
+    let plan = Plan::new(&p, &Overrides::default());
+    let part = &outer_parts(&p, &s, &plan).unwrap()[0];
+    // Every setting's accuracy on the test part, as the fast path counts it.
+    let settings = grid((&p.analysis, &p.classifier));
+    let mut on_test = Vec::new();
+    for st in &settings {
+        let f = extract(&s, &st.analysis, 2).unwrap();
+        let classes: Vec<usize> = s.iter().map(|e| e.label[1..].parse().unwrap()).collect();
+        let fold = Fold {
+            train: &part.train,
+            test: &part.test,
+        };
+        let c = st.classifier.clone();
+        let right = fold_correct(
+            &f,
+            &classes,
+            3,
+            &fold,
+            c.metric,
+            c.standardize,
+            &[(c.k, c.weights)],
+        );
+        on_test.push(right[0] as f64 / part.test.len() as f64);
+    }
+    let chosen = r.chosen_setting.as_ref().unwrap();
+    let i = settings.iter().position(|st| st == chosen).unwrap();
+    let best_on_test = on_test.iter().cloned().fold(0.0, f64::max);
+    // The data is built so that the honest choice is not the setting that
+    // would look best on the test part, and its inner score is not its
+    // test score: tune reports the latter.
+    assert!(
+        on_test[i] < best_on_test,
+        "{} vs {best_on_test}",
+        on_test[i]
+    );
+    assert_eq!(r.outer_accuracy, on_test[i]);
+    assert_ne!(r.outer_accuracy, r.chosen.inner_accuracy);
+    assert_eq!(r.outer.tested(), 15);
+}
+
+#[test]
+fn a_seed_gives_one_answer_and_the_budget_caps_the_settings() {
+    let p = profile(HOLDOUT);
+    let s = drifting();
+    let a = run(&p, &s, 96, 5);
+    let b = run(&p, &s, 96, 5);
+    assert_eq!(a, b);
+    assert_eq!(a.configurations, 96);
+    assert_eq!(
+        a.feature_settings, 2,
+        "two feature settings × 48 classifier settings"
+    );
+    let c = run(&p, &s, 96, 6);
+    assert_eq!(c.configurations, 96);
+}
+
+#[test]
+fn the_choice_is_made_on_training_folds_only() {
+    let p = profile(HOLDOUT);
+    let s = drifting();
+    let plan = Plan::new(&p, &Overrides::default());
+    let part = outer_parts(&p, &s, &plan).unwrap()[0].clone();
+    // Shuffle the test part's labels among themselves (each label keeps
+    // its count there, and the files still sort after the training ones).
+    let mut permuted = s.clone();
+    let labels: Vec<String> = part.test.iter().map(|&i| s[i].label.clone()).collect();
+    for (n, &i) in part.test.iter().enumerate() {
+        permuted[i].label = labels[(n + 7) % labels.len()].clone();
+    }
+    assert_ne!(permuted, s);
+    let again = outer_parts(&p, &permuted, &plan).unwrap()[0].clone();
+    assert_eq!(again.train, part.train);
+    let a = run(&p, &s, 200, 1);
+    let b = run(&p, &permuted, 200, 1);
+    assert_eq!(a.chosen, b.chosen);
+    assert_eq!(a.table, b.table);
+}
+
+#[test]
+fn groups_never_sit_on_both_sides() {
+    let p = profile("method = \"k-fold\"\nfolds = 3\ngroup_by = \"session\"");
+    let s = drifting();
+    let plan = Plan::new(&p, &Overrides::default());
+    let session = |i: usize| s[i].meta_text("session").unwrap();
+    let disjoint = |part: &Part| {
+        part.train
+            .iter()
+            .all(|&a| part.test.iter().all(|&b| session(a) != session(b)))
+    };
+    let outer = outer_parts(&p, &s, &plan).unwrap();
+    assert_eq!(outer.len(), 3);
+    for o in &outer {
+        assert!(disjoint(o));
+        let inner = inner_parts(&s, Some("session"), &o.train, 0).unwrap();
+        // 5 sessions at most in a training part of 3 folds over 5 sessions.
+        assert!(inner.len() >= 2);
+        for i in &inner {
+            assert!(disjoint(i));
+            assert!(i.train.iter().chain(&i.test).all(|r| o.train.contains(r)));
+        }
+    }
+    let r = run(&p, &s, 48, 0);
+    assert_eq!(r.outer.tested(), 30);
+    assert_eq!(r.outer_folds.len(), 3);
+}
+
+/// Every recording's sub-windows are one point on a line, and both its
+/// neighbours on the line carry the other label: a recording whose own
+/// windows were among the training windows would find them at distance 0
+/// and be named right; kept with their recording, none is. The inner
+/// folds test each recording once, whole.
+#[test]
+fn sub_windows_stay_with_their_recording() {
+    let features: score::Features = (0..12).map(|r| vec![vec![r as f64 * 10.0]; 3]).collect();
+    let classes: Vec<usize> = (0..12).map(|r| r % 2).collect();
+    let s = scans(2, 6, |_, _, rng| tone(50.0, 1.0, 1.0, rng));
+    let all: Vec<usize> = (0..12).collect();
+    let inner = inner_parts(&s, None, &all, 0).unwrap();
+    assert_eq!(inner.len(), 5);
+    for r in 0..12 {
+        let train: Vec<usize> = (0..12).filter(|&o| o != r).collect();
+        let fold = Fold {
+            train: &train,
+            test: &[r],
+        };
+        let right = fold_correct(
+            &features,
+            &classes,
+            2,
+            &fold,
+            crate::profile::Metric::Euclidean,
+            false,
+            &[(1, crate::profile::Weights::Uniform)],
+        );
+        assert_eq!(right, vec![0], "recording {r}");
+    }
+    let mut tested: Vec<usize> = inner.iter().flat_map(|p| p.test.iter().copied()).collect();
+    tested.sort_unstable();
+    assert_eq!(tested, all, "each recording tested once, whole");
+    // With sub-windows searched, the outer test counts recordings.
+    let p = profile(HOLDOUT);
+    let r = run(&p, &drifting(), 10_000, 0);
+    assert!(
+        r.feature_settings_scored
+            .iter()
+            .any(|d| d.0.iter().any(|(k, v)| k == "windows" && v != "none"))
+    );
+    assert_eq!(r.outer.tested(), 15);
+}
+
+#[test]
+fn plans_that_cannot_test_are_refused() {
+    let one_label = scans(1, 6, |_, _, rng| tone(50.0, 1.0, 1.0, rng));
+    let p = profile("method = \"k-fold\"\nfolds = 3");
+    let e = tune("t", &p, &one_label, &options(10, 0), &|_, _| {}).unwrap_err();
+    assert!(e.to_string().contains("single label"), "{e}");
+
+    let one_each = scans(3, 1, |c, _, rng| tone(50.0 + c as f64, 1.0, 1.0, rng));
+    let loo = profile("method = \"leave-one-out\"");
+    let e = tune("t", &loo, &one_each, &options(10, 0), &|_, _| {}).unwrap_err();
+    assert!(e.to_string().contains("has only one recording"), "{e}");
+    assert!(e.is_bad_input());
+
+    let few = scans(2, 2, |c, _, rng| tone(50.0 + c as f64, 1.0, 1.0, rng));
+    let ten = profile("method = \"k-fold\"\nfolds = 10");
+    let e = tune("t", &ten, &few, &options(10, 0), &|_, _| {}).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("10 folds need at least as many recordings, and there are 4"),
+        "{e}"
+    );
+}

@@ -1,0 +1,197 @@
+//! The tuned profile's text: the input profile's own text with the lines
+//! of the options searched replaced (or added to their section, or
+//! commented out when the chosen setting does not use them), each marked
+//! `# tune`, and a comment block at the end with the outer estimate and
+//! the table of the best settings by inner score.
+
+use std::fmt::Write as _;
+
+use super::TuneReport;
+use super::space::{Setting, kebab, trim};
+
+/// A key and the value written for it (`None`: the key must not be set).
+type Line = (&'static str, Option<String>);
+
+/// The keys `tune` decides, per section, and what the chosen setting
+/// writes for each.
+fn decided(setting: &Setting) -> Vec<(&'static str, Vec<Line>)> {
+    let a = &setting.analysis;
+    let c = &setting.classifier;
+    let analysis = vec![
+        ("spectrum", Some(quoted(&a.spectrum))),
+        ("taper", Some(quoted(&a.taper))),
+        ("welch_segment", a.welch_segment.map(|s| s.to_string())),
+        ("welch_overlap", None),
+        ("band", None),
+        (
+            "bins",
+            a.bands
+                .is_none()
+                .then(|| format!("[{}, {}]", a.bins[0], a.bins[1])),
+        ),
+        (
+            "bands",
+            a.bands.map(|b| {
+                format!(
+                    "{{ count = {}, from = {}, to = {}, scale = {} }}",
+                    b.count,
+                    trim(b.from),
+                    trim(b.to),
+                    quoted(&b.scale)
+                )
+            }),
+        ),
+        ("cepstra", a.cepstra.map(|n| n.to_string())),
+        ("drop_level", a.drop_level.then(|| "true".to_string())),
+        (
+            "windows",
+            a.windows
+                .map(|w| format!("{{ length = {}, hop = {} }}", trim(w.length), trim(w.hop))),
+        ),
+    ];
+    let classifier = vec![
+        ("k", Some(c.k.to_string())),
+        ("metric", Some(quoted(&c.metric))),
+        ("weights", Some(quoted(&c.weights))),
+        ("standardize", Some(c.standardize.to_string())),
+        ("k_candidates", None),
+    ];
+    vec![("analysis", analysis), ("classifier", classifier)]
+}
+
+/// An option's profile spelling, quoted: `"log-welch"`.
+fn quoted<T: serde::Serialize>(v: &T) -> String {
+    format!("\"{}\"", kebab(v))
+}
+
+/// The key a `key = value` line sets, when it is one.
+fn key_of(line: &str) -> Option<&str> {
+    let t = line.trim_start();
+    if t.starts_with('#') || t.starts_with('[') {
+        return None;
+    }
+    let (k, _) = t.split_once('=')?;
+    Some(k.trim())
+}
+
+/// The section a `[name]` line opens.
+fn section_of(line: &str) -> Option<&str> {
+    let t = line.trim();
+    let inner = t.strip_prefix('[')?.split(']').next()?;
+    Some(inner.trim_matches('[').trim())
+}
+
+/// `original` with the chosen setting's lines and the search's comment
+/// block; `about` is the block's first line (the folder and seed).
+pub fn tuned_profile(
+    original: &str,
+    setting: &Setting,
+    report: &TuneReport,
+    about: &str,
+) -> String {
+    let mut lines: Vec<String> = original.lines().map(str::to_string).collect();
+    for (section, keys) in decided(setting) {
+        let mut written = vec![false; keys.len()];
+        let mut inside = false;
+        let mut last_key: Option<usize> = None;
+        let mut header: Option<usize> = None;
+        for (i, line) in lines.iter_mut().enumerate() {
+            if let Some(s) = section_of(line) {
+                inside = s == section;
+                if inside {
+                    header = Some(i);
+                }
+                continue;
+            }
+            if !inside {
+                continue;
+            }
+            let Some(key) = key_of(line) else { continue };
+            last_key = Some(i);
+            if let Some(j) = keys.iter().position(|(k, _)| *k == key) {
+                *line = match &keys[j].1 {
+                    Some(v) => format!("{key} = {v}  # tune"),
+                    None => format!("# {}  # tune: not used by the setting chosen", line.trim()),
+                };
+                written[j] = true;
+            }
+        }
+        let missing: Vec<String> = keys
+            .iter()
+            .zip(&written)
+            .filter(|(_, w)| !**w)
+            .filter_map(|((k, v), _)| v.as_ref().map(|v| format!("{k} = {v}  # tune")))
+            .collect();
+        match last_key.or(header) {
+            Some(at) => {
+                for (n, l) in missing.into_iter().enumerate() {
+                    lines.insert(at + 1 + n, l);
+                }
+            }
+            None => {
+                lines.push(String::new());
+                lines.push(format!("[{section}]"));
+                lines.extend(missing);
+            }
+        }
+    }
+    let mut out = lines.join("\n");
+    out.push('\n');
+    out.push_str(&comment_block(report, about));
+    out
+}
+
+/// The comment block at the end of a tuned profile.
+fn comment_block(r: &TuneReport, about: &str) -> String {
+    let mut w = String::new();
+    let pct = |x: f64| format!("{:.1} %", 100.0 * x);
+    let _ = writeln!(w, "\n# --- hapticlab tune: {about} ---");
+    let _ = writeln!(
+        w,
+        "# The lines marked `# tune` were chosen by nested validation: {} of the {} settings of the",
+        r.configurations, r.grid
+    );
+    let _ = writeln!(
+        w,
+        "# search scored by {}-fold cross-validation inside the training part only, the best then",
+        r.inner_folds
+    );
+    let _ = writeln!(
+        w,
+        "# tested once on what [evaluation] ({}) holds out.",
+        r.method
+    );
+    let _ = writeln!(
+        w,
+        "# Outer estimate: {} ({}/{} test recordings). The inner scores below are not an estimate.",
+        pct(r.outer_accuracy),
+        r.outer.correct(),
+        r.outer.tested()
+    );
+    let _ = writeln!(
+        w,
+        "# Best settings by inner score (mean accuracy over the inner folds):"
+    );
+    let Some(first) = r.table.first() else {
+        return w;
+    };
+    let mut widths: Vec<usize> = first.options.0.iter().map(|(k, _)| k.len()).collect();
+    for row in &r.table {
+        for (wd, (_, v)) in widths.iter_mut().zip(&row.options.0) {
+            *wd = (*wd).max(v.len());
+        }
+    }
+    let mut head = "#   inner".to_string();
+    for ((k, _), wd) in first.options.0.iter().zip(&widths) {
+        let _ = write!(head, "  {k:<wd$}");
+    }
+    let _ = writeln!(w, "{}", head.trim_end());
+    for row in &r.table {
+        let mut line = format!("# {:>7}", pct(row.inner_accuracy));
+        for ((_, v), wd) in row.options.0.iter().zip(&widths) {
+            let _ = write!(line, "  {v:<wd$}");
+        }
+        let _ = writeln!(w, "{}", line.trim_end());
+    }
+    w
+}
