@@ -144,6 +144,11 @@ pub struct Report {
     pub link: Option<LinkStats>,
     /// Seconds from the first exchange until the forces were zeroed.
     pub duration_s: f64,
+    /// The zero-force packet that ended the test was seen to leave the host.
+    pub zero_force_confirmed: bool,
+    /// The motor commands the device applies after the test, where that
+    /// can be known (the emulator); `None` for a real Falcon.
+    pub motors_after: Option<[i16; 3]>,
     pub passed: bool,
 }
 
@@ -159,6 +164,8 @@ impl Report {
             pulses: Vec::new(),
             link: None,
             duration_s: 0.0,
+            zero_force_confirmed: false,
+            motors_after: None,
             passed: false,
         }
     }
@@ -217,7 +224,18 @@ impl Report {
                 l.saturated_ticks
             ));
         }
-        out.push(format!("forces zeroed after {:.1} s", self.duration_s));
+        out.push(if self.zero_force_confirmed {
+            format!(
+                "forces zeroed after {:.1} s (the zero-force packet left the host)",
+                self.duration_s
+            )
+        } else {
+            format!(
+                "forces zeroed after {:.1} s, but the zero-force packet was not seen to leave the host within {} ms: if the grip still pushes, unplug the Falcon's power",
+                self.duration_s,
+                super::SAFE_FLUSH.as_millis()
+            )
+        });
         let failed = self.not_passed().len();
         out.push(if self.passed {
             format!("result: PASS ({} steps)", self.steps.len())
@@ -400,6 +418,9 @@ pub fn run<T: FalconTransport, C: Clock>(
     report.push("open", Verdict::Pass, how);
     run_steps(&mut device, pace, operator, options, &mut report);
     report.link = device.link_stats();
+    let stats = device.stats();
+    report.zero_force_confirmed = stats.safe_confirmed > 0 && stats.safe_unconfirmed == 0;
+    report.motors_after = device.transport().applied_motor();
     (report, Ok(device))
 }
 

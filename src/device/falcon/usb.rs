@@ -148,6 +148,15 @@ fn in_transfer_error(e: TransferError) -> TransportError {
     }
 }
 
+/// A failed bulk OUT transfer: like a failed IN one, final only when the
+/// device vanished (a single failed write must not end a session).
+fn out_transfer_error(e: TransferError) -> TransportError {
+    match e {
+        TransferError::Disconnected => TransportError::Disconnected("USB device gone".into()),
+        other => TransportError::Transient(format!("bulk OUT transfer failed: {other}")),
+    }
+}
+
 /// An open Falcon: its handle, claimed interface, endpoints and buffers.
 struct Handle {
     device: nusb::Device,
@@ -259,13 +268,36 @@ impl Handle {
                     let mut b = c.buffer;
                     b.clear();
                     self.free_out.push(b);
-                    status.map_err(transfer_error)?;
+                    status.map_err(out_transfer_error)?;
                     wait = Duration::ZERO;
                 }
                 None => break,
             }
         }
         Ok(())
+    }
+
+    /// Wait until every OUT transfer has completed, at most `timeout`.
+    fn flush(&mut self, timeout: Duration) -> Result<(), TransportError> {
+        let deadline = Instant::now() + timeout;
+        let mut failed = Ok(());
+        while self.ep_out.pending() > 0 {
+            let left = deadline.saturating_duration_since(Instant::now());
+            let Some(c) = self.ep_out.wait_next_complete(left) else {
+                return Err(TransportError::Io(format!(
+                    "{} USB write(s) still queued after {} ms",
+                    self.ep_out.pending(),
+                    timeout.as_millis()
+                )));
+            };
+            let mut b = c.buffer;
+            b.clear();
+            self.free_out.push(b);
+            if let Err(e) = c.status {
+                failed = Err(out_transfer_error(e));
+            }
+        }
+        failed
     }
 }
 
@@ -297,7 +329,7 @@ impl Handle {
                 self.reclaim(WRITE_TIMEOUT)?;
             }
             let Some(mut b) = self.free_out.pop() else {
-                return Err(TransportError::Io(
+                return Err(TransportError::Transient(
                     "USB writes are not completing (the Falcon stopped reading)".into(),
                 ));
             };
@@ -360,6 +392,10 @@ impl FalconTransport for UsbTransport {
 
     fn read(&mut self, buf: &mut [u8], timeout: Duration) -> Result<usize, TransportError> {
         self.handle()?.read(buf, timeout)
+    }
+
+    fn flush(&mut self, timeout: Duration) -> Result<(), TransportError> {
+        self.handle()?.flush(timeout)
     }
 
     fn reopen(&mut self) -> Result<(), TransportError> {
