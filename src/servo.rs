@@ -194,6 +194,7 @@ pub struct ServoLoop<D: HapticDevice, C: Clock> {
     beat_at: f64,
     following: FollowingGuard,
     intervals: IntervalGuard,
+    force_limit: f64,
 }
 
 impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
@@ -243,6 +244,7 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
             beat_at: 0.0,
             following: FollowingGuard::default(),
             intervals: IntervalGuard::new(c.stiffness_n_per_m, c.damping_n_s_per_m),
+            force_limit: c.force_limit_n,
         }
     }
 
@@ -532,10 +534,6 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
             self.intervals.reset();
             return [0.0; 3];
         }
-        if let Some(reason) = self.intervals.check(dt) {
-            self.stop_motion(&reason);
-            return [0.0; 3];
-        }
         let force = match self.controller.force(reading.pos_m, self.setpoint, dt) {
             Ok(f) => f,
             Err(_) => {
@@ -543,6 +541,11 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
                 return [0.0; 3];
             }
         };
+        let saturated = force.iter().any(|f| f.abs() >= self.force_limit);
+        if let Some(reason) = self.intervals.check(dt, saturated) {
+            self.stop_motion(&reason);
+            return [0.0; 3];
+        }
         if let Some(reason) = self
             .following
             .check(now, reading.pos_m, self.setpoint, force)

@@ -353,6 +353,6 @@ mod tests {
                 .contains("[0] USB bus 1 device 7, serial FTA1B2C3: NOT USABLE: permission denied"),
             "{lines}"
         );
-        assert!(lines.contains("99-novint-falcon.rules"), "{lines}");
+        assert!(lines.contains("70-novint-falcon.rules"), "{lines}");
     }
 }

@@ -195,6 +195,51 @@ impl FalconStats {
     }
 }
 
+/// Round trips (packet written to its reply read, on the link's clock) in
+/// buckets of `ROUND_TRIP_BUCKET_S`; the last bucket holds everything longer.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RoundTrips {
+    counts: Vec<u64>,
+}
+
+const ROUND_TRIP_BUCKET_S: f64 = 0.000_05;
+const ROUND_TRIP_BUCKETS: usize = 400;
+
+impl RoundTrips {
+    fn new() -> RoundTrips {
+        RoundTrips {
+            counts: vec![0; ROUND_TRIP_BUCKETS],
+        }
+    }
+
+    fn add(&mut self, d: Duration) {
+        let i = (d.as_secs_f64() / ROUND_TRIP_BUCKET_S) as usize;
+        self.counts[i.min(ROUND_TRIP_BUCKETS - 1)] += 1;
+    }
+
+    pub fn count(&self) -> u64 {
+        self.counts.iter().sum()
+    }
+
+    /// The round trip (seconds, the top of its bucket) that a share `q`
+    /// (0..=1) of them took at most; `None` when there are none.
+    pub fn quantile(&self, q: f64) -> Option<f64> {
+        let n = self.count();
+        if n == 0 {
+            return None;
+        }
+        let want = ((q.clamp(0.0, 1.0) * n as f64).ceil() as u64).max(1);
+        let mut seen = 0;
+        for (i, c) in self.counts.iter().enumerate() {
+            seen += c;
+            if seen >= want {
+                return Some((i + 1) as f64 * ROUND_TRIP_BUCKET_S);
+            }
+        }
+        None
+    }
+}
+
 /// The driver over a transport. See the module's documentation.
 pub struct FalconDevice<T: FalconTransport> {
     transport: T,
@@ -215,6 +260,9 @@ pub struct FalconDevice<T: FalconTransport> {
     have_position: bool,
     gone: Option<String>,
     stats: FalconStats,
+    /// When the packet awaiting its reply was written (the link's clock).
+    sent_at: Instant,
+    round_trips: RoundTrips,
 }
 
 impl<T: FalconTransport> FalconDevice<T> {
@@ -261,6 +309,8 @@ impl<T: FalconTransport> FalconDevice<T> {
                 firmware: report,
                 ..FalconStats::default()
             },
+            sent_at: Instant::now(),
+            round_trips: RoundTrips::new(),
         })
     }
 
@@ -269,6 +319,15 @@ impl<T: FalconTransport> FalconDevice<T> {
         s.bad_packets = self.reader.stats.bad_packets;
         s.discarded_bytes = self.reader.stats.discarded_bytes;
         s
+    }
+
+    /// The round trips measured since the last [`Self::reset_round_trips`].
+    pub fn round_trips(&self) -> &RoundTrips {
+        &self.round_trips
+    }
+
+    pub fn reset_round_trips(&mut self) {
+        self.round_trips.counts.fill(0);
     }
 
     pub fn transport(&self) -> &T {
@@ -323,6 +382,7 @@ impl<T: FalconTransport> FalconDevice<T> {
             Ok(()) => {
                 self.awaiting = true;
                 self.stats.packets_sent += 1;
+                self.sent_at = self.transport.now();
                 Ok(())
             }
             // Not sent: the next tick sends again; only a streak breaks the link.
@@ -378,6 +438,10 @@ impl<T: FalconTransport> FalconDevice<T> {
 
     fn take_reply(&mut self, r: ReplyPacket) {
         self.stats.replies += 1;
+        if self.awaiting {
+            let rt = self.transport.now().saturating_duration_since(self.sent_at);
+            self.round_trips.add(rt);
+        }
         self.awaiting = false;
         self.missed_streak = 0;
         self.usb_error_streak = 0;

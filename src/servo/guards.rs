@@ -16,8 +16,8 @@
 //!   over a window, and stops the motion when too many are too late.
 
 /// How far from its set-point (along one axis) the probe must be, with how
-/// much force pushing it back along that axis, for how long, before the
-/// motion stops. A thesis scan stays far inside both bounds (its largest
+/// much force pushing it back along that axis, for how long without moving
+/// as far along any axis, before the motion stops. A thesis scan stays far inside both bounds (its largest
 /// errors are the ~1 mm it presses into the texture, along the soft y axis
 /// where 1 mm asks for 0.27 N, and lags of ~0.5 mm at leg changes); with
 /// the motors dead, the set-point walks away from the probe at the path's
@@ -72,8 +72,10 @@ pub fn longest_stable_period(m: f64, k: [f64; 3], d: [f64; 3]) -> f64 {
 pub struct IntervalGuard {
     bound_s: f64,
     late: [bool; INTERVAL_WINDOW],
+    saturated: [bool; INTERVAL_WINDOW],
     next: usize,
     count: u32,
+    count_saturated: u32,
 }
 
 impl IntervalGuard {
@@ -81,8 +83,10 @@ impl IntervalGuard {
         IntervalGuard {
             bound_s: longest_stable_period(PROBE_MASS_KG, stiffness, damping),
             late: [false; INTERVAL_WINDOW],
+            saturated: [false; INTERVAL_WINDOW],
             next: 0,
             count: 0,
+            count_saturated: 0,
         }
     }
 
@@ -93,21 +97,29 @@ impl IntervalGuard {
 
     pub fn reset(&mut self) {
         self.late = [false; INTERVAL_WINDOW];
+        self.saturated = [false; INTERVAL_WINDOW];
         self.count = 0;
+        self.count_saturated = 0;
     }
 
-    /// One tick `dt` after the last, while driving: why the motion must stop.
-    pub fn check(&mut self, dt: f64) -> Option<String> {
+    /// One tick `dt` after the last, while driving, the force at its limit
+    /// or not: why the motion must stop. Late ticks alone only slow the
+    /// path; late ticks while the force keeps hitting its limit are the
+    /// limit cycle starting.
+    pub fn check(&mut self, dt: f64, saturated: bool) -> Option<String> {
         let late = dt > self.bound_s;
-        let slot = &mut self.late[self.next];
-        self.count = self.count + u32::from(late) - u32::from(*slot);
-        *slot = late;
+        let i = self.next;
+        self.count = self.count + u32::from(late) - u32::from(self.late[i]);
+        self.count_saturated =
+            self.count_saturated + u32::from(saturated) - u32::from(self.saturated[i]);
+        self.late[i] = late;
+        self.saturated[i] = saturated;
         self.next = (self.next + 1) % INTERVAL_WINDOW;
-        if self.count < INTERVAL_LATE_LIMIT {
+        if self.count < INTERVAL_LATE_LIMIT || self.count_saturated < INTERVAL_LATE_LIMIT {
             return None;
         }
         let message = format!(
-            "{} of the last {INTERVAL_WINDOW} ticks came more than {:.1} ms apart (the last {:.1} ms), too far apart for the controller's gains, which oscillate beyond that: motion stopped, forces off; give the servo loop a core (close other programs; allow real-time scheduling: see `hapticlab doctor`) or lower [controller] stiffness_n_per_m",
+            "{} of the last {INTERVAL_WINDOW} ticks came more than {:.1} ms apart (the last {:.1} ms), too far apart for the controller's gains, and the force kept hitting its limit (an oscillation starting): motion stopped, forces off; give the servo loop a core (close other programs; allow real-time scheduling: see `hapticlab doctor`) or lower [controller] stiffness_n_per_m",
             self.count,
             self.bound_s * 1000.0,
             dt * 1000.0
@@ -125,6 +137,8 @@ pub struct FollowingGuard {
     since: Option<f64>,
     worst_m: f64,
     worst_n: f64,
+    /// Where the probe was when the episode began.
+    start: [f64; 3],
 }
 
 impl FollowingGuard {
@@ -155,7 +169,19 @@ impl FollowingGuard {
             self.reset();
             return None;
         };
-        let since = *self.since.get_or_insert(now);
+        if self.since.is_none() {
+            self.since = Some(now);
+            self.start = pos;
+        }
+        let since = self.since.unwrap_or(now);
+        // A probe that moves is following, however far behind (a glide
+        // saturating the force after homing); a dead motor moves nothing.
+        let moved = (0..3).any(|a| (pos[a] - self.start[a]).abs() >= FOLLOW_ERROR_M);
+        if moved {
+            self.since = Some(now);
+            self.start = pos;
+            return None;
+        }
         self.worst_m = self.worst_m.max(err);
         self.worst_n = self.worst_n.max(f);
         if now - since < FOLLOW_TIME_S {
@@ -203,16 +229,21 @@ mod tests {
     fn scattered_late_ticks_trip_the_interval_guard_and_one_stall_does_not() {
         let mut g = IntervalGuard::new([2400.0, 270.0, 2400.0], [7.2, 2.4, 7.2]);
         // One 20 ms stall, then half-period catch-up: fine.
-        assert_eq!(g.check(0.020), None);
+        assert_eq!(g.check(0.020, true), None);
         for _ in 0..1000 {
-            assert_eq!(g.check(0.0005), None);
-            assert_eq!(g.check(0.001), None);
+            assert_eq!(g.check(0.0005, true), None);
+            assert_eq!(g.check(0.001, true), None);
+        }
+        // A starved CPU alone, the force well inside its limit: no trip.
+        for k in 0..1000 {
+            let dt = if k % 4 == 0 { 0.006 } else { 0.001 };
+            assert_eq!(g.check(dt, false), None);
         }
         // One tick in eight comes 6 ms late: not consecutive, still tripped.
         let mut tripped = None;
         for k in 0..200 {
             let dt = if k % 8 == 0 { 0.006 } else { 0.001 };
-            if let Some(m) = g.check(dt) {
+            if let Some(m) = g.check(dt, true) {
                 tripped = Some((k, m));
                 break;
             }
@@ -243,6 +274,12 @@ mod tests {
                 g.check(t, [0.0; 3], [0.0, 0.005, 0.0], [0.0, 1.35, 0.0]),
                 None
             );
+        }
+        // A probe that moves, even far behind and pushed hard: no trip.
+        for k in 0..1000 {
+            let t = 1.5 + f64::from(k) * 0.001;
+            let p = [0.05 * (t - 1.5), 0.0, 0.0];
+            assert_eq!(g.check(t, p, [0.07, 0.0, 0.0], [8.0, 0.0, 0.0]), None);
         }
         // The set-point walks away at 1 cm/s from a probe that does not move.
         let mut tripped = None;

@@ -30,7 +30,7 @@ fn the_thesis_emulator_passes_every_step() {
     let r = self_test(&["-p", "profiles/thesis-emulator.toml", "--yes"]);
     assert_eq!(r.code, Some(0), "{r:?}");
     for step in [
-        "open", "leds", "homing", "encoders", "pulse x", "pulse y", "pulse z",
+        "open", "leds", "link", "homing", "encoders", "pulse x", "pulse y", "pulse z",
     ] {
         assert_eq!(verdict(&r.stdout, step), Some("PASS"), "{step}: {r:?}");
     }
@@ -210,6 +210,12 @@ fn each_signal_ends_the_self_test_with_the_emulated_motors_at_zero() {
             "{signals:?}: {r:?}"
         );
         assert_eq!(report["zero_force_confirmed"], true, "{signals:?}: {r:?}");
+        // Measured before the pulses began: the link's quality.
+        assert!(
+            report["link"]["round_trip_p99_ms"].as_f64().is_some()
+                && report["link"]["missed_per_1000"].as_f64().is_some(),
+            "{r:?}"
+        );
         assert!(!r.stderr.contains("panicked"), "{r:?}");
     }
 }

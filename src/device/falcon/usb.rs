@@ -34,10 +34,18 @@ const OUT_LEN: usize = 64;
 const CONTROL_TIMEOUT: Duration = Duration::from_millis(200);
 const WRITE_TIMEOUT: Duration = Duration::from_millis(100);
 
-/// The udev rule shipped in the repository, and how to install it.
-pub const UDEV_HINT: &str = "install the udev rule shipped with hapticlab: \
-`sudo cp contrib/99-novint-falcon.rules /etc/udev/rules.d/ && sudo udevadm control --reload-rules && sudo udevadm trigger`, \
-make sure you are in the `plugdev` group, then unplug and replug the Falcon";
+/// The udev rule (`contrib/70-novint-falcon.rules`), carried by the binary
+/// so that `hapticlab doctor --udev-rule` can print it without a checkout.
+pub const UDEV_RULE: &str = include_str!("../../../contrib/70-novint-falcon.rules");
+/// Where the rule goes, and the group its fallback names.
+pub const UDEV_RULE_FILE: &str = "/etc/udev/rules.d/70-novint-falcon.rules";
+pub const UDEV_GROUP: &str = "users";
+
+/// How to install the rule.
+pub const UDEV_HINT: &str = "install hapticlab's udev rule: \
+`hapticlab doctor --udev-rule | sudo tee /etc/udev/rules.d/70-novint-falcon.rules && sudo udevadm control --reload-rules && sudo udevadm trigger`, \
+then unplug and replug the Falcon; when not logged in at the machine itself (ssh), also join the `users` group \
+(`sudo usermod -aG users $USER`) and log out and in again";
 
 /// Why a Falcon could not be opened.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -451,9 +459,13 @@ mod tests {
         }
         .to_string();
         assert!(
-            e.contains("contrib/99-novint-falcon.rules") && e.contains("plugdev"),
+            e.contains("hapticlab doctor --udev-rule") && e.contains("log out and in"),
             "{e}"
         );
+        // The hint's file and group are the rule's own.
+        assert!(e.contains(UDEV_RULE_FILE) && e.contains(UDEV_GROUP), "{e}");
+        assert!(UDEV_RULE.contains(&format!("GROUP=\"{UDEV_GROUP}\"")));
+        assert!(UDEV_RULE.contains("TAG+=\"uaccess\""));
         assert!(
             UsbError::NotFound(String::new())
                 .to_string()

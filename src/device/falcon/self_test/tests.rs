@@ -111,7 +111,7 @@ fn a_clean_emulated_falcon_passes_every_step() {
     assert_eq!(
         names,
         [
-            "open", "leds", "homing", "encoders", "pulse x", "pulse y", "pulse z"
+            "open", "leds", "link", "homing", "encoders", "pulse x", "pulse y", "pulse z"
         ]
     );
     // The user was asked to home, move, hold, and finally let go; asked once before any force.
@@ -490,4 +490,35 @@ fn a_signal_while_a_pulse_holds_a_force_leaves_the_motors_at_zero() {
         text.contains("the zero-force packet left the host"),
         "{text}"
     );
+}
+
+#[test]
+fn a_slow_link_fails_the_link_step_and_a_timed_one_passes() {
+    // The thesis emulator's timed link: round trips well under a period.
+    let lp = thesis_emulator();
+    let (report, _) = run_on(&lp, &mut Script::answering(true));
+    let q = report
+        .link
+        .as_ref()
+        .and_then(|l| l.quality)
+        .expect("measured");
+    let text = report.lines().join("\n");
+    assert_eq!(verdict(&report, "link"), Verdict::Pass, "{text}");
+    assert!(q.round_trip_p99_ms.unwrap() < 1.0, "{q:?}");
+    // Every reply 1.5 ms late: over a tick, reported, not hidden.
+    let mut lp = thesis_emulator();
+    lp.profile.falcon.as_mut().unwrap().emulator.slow_link_ms = 1.5;
+    let (report, _) = run_on(&lp, &mut Script::answering(true));
+    let text = report.lines().join("\n");
+    let q = report
+        .link
+        .as_ref()
+        .and_then(|l| l.quality)
+        .expect("measured");
+    assert_eq!(verdict(&report, "link"), Verdict::Fail, "{text}");
+    assert!(
+        q.missed_per_1000 > 100.0 || q.round_trip_p99_ms.is_none_or(|p| p >= 1.0),
+        "{q:?}"
+    );
+    assert!(text.contains("the link is too slow"), "{text}");
 }
