@@ -27,7 +27,7 @@ use crate::support::{Failure, ProfileArg, bad, load_profile};
 
 pub use dataset::dataset_checks;
 pub use facts::{DatasetFacts, DirState, Facts, Limit, SystemFacts, TerminalFacts};
-pub use falcon::{firmware_check, usb_check};
+pub use falcon::{firmware_check, udev_group_check, usb_check};
 pub use realtime::{MEMLOCK_ENOUGH_BYTES, realtime_checks};
 pub use terminal::terminal_checks;
 
@@ -157,6 +157,7 @@ pub fn human_bytes(n: u64) -> String {
 pub fn checks(needs: &Needs, facts: &Facts) -> Vec<Check> {
     let mut out = vec![
         usb_check(needs, &facts.usb, facts.udev_rule.as_ref(), facts.root),
+        udev_group_check(needs, facts.udev_group),
         firmware_check(needs, facts.firmware.as_ref()),
     ];
     out.extend(realtime_checks(needs, &facts.system));

@@ -499,6 +499,11 @@ pub fn injected_faults(lp: &LoadedProfile) -> Option<String> {
                     ("stall_after_s", e.stall_after_s),
                     ("unplug_after_s", e.unplug_after_s),
                     ("reversed_motor", e.reversed_motor.map(f64::from)),
+                    ("motor_power_lost_after_s", e.motor_power_lost_after_s),
+                    (
+                        "slow_link_ms",
+                        (e.slow_link_ms > 0.0).then_some(e.slow_link_ms),
+                    ),
                 ]),
             )
         }

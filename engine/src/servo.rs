@@ -19,6 +19,7 @@
 //! for [`WATCHDOG_S`].
 
 pub mod controller;
+pub mod guards;
 pub mod stats;
 pub mod trajectory;
 
@@ -35,6 +36,7 @@ use crate::device::{HapticDevice, Reading};
 use crate::profile::Rig;
 use crate::recorder::{Recorder, Sample, SavedScan, ScanSink};
 use controller::SpringDamper;
+use guards::{FollowingGuard, IntervalGuard};
 use stats::{LoopStats, StatsCollector};
 use trajectory::Trajectory;
 
@@ -189,6 +191,9 @@ pub struct ServoLoop<D: HapticDevice, C: Clock> {
     heartbeat: Option<Arc<AtomicU64>>,
     beat: u64,
     beat_at: f64,
+    following: FollowingGuard,
+    intervals: IntervalGuard,
+    force_limit: f64,
 }
 
 impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
@@ -236,6 +241,9 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
             heartbeat: None,
             beat: 0,
             beat_at: 0.0,
+            following: FollowingGuard::default(),
+            intervals: IntervalGuard::new(c.stiffness_n_per_m, c.damping_n_s_per_m),
+            force_limit: c.force_limit_n,
         }
     }
 
@@ -377,7 +385,30 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
         if let Some(h) = &self.halted {
             return Err(h.clone());
         }
-        // Commands: a few per tick, never waiting.
+        self.take_commands()?;
+        let (now, missed) = self.wait_for_deadline();
+        let reading = self.read_device(now)?;
+        let dt = self.last_t.map_or(self.period, |t| now - t);
+        self.last_t = Some(now);
+        self.check_heartbeat(now);
+
+        let (scanning, progress) = self.advance_setpoint(reading, dt);
+        let force = self.drive(now, reading, dt);
+        if let Err(e) = self.device.command(force) {
+            let reason = format!("device write failed: {e}");
+            self.halt(Halt::DeviceError(reason.clone()), &reason);
+            return Err(Halt::DeviceError(reason));
+        }
+        self.force = force;
+        self.record(now, reading, scanning);
+        self.count_tick(now, missed);
+        self.send_telemetry(now, reading, progress);
+        Ok(())
+    }
+
+    /// Commands (a few per tick, never waiting), the stop flag and a
+    /// shutdown: `Err` when the loop must end.
+    fn take_commands(&mut self) -> Result<(), Halt> {
         for _ in 0..8 {
             let Some(rx) = self.links.commands.as_ref() else {
                 break;
@@ -406,11 +437,15 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
             self.halt(h.clone(), "the servo loop was shut down");
             return Err(h);
         }
+        Ok(())
+    }
 
-        // Wait for the next absolute deadline. After a stall the loop catches
-        // up on that schedule with periods no shorter than half a period (so
-        // the mean rate holds and the controller's rate estimate stays sane);
-        // beyond CATCH_UP_LIMIT periods behind it skips the passed deadlines.
+    /// Wait for the next absolute deadline: the time, and whether it was
+    /// missed. After a stall the loop catches up on that schedule with
+    /// periods no shorter than half a period (so the mean rate holds and the
+    /// controller's rate estimate stays sane); beyond CATCH_UP_LIMIT periods
+    /// behind it skips the passed deadlines.
+    fn wait_for_deadline(&mut self) -> (f64, bool) {
         self.deadline_index += 1;
         let deadline = self.deadline_index as f64 * self.period;
         let target = match self.last_t {
@@ -433,19 +468,24 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
                 self.scan_stats.missed += skipped;
             }
         }
+        (now, missed)
+    }
 
+    /// The device's reading at `now`; a failed read, or a position that is
+    /// not a number, halts the loop.
+    fn read_device(&mut self, now: f64) -> Result<Reading, Halt> {
         let reading = match self.device.read(now) {
             // A position that is not a number never reaches the controller,
             // the device or the recording: the device is not to be trusted.
             Ok(r) if r.pos_m.iter().any(|v| !v.is_finite()) => {
-                let e = crate::device::DeviceError::BadReading(format!(
+                Err(crate::device::DeviceError::BadReading(format!(
                     "position ({}, {}, {}) m at {now:.3} s is not a number",
                     r.pos_m[0], r.pos_m[1], r.pos_m[2]
-                ));
-                let reason = format!("device read failed: {e}");
-                self.halt(Halt::DeviceError(reason.clone()), &reason);
-                return Err(Halt::DeviceError(reason));
+                )))
             }
+            other => other,
+        };
+        let reading = match reading {
             Ok(r) => r,
             Err(e) => {
                 let reason = format!("device read failed: {e}");
@@ -459,48 +499,64 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
             self.clock.stall(d.as_secs_f64());
         }
         self.reading = reading;
-        let dt = self.last_t.map_or(self.period, |t| now - t);
-        self.last_t = Some(now);
-        self.check_heartbeat(now);
+        Ok(reading)
+    }
 
-        // The set-point and whether this tick is recorded.
-        let mut scanning = false;
-        let mut progress = 0.0;
+    /// Move the set-point on; whether this tick is recorded and how far
+    /// the scan has come.
+    fn advance_setpoint(&mut self, reading: Reading, dt: f64) -> (bool, f64) {
         match self.mode {
             Mode::Manual => {
                 self.setpoint = reading.pos_m;
                 self.controller.reset();
+                (false, 0.0)
             }
             Mode::Target | Mode::Test => {
-                if let Some(t) = self.trajectory.as_mut() {
-                    let step = t.advance(dt, self.speed_scale);
-                    self.setpoint = step.setpoint;
-                    scanning = step.scanning;
-                    progress = step.scan_progress;
-                    if step.done {
-                        self.trajectory = None;
-                    }
+                let Some(t) = self.trajectory.as_mut() else {
+                    return (false, 0.0);
+                };
+                let step = t.advance(dt, self.speed_scale);
+                self.setpoint = step.setpoint;
+                if step.done {
+                    self.trajectory = None;
                 }
+                (step.scanning, step.scan_progress)
             }
         }
+    }
 
-        let mut force = [0.0; 3];
-        if self.mode != Mode::Manual && reading.homed {
-            match self.controller.force(reading.pos_m, self.setpoint, dt) {
-                Ok(f) => force = f,
-                Err(_) => {
-                    self.stop_motion("the controller produced a non-finite force");
-                }
+    /// The force for this tick (zero in manual mode or before homing), and
+    /// the guards on the motion it drives.
+    fn drive(&mut self, now: f64, reading: Reading, dt: f64) -> [f64; 3] {
+        if self.mode == Mode::Manual || !reading.homed {
+            self.following.reset();
+            self.intervals.reset();
+            return [0.0; 3];
+        }
+        let force = match self.controller.force(reading.pos_m, self.setpoint, dt) {
+            Ok(f) => f,
+            Err(_) => {
+                self.stop_motion("the controller produced a non-finite force");
+                return [0.0; 3];
             }
+        };
+        let saturated = force.iter().any(|f| f.abs() >= self.force_limit);
+        if let Some(reason) = self.intervals.check(dt, saturated) {
+            self.stop_motion(&reason);
+            return [0.0; 3];
         }
-        if let Err(e) = self.device.command(force) {
-            let reason = format!("device write failed: {e}");
-            self.halt(Halt::DeviceError(reason.clone()), &reason);
-            return Err(Halt::DeviceError(reason));
+        if let Some(reason) = self
+            .following
+            .check(now, reading.pos_m, self.setpoint, force)
+        {
+            self.stop_motion(&reason);
+            return [0.0; 3];
         }
-        self.force = force;
+        force
+    }
 
-        // Recording: the scan leg and its dwell.
+    /// Recording: the scan leg and its dwell.
+    fn record(&mut self, now: f64, reading: Reading, scanning: bool) {
         if scanning && self.scan_path.is_some() && !self.sink.is_active() {
             let path = self.scan_path.clone().expect("checked above");
             let mut meta = self.scan_meta.take().unwrap_or_default();
@@ -521,7 +577,7 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
                 self.sink.push(Sample {
                     t_s: now - self.scan_t0.unwrap_or(now),
                     pos_m: reading.pos_m,
-                    force_n: force,
+                    force_n: self.force,
                 });
             } else {
                 self.end_scan(None);
@@ -534,7 +590,10 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
             // A full disk: no point stroking on; the recorder has the details.
             self.stop_motion("the recording could not be written");
         }
+    }
 
+    /// The tick counted; a streak of missed deadlines stops the motion.
+    fn count_tick(&mut self, now: f64, missed: bool) {
         self.stats.tick(now, missed);
         if self.sink.is_active() {
             self.scan_stats.tick(now, missed);
@@ -551,25 +610,28 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
         if self.stats.ticks % 250 == 1 {
             self.snapshot = self.stats();
         }
-        if let Some(tx) = &self.links.telemetry {
-            let t = Telemetry {
-                tick: self.stats.ticks,
-                t_s: now,
-                pos_m: reading.pos_m,
-                setpoint_m: self.setpoint,
-                force_n: self.force,
-                mode: self.mode,
-                scanning: self.sink.is_active(),
-                scan_progress: progress,
-                homed: reading.homed,
-                speed_scale: self.speed_scale,
-                stats: self.snapshot,
-            };
-            if let Err(TrySendError::Full(_)) = tx.try_send(t) {
-                self.stats.dropped_telemetry += 1;
-            }
+    }
+
+    fn send_telemetry(&mut self, now: f64, reading: Reading, progress: f64) {
+        let Some(tx) = &self.links.telemetry else {
+            return;
+        };
+        let t = Telemetry {
+            tick: self.stats.ticks,
+            t_s: now,
+            pos_m: reading.pos_m,
+            setpoint_m: self.setpoint,
+            force_n: self.force,
+            mode: self.mode,
+            scanning: self.sink.is_active(),
+            scan_progress: progress,
+            homed: reading.homed,
+            speed_scale: self.speed_scale,
+            stats: self.snapshot,
+        };
+        if let Err(TrySendError::Full(_)) = tx.try_send(t) {
+            self.stats.dropped_telemetry += 1;
         }
-        Ok(())
     }
 
     /// The watchdog: a front end that heartbeat and then stopped is stuck or

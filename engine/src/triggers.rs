@@ -96,7 +96,7 @@ impl std::fmt::Display for OpenFailure {
             OpenFailure::Absent => write!(f, "not plugged in"),
             OpenFailure::Permission(m) => write!(
                 f,
-                "permission denied ({m}); add a hidraw line for it to contrib/99-novint-falcon.rules and install the rule"
+                "permission denied ({m}); add a hidraw line for it to the udev rule (`hapticlab doctor --udev-rule`) and install the rule"
             ),
             OpenFailure::Other(m) => write!(f, "{m}"),
         }

@@ -5,7 +5,8 @@
 
 use std::io::BufRead;
 use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
 
 use clap::Args;
 
@@ -131,26 +132,81 @@ pub fn run(a: DevicesArgs) -> Result<(), Failure> {
 
 /// The person at the Falcon: told on standard error, asked on standard input.
 /// For the emulator, its simulated hand does what the person is asked.
-struct Terminal {
+struct Terminal<'a> {
     yes: bool,
+    /// Raised by a signal: a question waiting for its answer gives up.
+    stop: &'a AtomicBool,
 }
 
-impl Terminal {
+impl Terminal<'_> {
     fn tell(&self, line: &str) {
         crate::errln!("{line}");
     }
 
+    /// Asked on standard input, read on a helper thread so that a signal
+    /// still ends the test (forces zeroed) while the question waits.
     fn ask(&self, question: &str) -> bool {
         crate::errln!("{question} [y/N] (--yes skips this question)");
-        let mut answer = String::new();
-        match std::io::stdin().lock().read_line(&mut answer) {
-            Ok(n) if n > 0 => matches!(answer.trim(), "y" | "Y" | "yes" | "Yes" | "YES"),
-            _ => false,
+        let (tx, rx) = crossbeam_channel::bounded(1);
+        let reader = std::thread::Builder::new()
+            .name("stdin".into())
+            .spawn(move || {
+                let mut answer = String::new();
+                let yes = matches!(std::io::stdin().lock().read_line(&mut answer), Ok(n) if n > 0)
+                    && matches!(answer.trim(), "y" | "Y" | "yes" | "Yes" | "YES");
+                let _ = tx.send(yes);
+            });
+        if reader.is_err() {
+            return false;
+        }
+        loop {
+            if self.stop.load(Ordering::Relaxed) {
+                return false;
+            }
+            match rx.recv_timeout(Duration::from_millis(50)) {
+                Ok(yes) => return yes,
+                Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
+                Err(crossbeam_channel::RecvTimeoutError::Disconnected) => return false,
+            }
         }
     }
 }
 
-impl Operator<usb::UsbTransport> for Terminal {
+/// How long a second signal waits for the test to zero the forces and end
+/// before the process exits anyway.
+const SECOND_SIGNAL_GRACE: Duration = Duration::from_secs(2);
+
+/// SIGINT, SIGTERM and SIGHUP (a closed terminal) raise `stop`: the test
+/// ends at its next exchange with the forces zeroed. A second signal does
+/// the same, then exits (130) if the test has not ended within
+/// [`SECOND_SIGNAL_GRACE`] (`done` is raised when it has).
+fn watch_signals(stop: Arc<AtomicBool>, done: Arc<AtomicBool>) -> Result<(), Failure> {
+    use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+    let mut signals =
+        signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]).map_err(runtime)?;
+    std::thread::Builder::new()
+        .name("signals".into())
+        .spawn(move || {
+            let mut seen = 0;
+            for _ in signals.forever() {
+                seen += 1;
+                stop.store(true, Ordering::Relaxed);
+                if seen >= 2 {
+                    let until = Instant::now() + SECOND_SIGNAL_GRACE;
+                    while !done.load(Ordering::Relaxed) && Instant::now() < until {
+                        std::thread::sleep(Duration::from_millis(10));
+                    }
+                    if !done.load(Ordering::Relaxed) {
+                        std::process::exit(130);
+                    }
+                }
+            }
+        })
+        .map_err(runtime)?;
+    Ok(())
+}
+
+impl Operator<usb::UsbTransport> for Terminal<'_> {
     fn request(&mut self, request: &Request, _: &mut usb::UsbTransport) {
         self.tell(&format!(">> {}", request.instruction()));
     }
@@ -162,7 +218,7 @@ impl Operator<usb::UsbTransport> for Terminal {
     }
 }
 
-impl Operator<EmulatedFalcon> for Terminal {
+impl Operator<EmulatedFalcon> for Terminal<'_> {
     fn request(&mut self, request: &Request, transport: &mut EmulatedFalcon) {
         self.tell(&format!(">> {}", request.instruction()));
         if let Some(task) = request.hand_task() {
@@ -204,14 +260,12 @@ fn self_test_options(lp: &LoadedProfile, yes: bool) -> Result<self_test::Options
 
 fn run_self_test(lp: &LoadedProfile, yes: bool, json: bool) -> Result<(), Failure> {
     let options = self_test_options(lp, yes)?;
-    // Ctrl-C stops the test with the forces zeroed; a second one exits at once.
     let stop = Arc::new(AtomicBool::new(false));
-    for sig in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        signal_hook::flag::register_conditional_shutdown(sig, 130, stop.clone())
-            .and_then(|_| signal_hook::flag::register(sig, stop.clone()))
-            .map_err(runtime)?;
-    }
-    let mut terminal = Terminal { yes };
+    let done = Arc::new(AtomicBool::new(false));
+    watch_signals(stop.clone(), done.clone())?;
+    // Raised once the device is closed (its forces zeroed), however this ends.
+    let _closed = RaiseOnDrop(done);
+    let mut terminal = Terminal { yes, stop: &stop };
     let mut clock = RealClock::start();
     let name = &lp.profile.name;
     // (`self_test_options` has checked the profile has a Falcon device.)
@@ -264,6 +318,15 @@ fn run_self_test(lp: &LoadedProfile, yes: bool, json: bool) -> Result<(), Failur
     )))
 }
 
+/// Raises its flag when dropped.
+struct RaiseOnDrop(Arc<AtomicBool>);
+
+impl Drop for RaiseOnDrop {
+    fn drop(&mut self) {
+        self.0.store(true, Ordering::Relaxed);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -290,6 +353,6 @@ mod tests {
                 .contains("[0] USB bus 1 device 7, serial FTA1B2C3: NOT USABLE: permission denied"),
             "{lines}"
         );
-        assert!(lines.contains("99-novint-falcon.rules"), "{lines}");
+        assert!(lines.contains("70-novint-falcon.rules"), "{lines}");
     }
 }

@@ -19,6 +19,8 @@ pub struct Facts {
     pub usb: Result<Vec<FalconInfo>, UsbError>,
     /// An installed udev rule naming the Falcon (0403:cb48), if any.
     pub udev_rule: Option<PathBuf>,
+    /// The group the shipped rule falls back on exists on this system.
+    pub udev_group: bool,
     /// The profile's firmware file through the driver's validation (its
     /// length when good); `None` when the profile names none.
     pub firmware: Option<Result<usize, FirmwareFileError>>,
@@ -95,6 +97,7 @@ impl Facts {
             root: is_root(),
             usb: usb::list_falcons(),
             udev_rule: find_udev_rule(),
+            udev_group: group_exists(usb::UDEV_GROUP),
             firmware: needs
                 .firmware
                 .as_deref()
@@ -127,6 +130,12 @@ fn find_udev_rule() -> Option<PathBuf> {
             rule_names_falcon(&text).then_some(path)
         })
     })
+}
+
+/// Whether `/etc/group` lists `name` (the groups udev can use are local).
+fn group_exists(name: &str) -> bool {
+    std::fs::read_to_string("/etc/group")
+        .is_ok_and(|t| t.lines().any(|l| l.split(':').next() == Some(name)))
 }
 
 /// Whether udev rules text gives the Falcon (0403:cb48) a rule (comments aside).

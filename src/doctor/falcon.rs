@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use super::{Check, Needs, Status, check, with_fix};
 use crate::device::falcon::firmware::{FirmwareFileError, KNOWN_IMAGES, WHERE_TO_GET};
-use crate::device::falcon::usb::{FalconInfo, UDEV_HINT, UsbError};
+use crate::device::falcon::usb::{FalconInfo, UDEV_GROUP, UDEV_HINT, UsbError};
 use crate::profile::DeviceKind;
 
 fn falcon_line(f: &FalconInfo) -> String {
@@ -135,7 +135,7 @@ pub fn usb_check(
             );
             if root && udev_rule.is_none() {
                 finding.push_str(
-                    " (as root; other users need contrib/99-novint-falcon.rules installed)",
+                    " (as root; other users need the udev rule (`hapticlab doctor --udev-rule`) installed)",
                 );
             }
             check(NAME, Status::Ok, finding)
@@ -145,6 +145,40 @@ pub fn usb_check(
             with_fix(check(NAME, Status::Fail, finding), fix)
         }
     }
+}
+
+/// The udev rule's group fallback: the group it names must exist here
+/// (sessions without a seat, such as ssh, rely on it).
+pub fn udev_group_check(needs: &Needs, group_exists: bool) -> Check {
+    const NAME: &str = "udev";
+    let status = if needs.kind != DeviceKind::Falcon {
+        Status::Note
+    } else if group_exists {
+        Status::Ok
+    } else {
+        Status::Warn
+    };
+    if group_exists {
+        return check(
+            NAME,
+            status,
+            format!(
+                "the udev rule's group `{UDEV_GROUP}` exists here (members may open the Falcon from any session; the person at the machine may without it)"
+            ),
+        );
+    }
+    with_fix(
+        check(
+            NAME,
+            status,
+            format!(
+                "the udev rule's group `{UDEV_GROUP}` does not exist on this system: only the person logged in at the machine itself can open the Falcon"
+            ),
+        ),
+        format!(
+            "`sudo groupadd {UDEV_GROUP} && sudo usermod -aG {UDEV_GROUP} $USER`, then log out and in again, and replug the Falcon"
+        ),
+    )
 }
 
 /// The firmware file named by the profile, checked by the driver's own

@@ -8,10 +8,10 @@ use crate::profile::Realtime;
 /// mlockall: it locks every mapping of the process (code, heap, each
 /// thread's stack): `scan` on the simulator maps about 150 MiB, the console more.
 pub const MEMLOCK_ENOUGH_BYTES: u64 = 1 << 30;
-/// The limits.d file the fixes suggest; the lab's users are in `plugdev`
+/// The limits.d file the fixes suggest; the lab's users are in `users`
 /// already for the Falcon's udev rule.
 const LIMITS_FILE: &str = "/etc/security/limits.d/95-hapticlab.conf";
-const LAB_GROUP: &str = "@plugdev";
+const LAB_GROUP: &str = "@users";
 
 /// A limit for people: a number, or "unlimited".
 fn limit_text(v: Option<u64>, bytes: bool) -> String {

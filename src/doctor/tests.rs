@@ -103,7 +103,8 @@ fn good_facts() -> Facts {
     Facts {
         root: false,
         usb: Ok(vec![]),
-        udev_rule: Some(PathBuf::from("/etc/udev/rules.d/99-novint-falcon.rules")),
+        udev_rule: Some(PathBuf::from("/etc/udev/rules.d/70-novint-falcon.rules")),
+        udev_group: true,
         firmware: None,
         system: good_system(),
         terminal: tty(120, 40),
@@ -191,10 +192,10 @@ fn no_falcon_is_a_note_for_sim_and_a_failure_for_falcon() {
     assert!(c.finding.contains("0403:cb48"), "{c:?}");
     // No udev rule installed either: the fix says to install it.
     assert!(
-        fix(&c).contains("not through a hub") && fix(&c).contains("99-novint-falcon.rules"),
+        fix(&c).contains("not through a hub") && fix(&c).contains("70-novint-falcon.rules"),
         "{c:?}"
     );
-    let rule = PathBuf::from("/etc/udev/rules.d/99-novint-falcon.rules");
+    let rule = PathBuf::from("/etc/udev/rules.d/70-novint-falcon.rules");
     let c = usb_check(&falcon_needs(), &facts.usb, Some(&rule), false);
     assert!(!fix(&c).contains("udev"), "{c:?}");
 }
@@ -210,6 +211,18 @@ fn no_usb_bus_says_so_and_fails_only_for_falcon() {
 }
 
 #[test]
+fn a_missing_udev_group_is_a_warning_for_a_falcon_profile() {
+    let c = udev_group_check(&falcon_needs(), false);
+    assert_eq!(c.status, Status::Warn, "{c:?}");
+    assert!(
+        c.finding.contains("`users` does not exist") && fix(&c).contains("log out and in"),
+        "{c:?}"
+    );
+    assert_eq!(udev_group_check(&falcon_needs(), true).status, Status::Ok);
+    assert_eq!(udev_group_check(&thesis(), false).status, Status::Note);
+}
+
+#[test]
 fn a_falcon_without_permission_gets_the_udev_rule() {
     let usb = Ok(vec![falcon(Err(UsbError::Permission {
         at: "USB bus 1 device 7".into(),
@@ -218,13 +231,13 @@ fn a_falcon_without_permission_gets_the_udev_rule() {
     assert_eq!(c.status, Status::Fail, "{c:?}");
     assert!(c.finding.contains("permission denied"), "{c:?}");
     assert!(
-        fix(&c).contains("contrib/99-novint-falcon.rules") && fix(&c).contains("plugdev"),
+        fix(&c).contains("doctor --udev-rule") && fix(&c).contains("log out and in"),
         "{c:?}"
     );
     // Not needed by a sim profile, but worth knowing.
     let c = usb_check(&thesis(), &usb, None, false);
     assert_eq!(c.status, Status::Warn, "{c:?}");
-    assert!(fix(&c).contains("99-novint-falcon.rules"), "{c:?}");
+    assert!(fix(&c).contains("70-novint-falcon.rules"), "{c:?}");
 }
 
 #[test]
@@ -352,7 +365,7 @@ fn priority_limits_too_low_say_which_line_to_add() {
         "{p:?}"
     );
     assert!(
-        fix(p).contains("@plugdev - rtprio 80") && fix(p).contains("/etc/security/limits.d/"),
+        fix(p).contains("@users - rtprio 80") && fix(p).contains("/etc/security/limits.d/"),
         "{p:?}"
     );
     assert!(fix(p).contains("cap_sys_nice"), "{p:?}");
@@ -417,7 +430,7 @@ fn memory_locking_needs_an_unlimited_memlock_or_the_capability() {
         m.finding.contains("8.0 MiB") && m.finding.contains("maps 40 MiB"),
         "{m:?}"
     );
-    assert!(fix(m).contains("@plugdev - memlock unlimited"), "{m:?}");
+    assert!(fix(m).contains("@users - memlock unlimited"), "{m:?}");
     let sys = SystemFacts {
         memlock: Limit {
             soft: Some(64 * 1024),
@@ -747,7 +760,7 @@ fn a_relative_missing_folder_is_created_in_the_current_one() {
 #[test]
 fn the_shipped_udev_rule_is_recognised() {
     let shipped = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("contrib/99-novint-falcon.rules"),
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("contrib/70-novint-falcon.rules"),
     )
     .unwrap();
     assert!(rule_names_falcon(&shipped));

@@ -30,7 +30,7 @@ fn the_thesis_emulator_passes_every_step() {
     let r = self_test(&["-p", "profiles/thesis-emulator.toml", "--yes"]);
     assert_eq!(r.code, Some(0), "{r:?}");
     for step in [
-        "open", "leds", "homing", "encoders", "pulse x", "pulse y", "pulse z",
+        "open", "leds", "link", "homing", "encoders", "pulse x", "pulse y", "pulse z",
     ] {
         assert_eq!(verdict(&r.stdout, step), Some("PASS"), "{step}: {r:?}");
     }
@@ -121,4 +121,101 @@ fn bad_input_exits_2_naming_what() {
         .into();
     assert_eq!(r.code, Some(2), "{r:?}");
     assert!(r.stderr.contains("--self-test"), "{r:?}");
+}
+
+/// A copy of the thesis emulator profile in `dir` with `extra` lines added
+/// to its `[falcon.emulator]` table.
+fn emulator_profile(dir: &std::path::Path, extra: &str) -> std::path::PathBuf {
+    let text = std::fs::read_to_string("profiles/thesis-emulator.toml").unwrap();
+    let text = text.replacen(
+        "[falcon.emulator]\n",
+        &format!("[falcon.emulator]\n{extra}\n"),
+        1,
+    );
+    let path = dir.join("emulator.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// The self-test interrupted by `signals` (sent `apart` from each other)
+/// once the force pulses begin, on firmware that keeps the last force.
+fn interrupted_by(signals: &[i32]) -> Run {
+    use std::io::BufRead;
+    use std::time::{Duration, Instant};
+    let dir = tempfile::tempdir().unwrap();
+    let profile = emulator_profile(dir.path(), "keeps_last_force = true");
+    let mut child = crate::common::hapticlab()
+        .args(["devices", "--self-test", "--yes", "--json", "-p"])
+        .arg(&profile)
+        .stdin(std::process::Stdio::null())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let stderr = child.stderr.take().unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    let reader = std::thread::spawn(move || {
+        let mut all = String::new();
+        for line in std::io::BufReader::new(stderr)
+            .lines()
+            .map_while(Result::ok)
+        {
+            if line.contains("pulse along x") {
+                let _ = tx.send(());
+            }
+            all.push_str(&line);
+            all.push('\n');
+        }
+        all
+    });
+    // Waits for the pulses to begin, not for a time.
+    rx.recv_timeout(Duration::from_secs(120))
+        .expect("the pulses never began");
+    for &sig in signals {
+        assert_eq!(unsafe { libc::kill(child.id() as i32, sig) }, 0);
+    }
+    let give_up = Instant::now() + Duration::from_secs(60);
+    while child.try_wait().unwrap().is_none() {
+        if Instant::now() > give_up {
+            let _ = child.kill();
+            panic!("the self-test did not end after {signals:?}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let out = child.wait_with_output().unwrap();
+    Run {
+        code: out.status.code(),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: reader.join().unwrap(),
+    }
+}
+
+#[test]
+fn each_signal_ends_the_self_test_with_the_emulated_motors_at_zero() {
+    for signals in [
+        &[libc::SIGINT][..],
+        &[libc::SIGTERM],
+        &[libc::SIGHUP],
+        // A second Ctrl-C still zeroes the forces before the process ends.
+        &[libc::SIGINT, libc::SIGINT],
+    ] {
+        let r = interrupted_by(signals);
+        assert_eq!(r.code, Some(1), "{signals:?}: {r:?}");
+        let report: serde_json::Value = serde_json::from_str(&r.stdout).expect("a JSON report");
+        let text = report.to_string();
+        assert!(text.contains("interrupted"), "{signals:?}: {r:?}");
+        assert_eq!(
+            report["motors_after"],
+            serde_json::json!([0, 0, 0]),
+            "{signals:?}: {r:?}"
+        );
+        assert_eq!(report["zero_force_confirmed"], true, "{signals:?}: {r:?}");
+        // Measured before the pulses began: the link's quality.
+        assert!(
+            report["link"]["round_trip_p99_ms"].as_f64().is_some()
+                && report["link"]["missed_per_1000"].as_f64().is_some(),
+            "{r:?}"
+        );
+        assert!(!r.stderr.contains("panicked"), "{r:?}");
+    }
 }

@@ -301,11 +301,11 @@ fn emulator_read_error_streak() {
     let halt = o.halt.as_deref().expect("the loop halts");
     assert!(
         halt.contains("device I/O failed")
-            && halt.contains("5 USB reads in a row failed")
+            && halt.contains("5 USB transfers in a row failed")
             && halt.contains("USB read failed (endpoint stalled) at 2.40"),
         "{halt}"
     );
-    assert_aborted(&o, "USB reads in a row failed", 50..800);
+    assert_aborted(&o, "USB transfers in a row failed", 50..800);
 }
 
 #[test]
@@ -319,6 +319,30 @@ fn emulator_unplugged() {
         "{halt}"
     );
     assert_aborted(&o, "unplugged", 50..800);
+}
+
+/// The wall power lost mid-stroke (encoders live, motors dead): the
+/// following-error guard stops the scan within 300 ms, saying why, with
+/// the motors at zero.
+#[test]
+fn emulator_motor_power_lost_aborts_within_300_ms() {
+    let mut lp = load(QUICK_EMU);
+    let e = &mut lp.profile.falcon.as_mut().unwrap().emulator;
+    e.motor_power_lost_after_s = Some(2.3);
+    let o = scan_virtual(&lp.profile, emulated(&lp), |d| {
+        falcon_forces_off(d);
+        // One command per millisecond: forces asked of dead motors for
+        // under 300 ms before the motion stopped.
+        let asked = d.transport().counters.unpowered_commands;
+        assert!((1..300).contains(&asked), "{asked} commands after the loss");
+    });
+    assert_eq!(o.halt, None);
+    let stopped = o.stopped.as_deref().expect("the motion stops");
+    assert!(
+        stopped.contains("check the Falcon's power supply"),
+        "{stopped}"
+    );
+    assert_aborted(&o, "check the Falcon's power supply", 50..800);
 }
 
 #[test]
@@ -519,7 +543,11 @@ fn scan_reports_an_emulated_read_error() {
         QUICK_EMU,
         with_emulator_faults("read_error_after_s = 2.4\nread_errors = 100"),
     );
-    scan_with_fault(&prof, &dir.path().join("D"), "USB reads in a row failed");
+    scan_with_fault(
+        &prof,
+        &dir.path().join("D"),
+        "USB transfers in a row failed",
+    );
 }
 
 #[test]

@@ -262,8 +262,11 @@ fn a_streak_of_missed_deadlines_stops_the_motion_and_keeps_the_samples() {
             _ => None,
         })
         .expect("a MotionStopped event");
+    // Ticks this late with the force at its limit: the tick-interval guard
+    // (servo/guards.rs) may see the oscillation starting before the streak.
     assert!(
-        stopped.contains("consecutive missed deadlines"),
+        stopped.contains("consecutive missed deadlines")
+            || stopped.contains("too far apart for the controller's gains"),
         "{stopped}"
     );
     let saved = recorder.join();

@@ -15,10 +15,15 @@
 //! the next `read` collects its reply (waiting at most `reply_timeout`). A
 //! reply that does not come is counted as missed and the last position is
 //! held; after two misses the packet is sent again; after `link_lost_after`
-//! without any reply the device counts as gone. A failed USB read (a stall,
-//! an overflow, a timeout) counts as a read that brought no bytes, as
-//! libnifalcon treats it; only `read_error_streak` of them in a row, or a
-//! vanished device, end the session.
+//! without any reply the device counts as gone. A failed USB transfer, IN or
+//! OUT (a stall, an overflow, a timeout), counts as one that moved no bytes,
+//! as libnifalcon treats it; only `read_error_streak` failures in a row
+//! (IN and OUT in one streak, ended by a reply), or a vanished device, end
+//! the session.
+//!
+//! Making the device safe sends a zero-force packet and waits (at most
+//! [`SAFE_FLUSH`]) until it has left the host: closing the device cancels
+//! queued writes, and the firmware may keep the last force it was sent.
 
 pub mod emulator;
 pub mod firmware;
@@ -96,6 +101,16 @@ pub trait FalconTransport: Send {
     fn reopen(&mut self) -> Result<(), TransportError> {
         Ok(())
     }
+    /// Wait (at most `timeout`) until every byte written has left the host;
+    /// an error when some has not (it may still be cancelled on closing).
+    fn flush(&mut self, _timeout: Duration) -> Result<(), TransportError> {
+        Ok(())
+    }
+    /// The motor commands the device itself is applying, where the
+    /// transport can know it (the emulator); `None` for a real Falcon.
+    fn applied_motor(&self) -> Option<[i16; 3]> {
+        None
+    }
     /// The servo loop's time (seconds): the emulator runs its physics up to
     /// it; a real device ignores it.
     fn advance_to(&mut self, _t_s: f64) {}
@@ -119,9 +134,14 @@ pub struct FalconConfig {
     pub link_lost_after: u32,
     /// How long the probe for a running firmware keeps asking.
     pub probe_window: Duration,
-    /// Failed USB reads in a row after which the link counts as broken.
+    /// Failed USB transfers (IN or OUT) in a row, with no reply between,
+    /// after which the link counts as broken.
     pub read_error_streak: u32,
 }
+
+/// How long making the device safe waits for its zero-force packet to
+/// leave: a bulk OUT of 16 bytes takes about a millisecond at full speed.
+pub const SAFE_FLUSH: Duration = Duration::from_millis(20);
 
 impl Default for FalconConfig {
     fn default() -> Self {
@@ -148,8 +168,12 @@ pub struct FalconStats {
     /// Garbled or partial packets thrown away while resynchronising.
     pub bad_packets: u64,
     pub discarded_bytes: u64,
-    /// USB reads that failed and were ridden out as "no bytes".
+    /// USB transfers (reads and writes) that failed and were ridden out.
     pub usb_errors: u64,
+    /// Zero-force packets sent by `make_safe` and seen to leave the host,
+    /// and those that did not leave within [`SAFE_FLUSH`] (or failed).
+    pub safe_confirmed: u64,
+    pub safe_unconfirmed: u64,
     /// Forward-kinematics Newton steps per solution: `fk_iterations[n]` counts solutions taking n.
     pub fk_iterations: [u64; 16],
     pub fk_restarts: u64,
@@ -168,6 +192,51 @@ impl FalconStats {
     /// The largest number of Newton steps any solution took.
     pub fn fk_max_iterations(&self) -> usize {
         self.fk_iterations.iter().rposition(|&n| n > 0).unwrap_or(0)
+    }
+}
+
+/// Round trips (packet written to its reply read, on the link's clock) in
+/// buckets of `ROUND_TRIP_BUCKET_S`; the last bucket holds everything longer.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RoundTrips {
+    counts: Vec<u64>,
+}
+
+const ROUND_TRIP_BUCKET_S: f64 = 0.000_05;
+const ROUND_TRIP_BUCKETS: usize = 400;
+
+impl RoundTrips {
+    fn new() -> RoundTrips {
+        RoundTrips {
+            counts: vec![0; ROUND_TRIP_BUCKETS],
+        }
+    }
+
+    fn add(&mut self, d: Duration) {
+        let i = (d.as_secs_f64() / ROUND_TRIP_BUCKET_S) as usize;
+        self.counts[i.min(ROUND_TRIP_BUCKETS - 1)] += 1;
+    }
+
+    pub fn count(&self) -> u64 {
+        self.counts.iter().sum()
+    }
+
+    /// The round trip (seconds, the top of its bucket) that a share `q`
+    /// (0..=1) of them took at most; `None` when there are none.
+    pub fn quantile(&self, q: f64) -> Option<f64> {
+        let n = self.count();
+        if n == 0 {
+            return None;
+        }
+        let want = ((q.clamp(0.0, 1.0) * n as f64).ceil() as u64).max(1);
+        let mut seen = 0;
+        for (i, c) in self.counts.iter().enumerate() {
+            seen += c;
+            if seen >= want {
+                return Some((i + 1) as f64 * ROUND_TRIP_BUCKET_S);
+            }
+        }
+        None
     }
 }
 
@@ -191,6 +260,9 @@ pub struct FalconDevice<T: FalconTransport> {
     have_position: bool,
     gone: Option<String>,
     stats: FalconStats,
+    /// When the packet awaiting its reply was written (the link's clock).
+    sent_at: Instant,
+    round_trips: RoundTrips,
 }
 
 impl<T: FalconTransport> FalconDevice<T> {
@@ -237,6 +309,8 @@ impl<T: FalconTransport> FalconDevice<T> {
                 firmware: report,
                 ..FalconStats::default()
             },
+            sent_at: Instant::now(),
+            round_trips: RoundTrips::new(),
         })
     }
 
@@ -245,6 +319,15 @@ impl<T: FalconTransport> FalconDevice<T> {
         s.bad_packets = self.reader.stats.bad_packets;
         s.discarded_bytes = self.reader.stats.discarded_bytes;
         s
+    }
+
+    /// The round trips measured since the last [`Self::reset_round_trips`].
+    pub fn round_trips(&self) -> &RoundTrips {
+        &self.round_trips
+    }
+
+    pub fn reset_round_trips(&mut self) {
+        self.round_trips.counts.fill(0);
     }
 
     pub fn transport(&self) -> &T {
@@ -295,9 +378,30 @@ impl<T: FalconTransport> FalconDevice<T> {
             motor: self.motor,
             flags: self.flags(),
         });
-        self.transport.write(&p).map_err(|e| self.lost(e))?;
-        self.awaiting = true;
-        self.stats.packets_sent += 1;
+        match self.transport.write(&p) {
+            Ok(()) => {
+                self.awaiting = true;
+                self.stats.packets_sent += 1;
+                self.sent_at = self.transport.now();
+                Ok(())
+            }
+            // Not sent: the next tick sends again; only a streak breaks the link.
+            Err(TransportError::Transient(m)) => self.usb_failed(&m, "write"),
+            Err(e) => Err(self.lost(e)),
+        }
+    }
+
+    /// One failed USB transfer ridden out; the link is broken after
+    /// `read_error_streak` of them (IN and OUT alike) without a reply.
+    fn usb_failed(&mut self, m: &str, what: &str) -> Result<(), DeviceError> {
+        self.stats.usb_errors += 1;
+        self.usb_error_streak += 1;
+        if self.usb_error_streak >= self.config.read_error_streak {
+            return Err(DeviceError::Io(format!(
+                "{} USB transfers in a row failed without a reply (the last, a {what}: {m}): the link is broken; unplug the Falcon, plug it in directly (not through a hub) and start again",
+                self.usb_error_streak
+            )));
+        }
         Ok(())
     }
 
@@ -316,20 +420,10 @@ impl<T: FalconTransport> FalconDevice<T> {
             }
             let left = deadline.saturating_duration_since(self.transport.now());
             let n = match self.transport.read(&mut self.rx, left) {
-                Ok(n) => {
-                    self.usb_error_streak = 0;
-                    n
-                }
+                Ok(n) => n,
                 Err(TransportError::Transient(m)) => {
                     // No bytes this time; only a streak breaks the link.
-                    self.stats.usb_errors += 1;
-                    self.usb_error_streak += 1;
-                    if self.usb_error_streak >= self.config.read_error_streak {
-                        return Err(DeviceError::Io(format!(
-                            "{} USB reads in a row failed (the last: {m}): the link is broken; unplug the Falcon, plug it in directly (not through a hub) and start again",
-                            self.usb_error_streak
-                        )));
-                    }
+                    self.usb_failed(&m, "read")?;
                     0
                 }
                 Err(e) => return Err(self.lost(e)),
@@ -344,8 +438,13 @@ impl<T: FalconTransport> FalconDevice<T> {
 
     fn take_reply(&mut self, r: ReplyPacket) {
         self.stats.replies += 1;
+        if self.awaiting {
+            let rt = self.transport.now().saturating_duration_since(self.sent_at);
+            self.round_trips.add(rt);
+        }
         self.awaiting = false;
         self.missed_streak = 0;
+        self.usb_error_streak = 0;
         self.buttons = r.buttons;
         let homed = r.is_homed();
         if homed && !self.homed {
@@ -445,16 +544,24 @@ impl<T: FalconTransport> HapticDevice for FalconDevice<T> {
 
     fn make_safe(&mut self) {
         self.motor = [0; 3];
-        if self.gone.is_none() {
-            // Best effort, outside the lockstep: a zero packet now.
-            let p = packet::encode_command(&CommandPacket {
-                motor: [0; 3],
-                flags: self.flags(),
-            });
-            if self.transport.write(&p).is_ok() {
-                self.awaiting = true;
-                self.stats.packets_sent += 1;
-            }
+        if self.gone.is_some() {
+            return;
+        }
+        // Outside the lockstep: a zero packet now, and wait until it has
+        // left (a write still queued when the device closes is cancelled).
+        let p = packet::encode_command(&CommandPacket {
+            motor: [0; 3],
+            flags: self.flags(),
+        });
+        let sent = self.transport.write(&p).is_ok();
+        if sent {
+            self.awaiting = true;
+            self.stats.packets_sent += 1;
+        }
+        if sent && self.transport.flush(SAFE_FLUSH).is_ok() {
+            self.stats.safe_confirmed += 1;
+        } else {
+            self.stats.safe_unconfirmed += 1;
         }
     }
 
@@ -565,3 +672,6 @@ pub fn open_usb(
     log(&format!("opened {}", transport.describe()));
     FalconDevice::open(transport, config, log).map_err(firmware_failure)
 }
+
+#[cfg(test)]
+mod tests;

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use serde::{Deserialize, Serialize};
 
 use super::falcon_reach::{self, DEFAULT_ENCODER_OFFSET_DEG, DEFAULT_ORIGIN_M};
-use super::{DeviceKind, Invalid, Profile};
+use super::{DeviceKind, Invalid, PathSpec, Profile};
 
 /// How to drive a Falcon.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
@@ -46,7 +46,8 @@ pub struct FalconSection {
     /// take that long to start).
     #[serde(default = "default_probe_window")]
     pub probe_window_ms: f64,
-    /// Failed USB reads in a row (stalls, overflows, timeouts) after which
+    /// Failed USB transfers, reads and writes alike, in a row without a
+    /// reply (stalls, overflows, timeouts) after which
     /// the link counts as broken; fewer are counted and ridden out.
     #[serde(default = "default_read_error_streak")]
     pub read_error_streak: u32,
@@ -138,6 +139,16 @@ pub struct EmulatorSection {
     /// it turns against its command, so a force comes out bent or reversed
     /// (what `devices --self-test`'s force pulses are there to catch).
     pub reversed_motor: Option<u8>,
+    /// The wall power fails this many seconds after the loop starts: USB
+    /// and the encoders keep working, the motors do nothing.
+    pub motor_power_lost_after_s: Option<f64>,
+    /// Every reply comes this much later (a slow link: a hub, a loaded
+    /// host); over about a tick, the lockstep exchange misses replies.
+    pub slow_link_ms: f64,
+    /// The firmware keeps applying the last force it was sent when
+    /// commands stop (otherwise it stops its motors after
+    /// 100 ms without one: what Novint's firmware does is not known).
+    pub keeps_last_force: bool,
 }
 
 /// The emulated link's timing model (`[falcon.emulator.timing]`); the FTDI
@@ -188,6 +199,9 @@ impl Default for EmulatorSection {
             upload_needs_reopen: false,
             timing: None,
             reversed_motor: None,
+            motor_power_lost_after_s: None,
+            slow_link_ms: 0.0,
+            keeps_last_force: false,
         }
     }
 }
@@ -394,123 +408,9 @@ pub fn validate(p: &Profile) -> Result<(), Invalid> {
         );
     }
     if let Some(f) = &p.falcon {
-        if f.origin_m.iter().any(|v| !v.is_finite()) {
-            return bad("falcon.origin_m", "must be three numbers (metres)");
-        }
-        if !(f.encoder_offset_deg.is_finite() && f.encoder_offset_deg.abs() <= 180.0) {
-            return bad("falcon.encoder_offset_deg", "must be within ±180°");
-        }
-        if f.firmware
-            .as_ref()
-            .is_some_and(|p| p.as_os_str().is_empty())
-        {
-            return bad("falcon.firmware", "must name the firmware file");
-        }
-        if !(1..=100).contains(&f.firmware_attempts) {
-            return bad("falcon.firmware_attempts", "must be from 1 to 100");
-        }
-        if f.index > 15 {
-            return bad("falcon.index", "must be from 0 to 15");
-        }
-        if !(f.homing_timeout_s.is_finite()
-            && f.homing_timeout_s > 0.0
-            && f.homing_timeout_s <= 3600.0)
-        {
-            return bad("falcon.homing_timeout_s", "must be in (0, 3600] s");
-        }
-        if !(f.reply_timeout_ms.is_finite()
-            && f.reply_timeout_ms > 0.0
-            && f.reply_timeout_ms <= 100.0)
-        {
-            return bad("falcon.reply_timeout_ms", "must be in (0, 100] ms");
-        }
-        // Without a [device] the servo rate is unknown: the thesis's 1 kHz.
-        let period_ms = 1000.0 / p.device.as_ref().map_or(1000.0, |d| d.rate_hz);
-        if !(f.link_lost_after_ms.is_finite()
-            && f.link_lost_after_ms >= 2.0 * period_ms
-            && f.link_lost_after_ms <= 10_000.0)
-        {
-            return bad(
-                "falcon.link_lost_after_ms",
-                format!(
-                    "must be from two servo periods ({:.1} ms) to 10000 ms",
-                    2.0 * period_ms
-                ),
-            );
-        }
-        if !(f.probe_window_ms.is_finite() && (100.0..=30_000.0).contains(&f.probe_window_ms)) {
-            return bad(
-                "falcon.probe_window_ms",
-                format!(
-                    "must be from 100 to 30000 ms (1000, as libnifalcon waits, unless you know better), got {}",
-                    f.probe_window_ms
-                ),
-            );
-        }
-        if !(1..=10_000).contains(&f.read_error_streak) {
-            return bad(
-                "falcon.read_error_streak",
-                format!("must be from 1 to 10000, got {}", f.read_error_streak),
-            );
-        }
-        let e = &f.emulator;
-        rate("falcon.emulator.drop_rate", e.drop_rate)?;
-        rate("falcon.emulator.garble_rate", e.garble_rate)?;
-        rate("falcon.emulator.split_rate", e.split_rate)?;
-        if e.upload_failures > 100 {
-            return bad("falcon.emulator.upload_failures", "must be at most 100");
-        }
-        if let Some(u) = e.unplug_after_s
-            && !(u.is_finite() && u > 0.0)
-        {
-            return bad(
-                "falcon.emulator.unplug_after_s",
-                "must be a positive number of seconds",
-            );
-        }
-        fault_time(
-            "falcon.emulator",
-            "read_error_after_s",
-            e.read_error_after_s,
-        )?;
-        stall("falcon.emulator", e.stall_after_s, e.stall_ms, e.stalls)?;
-        if !(1..=100_000).contains(&e.read_errors) {
-            return bad(
-                "falcon.emulator.read_errors",
-                format!("must be from 1 to 100000, got {}", e.read_errors),
-            );
-        }
-        if !(e.firmware_start_ms.is_finite() && (0.0..=10_000.0).contains(&e.firmware_start_ms)) {
-            return bad(
-                "falcon.emulator.firmware_start_ms",
-                format!("must be from 0 to 10000 ms, got {}", e.firmware_start_ms),
-            );
-        }
-        if let Some(t) = &e.timing {
-            for (key, v, max) in [
-                ("usb_latency_ms", t.usb_latency_ms, 100.0),
-                ("firmware_ms", t.firmware_ms, 100.0),
-                ("jitter_ms", t.jitter_ms, 100.0),
-                ("late_ms", t.late_ms, 1000.0),
-            ] {
-                if !(v.is_finite() && (0.0..=max).contains(&v)) {
-                    return bad(
-                        format!("falcon.emulator.timing.{key}"),
-                        format!("must be from 0 to {max} ms, got {v}"),
-                    );
-                }
-            }
-            rate("falcon.emulator.timing.late_rate", t.late_rate)?;
-        }
-        if let Some(m) = e.reversed_motor
-            && m > 2
-        {
-            return bad(
-                "falcon.emulator.reversed_motor",
-                format!("must be 0, 1 or 2 (a leg's motor), got {m}"),
-            );
-        }
-        if !e.firmware_loaded && f.firmware.is_none() {
+        validate_falcon(f, p)?;
+        validate_emulator(&f.emulator)?;
+        if !f.emulator.firmware_loaded && f.firmware.is_none() {
             return bad(
                 "falcon.emulator.firmware_loaded",
                 "is false, so the driver must upload firmware: name the file in `[falcon] firmware`",
@@ -518,44 +418,190 @@ pub fn validate(p: &Profile) -> Result<(), Invalid> {
         }
     }
     if falcon_kind && let Some(path) = &p.path {
-        let frame = falcon_reach::Frame {
-            origin_m: p.falcon.as_ref().map_or(DEFAULT_ORIGIN_M, |f| f.origin_m),
-        };
-        for (i, w) in path.waypoints_m.iter().enumerate() {
-            let q = frame.to_falcon(*w);
-            if !falcon_reach::in_workspace(q) {
+        validate_reach(p, path)?;
+    }
+    validate_triggers(p)
+}
+
+/// The `[falcon]` section's own keys.
+fn validate_falcon(f: &FalconSection, p: &Profile) -> Result<(), Invalid> {
+    if f.origin_m.iter().any(|v| !v.is_finite()) {
+        return bad("falcon.origin_m", "must be three numbers (metres)");
+    }
+    if !(f.encoder_offset_deg.is_finite() && f.encoder_offset_deg.abs() <= 180.0) {
+        return bad("falcon.encoder_offset_deg", "must be within ±180°");
+    }
+    if f.firmware
+        .as_ref()
+        .is_some_and(|p| p.as_os_str().is_empty())
+    {
+        return bad("falcon.firmware", "must name the firmware file");
+    }
+    if !(1..=100).contains(&f.firmware_attempts) {
+        return bad("falcon.firmware_attempts", "must be from 1 to 100");
+    }
+    if f.index > 15 {
+        return bad("falcon.index", "must be from 0 to 15");
+    }
+    if !(f.homing_timeout_s.is_finite() && f.homing_timeout_s > 0.0 && f.homing_timeout_s <= 3600.0)
+    {
+        return bad("falcon.homing_timeout_s", "must be in (0, 3600] s");
+    }
+    if !(f.reply_timeout_ms.is_finite() && f.reply_timeout_ms > 0.0 && f.reply_timeout_ms <= 100.0)
+    {
+        return bad("falcon.reply_timeout_ms", "must be in (0, 100] ms");
+    }
+    // Without a [device] the servo rate is unknown: the thesis's 1 kHz.
+    let period_ms = 1000.0 / p.device.as_ref().map_or(1000.0, |d| d.rate_hz);
+    if !(f.link_lost_after_ms.is_finite()
+        && f.link_lost_after_ms >= 2.0 * period_ms
+        && f.link_lost_after_ms <= 10_000.0)
+    {
+        return bad(
+            "falcon.link_lost_after_ms",
+            format!(
+                "must be from two servo periods ({:.1} ms) to 10000 ms",
+                2.0 * period_ms
+            ),
+        );
+    }
+    if !(f.probe_window_ms.is_finite() && (100.0..=30_000.0).contains(&f.probe_window_ms)) {
+        return bad(
+            "falcon.probe_window_ms",
+            format!(
+                "must be from 100 to 30000 ms (1000, as libnifalcon waits, unless you know better), got {}",
+                f.probe_window_ms
+            ),
+        );
+    }
+    if !(1..=10_000).contains(&f.read_error_streak) {
+        return bad(
+            "falcon.read_error_streak",
+            format!("must be from 1 to 10000, got {}", f.read_error_streak),
+        );
+    }
+    Ok(())
+}
+
+/// The emulator's state and faults (`[falcon.emulator]`).
+fn validate_emulator(e: &EmulatorSection) -> Result<(), Invalid> {
+    rate("falcon.emulator.drop_rate", e.drop_rate)?;
+    rate("falcon.emulator.garble_rate", e.garble_rate)?;
+    rate("falcon.emulator.split_rate", e.split_rate)?;
+    if e.upload_failures > 100 {
+        return bad("falcon.emulator.upload_failures", "must be at most 100");
+    }
+    if let Some(u) = e.unplug_after_s
+        && !(u.is_finite() && u > 0.0)
+    {
+        return bad(
+            "falcon.emulator.unplug_after_s",
+            "must be a positive number of seconds",
+        );
+    }
+    fault_time(
+        "falcon.emulator",
+        "read_error_after_s",
+        e.read_error_after_s,
+    )?;
+    stall("falcon.emulator", e.stall_after_s, e.stall_ms, e.stalls)?;
+    if !(1..=100_000).contains(&e.read_errors) {
+        return bad(
+            "falcon.emulator.read_errors",
+            format!("must be from 1 to 100000, got {}", e.read_errors),
+        );
+    }
+    if !(e.firmware_start_ms.is_finite() && (0.0..=10_000.0).contains(&e.firmware_start_ms)) {
+        return bad(
+            "falcon.emulator.firmware_start_ms",
+            format!("must be from 0 to 10000 ms, got {}", e.firmware_start_ms),
+        );
+    }
+    if let Some(t) = &e.timing {
+        for (key, v, max) in [
+            ("usb_latency_ms", t.usb_latency_ms, 100.0),
+            ("firmware_ms", t.firmware_ms, 100.0),
+            ("jitter_ms", t.jitter_ms, 100.0),
+            ("late_ms", t.late_ms, 1000.0),
+        ] {
+            if !(v.is_finite() && (0.0..=max).contains(&v)) {
                 return bad(
-                    format!("path.waypoints_m[{i}]"),
-                    format!(
-                        "waypoint {} ({:.4}, {:.4}, {:.4}) m is outside the Falcon's workspace: in the Falcon's frame it is ({:.4}, {:.4}, {:.4}) m, which must lie in x, y ±0.05 m, z 0.075…0.175 m and within the legs' reach (move the waypoint or `[falcon] origin_m`)",
-                        i + 1,
-                        w[0],
-                        w[1],
-                        w[2],
-                        q[0],
-                        q[1],
-                        q[2]
-                    ),
-                );
-            }
-            if let Ok((leg, deg, clearance)) = falcon_reach::joint_clearance(q)
-                && clearance < falcon_reach::JOINT_MARGIN_DEG
-            {
-                let (lo, hi) = falcon_reach::joint_limits_deg();
-                return bad(
-                    format!("path.waypoints_m[{i}]"),
-                    format!(
-                        "waypoint {} ({:.4}, {:.4}, {:.4}) m puts leg {leg}'s arm at {deg:.1}°, {clearance:.1}° from its stops ({lo:.1}° grip pushed in, {hi:.1}° pulled out; keep {:.0}° clear): move the waypoint inward or `[falcon] origin_m`",
-                        i + 1,
-                        w[0],
-                        w[1],
-                        w[2],
-                        falcon_reach::JOINT_MARGIN_DEG
-                    ),
+                    format!("falcon.emulator.timing.{key}"),
+                    format!("must be from 0 to {max} ms, got {v}"),
                 );
             }
         }
+        rate("falcon.emulator.timing.late_rate", t.late_rate)?;
     }
+    if let Some(m) = e.reversed_motor
+        && m > 2
+    {
+        return bad(
+            "falcon.emulator.reversed_motor",
+            format!("must be 0, 1 or 2 (a leg's motor), got {m}"),
+        );
+    }
+    fault_time(
+        "falcon.emulator",
+        "motor_power_lost_after_s",
+        e.motor_power_lost_after_s,
+    )?;
+    if !(e.slow_link_ms.is_finite() && (0.0..=100.0).contains(&e.slow_link_ms)) {
+        return bad(
+            "falcon.emulator.slow_link_ms",
+            format!(
+                "must be from 0 to 100 ms (extra delay of every reply), got {}",
+                e.slow_link_ms
+            ),
+        );
+    }
+    Ok(())
+}
+
+/// Every waypoint inside the Falcon's workspace and clear of its arms' stops.
+fn validate_reach(p: &Profile, path: &PathSpec) -> Result<(), Invalid> {
+    let frame = falcon_reach::Frame {
+        origin_m: p.falcon.as_ref().map_or(DEFAULT_ORIGIN_M, |f| f.origin_m),
+    };
+    for (i, w) in path.waypoints_m.iter().enumerate() {
+        let q = frame.to_falcon(*w);
+        if !falcon_reach::in_workspace(q) {
+            return bad(
+                format!("path.waypoints_m[{i}]"),
+                format!(
+                    "waypoint {} ({:.4}, {:.4}, {:.4}) m is outside the Falcon's workspace: in the Falcon's frame it is ({:.4}, {:.4}, {:.4}) m, which must lie in x, y ±0.05 m, z 0.075…0.175 m and within the legs' reach (move the waypoint or `[falcon] origin_m`)",
+                    i + 1,
+                    w[0],
+                    w[1],
+                    w[2],
+                    q[0],
+                    q[1],
+                    q[2]
+                ),
+            );
+        }
+        if let Ok((leg, deg, clearance)) = falcon_reach::joint_clearance(q)
+            && clearance < falcon_reach::JOINT_MARGIN_DEG
+        {
+            let (lo, hi) = falcon_reach::joint_limits_deg();
+            return bad(
+                format!("path.waypoints_m[{i}]"),
+                format!(
+                    "waypoint {} ({:.4}, {:.4}, {:.4}) m puts leg {leg}'s arm at {deg:.1}°, {clearance:.1}° from its stops ({lo:.1}° grip pushed in, {hi:.1}° pulled out; keep {:.0}° clear): move the waypoint inward or `[falcon] origin_m`",
+                    i + 1,
+                    w[0],
+                    w[1],
+                    w[2],
+                    falcon_reach::JOINT_MARGIN_DEG
+                ),
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Each trigger maps buttons 1..=256, each once.
+fn validate_triggers(p: &Profile) -> Result<(), Invalid> {
     for (i, t) in p.triggers.iter().enumerate() {
         let key = format!("triggers[{i}]");
         if t.buttons.is_empty() {

@@ -22,8 +22,11 @@
 //! unplugging at a given time (every call then fails as a vanished USB
 //! device does, and the motors stop), USB reads that fail (stall) from a
 //! given time, and exchanges that stall (handed to the servo loop's clock
-//! through `take_stall`, as are the link's waits). It never sleeps, so the
-//! same emulator runs in virtual and in real time.
+//! through `take_stall`, as are the link's waits); the wall power lost at a
+//! given time (encoders live, motors dead), a link whose replies all come
+//! late, and firmware that keeps the last force when commands stop (by
+//! default it stops its motors after [`FIRMWARE_SILENCE_S`]). It never
+//! sleeps, so the same emulator runs in virtual and in real time.
 
 use std::time::{Duration, Instant};
 
@@ -91,6 +94,9 @@ pub enum HandTask {
 /// Beyond the arms' reach the mechanism holds the grip back, stiffly.
 const REACH_STIFFNESS_N_PER_M: f64 = 20_000.0;
 const REACH_DAMPING_N_S_PER_M: f64 = 20.0;
+/// Without `keeps_last_force`, the emulated firmware stops its motors after
+/// this long without a command (servo time).
+pub const FIRMWARE_SILENCE_S: f64 = 0.1;
 /// Uploads shorter than this never start a firmware.
 const MIN_IMAGE: usize = 1024;
 
@@ -143,6 +149,10 @@ pub struct EmulatorCounters {
     pub read_errors: u32,
     /// Packets ignored because the fresh firmware had not started yet.
     pub ignored_while_starting: u64,
+    /// Commands asking for force after the motors lost power (none came).
+    pub unpowered_commands: u64,
+    /// Times the firmware stopped its motors for want of commands.
+    pub silence_stops: u32,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -203,6 +213,10 @@ pub struct EmulatedFalcon {
     stall: Option<Duration>,
     /// What the hand was last asked to do, and when (servo time).
     hand_task: Option<(HandTask, f64)>,
+    /// The wall power is off: the motors do nothing.
+    power_lost: bool,
+    /// Servo time of the last command applied.
+    commanded_at: f64,
     pub counters: EmulatorCounters,
 }
 
@@ -245,6 +259,8 @@ impl EmulatedFalcon {
             stalls_done: 0,
             stall: None,
             hand_task: None,
+            power_lost: false,
+            commanded_at: 0.0,
             counters: EmulatorCounters::default(),
             cfg,
         }
@@ -386,6 +402,7 @@ impl EmulatedFalcon {
         self.counters.commands += 1;
         self.motor = c.motor;
         self.flags = c.flags;
+        self.commanded_at = self.t;
         let mut turning = c.motor;
         if let Some(m) = self.cfg.device.reversed_motor {
             // Wired backwards: the motor turns against its command.
@@ -399,6 +416,11 @@ impl EmulatedFalcon {
             .max()
             .unwrap_or(0);
         self.counters.max_motor = self.counters.max_motor.max(m);
+        if self.power_lost {
+            // The firmware takes the command; the motors have no power.
+            self.counters.unpowered_commands += u64::from(turning != [0; 3]);
+            turning = [0; 3];
+        }
         // Torques through the Jacobian at the true position.
         let tau = kinematics::torques_of_commands(turning);
         let force = kinematics::inverse(self.falcon_position())
@@ -431,7 +453,8 @@ impl EmulatedFalcon {
             self.counters.garbled += 1;
         }
         self.counters.replies += 1;
-        self.link.begin_message();
+        self.link
+            .begin_message_after(self.cfg.device.slow_link_ms / 1000.0);
         for (i, b) in bytes.into_iter().enumerate() {
             self.link.device_send(b, at + (i + 1) as f64 * byte_s);
         }
@@ -709,6 +732,22 @@ impl FalconTransport for EmulatedFalcon {
         if !self.unplugged && self.cfg.device.unplug_after_s.is_some_and(|u| t_s >= u) {
             self.unplug();
         }
+        if !self.power_lost
+            && self
+                .cfg
+                .device
+                .motor_power_lost_after_s
+                .is_some_and(|p| t_s >= p)
+        {
+            self.power_lost = true;
+            self.sim.make_safe();
+        }
+        let silent = t_s - self.commanded_at > FIRMWARE_SILENCE_S;
+        if !self.cfg.device.keeps_last_force && silent && self.motor != [0; 3] {
+            self.motor = [0; 3];
+            self.sim.make_safe();
+            self.counters.silence_stops += 1;
+        }
         if self.stalls_done < self.cfg.device.stalls
             && self.cfg.device.stall_after_s.is_some_and(|a| t_s >= a)
         {
@@ -722,6 +761,10 @@ impl FalconTransport for EmulatedFalcon {
         }
         // The physics runs whether or not anyone listens.
         let _ = self.sim.read(t_s);
+    }
+
+    fn applied_motor(&self) -> Option<[i16; 3]> {
+        Some(self.motor)
     }
 
     fn take_stall(&mut self) -> Option<Duration> {

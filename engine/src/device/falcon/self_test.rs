@@ -130,6 +130,27 @@ pub struct PulseResponse {
     pub cosine: f64,
 }
 
+/// The link measured over a few seconds with the grip let go.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct LinkQuality {
+    /// Packet written to its reply read: the median and the 99th percentile.
+    pub round_trip_p50_ms: Option<f64>,
+    pub round_trip_p99_ms: Option<f64>,
+    pub missed_per_1000: f64,
+    /// The limits the step passes within.
+    pub limit_p99_ms: f64,
+    pub limit_missed_per_1000: f64,
+}
+
+/// The link's counters over the whole test, and its measured quality.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LinkReport {
+    #[serde(flatten)]
+    pub counts: LinkStats,
+    #[serde(flatten)]
+    pub quality: Option<LinkQuality>,
+}
+
 /// The whole run, for the user to paste into an issue.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Report {
@@ -141,9 +162,14 @@ pub struct Report {
     pub open_log: Vec<String>,
     pub steps: Vec<Step>,
     pub pulses: Vec<PulseResponse>,
-    pub link: Option<LinkStats>,
+    pub link: Option<LinkReport>,
     /// Seconds from the first exchange until the forces were zeroed.
     pub duration_s: f64,
+    /// The zero-force packet that ended the test was seen to leave the host.
+    pub zero_force_confirmed: bool,
+    /// The motor commands the device applies after the test, where that
+    /// can be known (the emulator); `None` for a real Falcon.
+    pub motors_after: Option<[i16; 3]>,
     pub passed: bool,
 }
 
@@ -159,6 +185,8 @@ impl Report {
             pulses: Vec::new(),
             link: None,
             duration_s: 0.0,
+            zero_force_confirmed: false,
+            motors_after: None,
             passed: false,
         }
     }
@@ -205,7 +233,7 @@ impl Report {
                 s.detail
             ));
         }
-        if let Some(l) = &self.link {
+        if let Some(LinkReport { counts: l, .. }) = &self.link {
             out.push(format!(
                 "link: {} packets, {} replies, {} missed ({:.2} per 1000 packets), {} bad packets, {} USB errors, {} saturated ticks",
                 l.packets,
@@ -217,7 +245,18 @@ impl Report {
                 l.saturated_ticks
             ));
         }
-        out.push(format!("forces zeroed after {:.1} s", self.duration_s));
+        out.push(if self.zero_force_confirmed {
+            format!(
+                "forces zeroed after {:.1} s (the zero-force packet left the host)",
+                self.duration_s
+            )
+        } else {
+            format!(
+                "forces zeroed after {:.1} s, but the zero-force packet was not seen to leave the host within {} ms: if the grip still pushes, unplug the Falcon's power",
+                self.duration_s,
+                super::SAFE_FLUSH.as_millis()
+            )
+        });
         let failed = self.not_passed().len();
         out.push(if self.passed {
             format!("result: PASS ({} steps)", self.steps.len())
@@ -265,6 +304,11 @@ pub struct Options {
     pub min_cosine: f64,
     /// Apply the pulses without asking (`--yes`).
     pub assume_yes: bool,
+    /// The link is measured this long; it passes with at most this many
+    /// missed replies per 1000 packets (the round trip's 99th percentile
+    /// must stay under one servo period).
+    pub link_s: f64,
+    pub max_missed_per_1000: f64,
 }
 
 impl Default for Options {
@@ -284,6 +328,8 @@ impl Default for Options {
             min_motion_m: 0.0005,
             min_cosine: 0.7,
             assume_yes: false,
+            link_s: 3.0,
+            max_missed_per_1000: 100.0,
         }
     }
 }
@@ -399,7 +445,13 @@ pub fn run<T: FalconTransport, C: Clock>(
     };
     report.push("open", Verdict::Pass, how);
     run_steps(&mut device, pace, operator, options, &mut report);
-    report.link = device.link_stats();
+    let quality = report.link.take().and_then(|l| l.quality);
+    report.link = device
+        .link_stats()
+        .map(|counts| LinkReport { counts, quality });
+    let stats = device.stats();
+    report.zero_force_confirmed = stats.safe_confirmed > 0 && stats.safe_unconfirmed == 0;
+    report.motors_after = device.transport().applied_motor();
     (report, Ok(device))
 }
 
@@ -419,8 +471,9 @@ pub fn run_steps<T: FalconTransport, C: Clock>(
         t: 0.0,
     };
     let mut guard = ForcesOff(device);
-    let steps: [(&str, StepFn<T, C>); 4] = [
+    let steps: [(&str, StepFn<T, C>); 5] = [
         ("leds", leds),
+        ("link", link),
         ("homing", homing),
         ("encoders", encoders),
         ("pulses", pulses),
@@ -502,6 +555,61 @@ fn leds<T: FalconTransport, C: Clock>(
         Verdict::Fail
     };
     report.push("leds", verdict, detail);
+    Ok(())
+}
+
+/// The link with the grip let go: round trips and missed replies over
+/// `link_s`, against one servo period and `max_missed_per_1000`.
+fn link<T: FalconTransport, C: Clock>(
+    dev: &mut ForcesOff<'_, T>,
+    ticker: &mut Ticker<'_, C>,
+    _operator: &mut dyn Operator<T>,
+    options: &Options,
+    report: &mut Report,
+) -> Result<(), Halt> {
+    dev.0.reset_round_trips();
+    let before = dev.0.stats();
+    for _ in 0..ticker.ticks(options.link_s) {
+        ticker.tick(dev.0, [0.0; 3])?;
+    }
+    let after = dev.0.stats();
+    let packets = after.packets_sent - before.packets_sent;
+    let missed = after.missed_replies - before.missed_replies;
+    let rt = dev.0.round_trips();
+    let ms = |q: f64| rt.quantile(q).map(|s| s * 1000.0);
+    let q = LinkQuality {
+        round_trip_p50_ms: ms(0.5),
+        round_trip_p99_ms: ms(0.99),
+        missed_per_1000: per_1000(missed, packets),
+        limit_p99_ms: 1000.0 * ticker.period,
+        limit_missed_per_1000: options.max_missed_per_1000,
+    };
+    let shown = |v: Option<f64>| v.map_or("none".to_string(), |v| format!("{v:.2} ms"));
+    let detail = format!(
+        "round trip p50 {}, p99 {}; {:.1} missed replies per 1000 packets over {:.1} s (passes with p99 under {:.2} ms, one servo period, and at most {:.0} missed per 1000)",
+        shown(q.round_trip_p50_ms),
+        shown(q.round_trip_p99_ms),
+        q.missed_per_1000,
+        options.link_s,
+        q.limit_p99_ms,
+        q.limit_missed_per_1000
+    );
+    let fast = q.round_trip_p99_ms.is_some_and(|p| p < q.limit_p99_ms);
+    let (verdict, detail) = if fast && q.missed_per_1000 <= q.limit_missed_per_1000 {
+        (Verdict::Pass, detail)
+    } else {
+        (
+            Verdict::Fail,
+            format!(
+                "{detail}: the link is too slow for the lockstep exchange (positions are held on missed ticks): plug the Falcon in directly, not through a hub, and close programs that load the machine"
+            ),
+        )
+    };
+    report.push("link", verdict, detail);
+    report.link = Some(LinkReport {
+        counts: LinkStats::default(),
+        quality: Some(q),
+    });
     Ok(())
 }
 

@@ -34,10 +34,18 @@ const OUT_LEN: usize = 64;
 const CONTROL_TIMEOUT: Duration = Duration::from_millis(200);
 const WRITE_TIMEOUT: Duration = Duration::from_millis(100);
 
-/// The udev rule shipped in the repository, and how to install it.
-pub const UDEV_HINT: &str = "install the udev rule shipped with hapticlab: \
-`sudo cp contrib/99-novint-falcon.rules /etc/udev/rules.d/ && sudo udevadm control --reload-rules && sudo udevadm trigger`, \
-make sure you are in the `plugdev` group, then unplug and replug the Falcon";
+/// The udev rule (`contrib/70-novint-falcon.rules`), carried by the binary
+/// so that `hapticlab doctor --udev-rule` can print it without a checkout.
+pub const UDEV_RULE: &str = include_str!("../../../contrib/70-novint-falcon.rules");
+/// Where the rule goes, and the group its fallback names.
+pub const UDEV_RULE_FILE: &str = "/etc/udev/rules.d/70-novint-falcon.rules";
+pub const UDEV_GROUP: &str = "users";
+
+/// How to install the rule.
+pub const UDEV_HINT: &str = "install hapticlab's udev rule: \
+`hapticlab doctor --udev-rule | sudo tee /etc/udev/rules.d/70-novint-falcon.rules && sudo udevadm control --reload-rules && sudo udevadm trigger`, \
+then unplug and replug the Falcon; when not logged in at the machine itself (ssh), also join the `users` group \
+(`sudo usermod -aG users $USER`) and log out and in again";
 
 /// Why a Falcon could not be opened.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -145,6 +153,15 @@ fn in_transfer_error(e: TransferError) -> TransportError {
         TransferError::Stall => TransportError::Transient("bulk IN endpoint stalled".into()),
         TransferError::Cancelled => TransportError::Transient("bulk IN transfer timed out".into()),
         other => TransportError::Transient(format!("bulk IN transfer failed: {other}")),
+    }
+}
+
+/// A failed bulk OUT transfer: like a failed IN one, final only when the
+/// device vanished (a single failed write must not end a session).
+fn out_transfer_error(e: TransferError) -> TransportError {
+    match e {
+        TransferError::Disconnected => TransportError::Disconnected("USB device gone".into()),
+        other => TransportError::Transient(format!("bulk OUT transfer failed: {other}")),
     }
 }
 
@@ -259,13 +276,36 @@ impl Handle {
                     let mut b = c.buffer;
                     b.clear();
                     self.free_out.push(b);
-                    status.map_err(transfer_error)?;
+                    status.map_err(out_transfer_error)?;
                     wait = Duration::ZERO;
                 }
                 None => break,
             }
         }
         Ok(())
+    }
+
+    /// Wait until every OUT transfer has completed, at most `timeout`.
+    fn flush(&mut self, timeout: Duration) -> Result<(), TransportError> {
+        let deadline = Instant::now() + timeout;
+        let mut failed = Ok(());
+        while self.ep_out.pending() > 0 {
+            let left = deadline.saturating_duration_since(Instant::now());
+            let Some(c) = self.ep_out.wait_next_complete(left) else {
+                return Err(TransportError::Io(format!(
+                    "{} USB write(s) still queued after {} ms",
+                    self.ep_out.pending(),
+                    timeout.as_millis()
+                )));
+            };
+            let mut b = c.buffer;
+            b.clear();
+            self.free_out.push(b);
+            if let Err(e) = c.status {
+                failed = Err(out_transfer_error(e));
+            }
+        }
+        failed
     }
 }
 
@@ -297,7 +337,7 @@ impl Handle {
                 self.reclaim(WRITE_TIMEOUT)?;
             }
             let Some(mut b) = self.free_out.pop() else {
-                return Err(TransportError::Io(
+                return Err(TransportError::Transient(
                     "USB writes are not completing (the Falcon stopped reading)".into(),
                 ));
             };
@@ -362,6 +402,10 @@ impl FalconTransport for UsbTransport {
         self.handle()?.read(buf, timeout)
     }
 
+    fn flush(&mut self, timeout: Duration) -> Result<(), TransportError> {
+        self.handle()?.flush(timeout)
+    }
+
     fn reopen(&mut self) -> Result<(), TransportError> {
         // Close first: the interface can be claimed by one handle at a time.
         self.handle = None;
@@ -415,9 +459,13 @@ mod tests {
         }
         .to_string();
         assert!(
-            e.contains("contrib/99-novint-falcon.rules") && e.contains("plugdev"),
+            e.contains("hapticlab doctor --udev-rule") && e.contains("log out and in"),
             "{e}"
         );
+        // The hint's file and group are the rule's own.
+        assert!(e.contains(UDEV_RULE_FILE) && e.contains(UDEV_GROUP), "{e}");
+        assert!(UDEV_RULE.contains(&format!("GROUP=\"{UDEV_GROUP}\"")));
+        assert!(UDEV_RULE.contains("TAG+=\"uaccess\""));
         assert!(
             UsbError::NotFound(String::new())
                 .to_string()

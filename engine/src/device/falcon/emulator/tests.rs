@@ -424,7 +424,7 @@ fn usb_read_errors_are_ridden_out_and_a_streak_ends_the_link() {
     let (r, s) = run(10);
     let err = r.unwrap_err();
     assert!(
-        err.contains("10 USB reads in a row failed") && err.contains("stalled"),
+        err.contains("10 USB transfers in a row failed") && err.contains("stalled"),
         "{err}"
     );
     assert_eq!(s.usb_errors, 10);

@@ -80,6 +80,8 @@ pub struct Link {
     tx_free_at: f64,
     /// The host-side delay of the message being sent.
     extra_s: f64,
+    /// How late the message being sent reaches the chip (a slow link).
+    delay_s: f64,
     /// Link time spent waiting in reads since the last [`Link::take_waited`].
     waited: f64,
     pub counters: LinkCounters,
@@ -106,6 +108,7 @@ impl Link {
             held_flush: 0.0,
             tx_free_at: 0.0,
             extra_s: 0.0,
+            delay_s: 0.0,
             waited: 0.0,
             counters: LinkCounters::default(),
         }
@@ -164,6 +167,7 @@ impl Link {
     /// The Falcon starts sending a message (a reply, an echo): its
     /// host-side delay is drawn once for all its bytes.
     pub fn begin_message(&mut self) {
+        self.delay_s = 0.0;
         let Some(t) = &self.timing else {
             return;
         };
@@ -175,13 +179,20 @@ impl Link {
         self.extra_s = extra;
     }
 
+    /// [`Link::begin_message`] for a message that reaches the chip
+    /// `delay_s` late (a slow link), with or without a timing model.
+    pub fn begin_message_after(&mut self, delay_s: f64) {
+        self.begin_message();
+        self.delay_s = delay_s.max(0.0);
+    }
+
     /// The Falcon sends byte `b`, which is in the chip at `at` (link time;
-    /// ignored without a timing model).
+    /// ignored without a timing model, but for a message's delay).
     pub fn device_send(&mut self, b: u8, at: f64) {
         let seen = if self.timing.is_none() {
-            self.now
+            self.now + self.delay_s
         } else {
-            self.flush_time(at) + self.extra_s
+            self.flush_time(at + self.delay_s) + self.extra_s
         };
         let last = self.visible.back().copied().unwrap_or(f64::NEG_INFINITY);
         self.bytes.push_back(b);

@@ -111,7 +111,7 @@ fn a_clean_emulated_falcon_passes_every_step() {
     assert_eq!(
         names,
         [
-            "open", "leds", "homing", "encoders", "pulse x", "pulse y", "pulse z"
+            "open", "leds", "link", "homing", "encoders", "pulse x", "pulse y", "pulse z"
         ]
     );
     // The user was asked to home, move, hold, and finally let go; asked once before any force.
@@ -386,4 +386,139 @@ fn firmware_is_loaded_when_needed_and_each_step_told() {
         report.open_log.iter().any(|l| l == "firmware running"),
         "{text}"
     );
+}
+
+/// The emulator behind a transport that raises the stop flag (as a signal
+/// would) 20 packets into the first force, on firmware that keeps the last
+/// force it was sent.
+struct StopsMidPulse {
+    inner: EmulatedFalcon,
+    stop: std::sync::Arc<AtomicBool>,
+    forced: u32,
+    held_when_stopped: [i16; 3],
+}
+
+impl HandOf for StopsMidPulse {
+    fn emulator(&mut self) -> &mut EmulatedFalcon {
+        &mut self.inner
+    }
+}
+
+impl FalconTransport for StopsMidPulse {
+    fn kind(&self) -> &'static str {
+        self.inner.kind()
+    }
+    fn control(&mut self, request: u8, value: u16) -> Result<(), TransportError> {
+        self.inner.control(request, value)
+    }
+    fn write(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
+        self.inner.write(bytes)?;
+        if self.inner.motor() != [0; 3] {
+            self.forced += 1;
+            if self.forced == 20 {
+                self.held_when_stopped = self.inner.motor();
+                self.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+            }
+        }
+        Ok(())
+    }
+    fn read(&mut self, buf: &mut [u8], timeout: Duration) -> Result<usize, TransportError> {
+        self.inner.read(buf, timeout)
+    }
+    fn now(&self) -> std::time::Instant {
+        self.inner.now()
+    }
+    fn advance_to(&mut self, t_s: f64) {
+        self.inner.advance_to(t_s)
+    }
+    fn applied_motor(&self) -> Option<[i16; 3]> {
+        self.inner.applied_motor()
+    }
+}
+
+#[test]
+fn a_signal_while_a_pulse_holds_a_force_leaves_the_motors_at_zero() {
+    let mut lp = thesis_emulator();
+    lp.profile
+        .falcon
+        .as_mut()
+        .unwrap()
+        .emulator
+        .keeps_last_force = true;
+    let config = crate::device::falcon::config_from_profile(&lp).unwrap();
+    let sim = crate::device::sim::SimDevice::new(&lp.profile, &lp.base_dir, None, 7)
+        .unwrap()
+        .without_faults();
+    let inner = EmulatedFalcon::new(
+        sim,
+        EmulatorConfig {
+            device: lp.profile.falcon.clone().unwrap().emulator,
+            frame: config.frame,
+            position_noise_m: lp.profile.simulator.position_noise_m,
+            ..EmulatorConfig::default()
+        },
+    );
+    let stop = std::sync::Arc::new(AtomicBool::new(false));
+    let wrapped = StopsMidPulse {
+        inner,
+        stop: stop.clone(),
+        forced: 0,
+        held_when_stopped: [0; 3],
+    };
+    let (report, device) = run(
+        &lp.profile.name,
+        |log| {
+            FalconDevice::open(wrapped, config, log)
+                .map_err(|e| crate::device::falcon::OpenError::Device(e.to_string()))
+        },
+        Pace {
+            clock: &mut clock(),
+            stop: &stop,
+        },
+        &mut Script::answering(true),
+        &options(),
+    );
+    let device = device.unwrap();
+    let text = report.lines().join("\n");
+    assert_ne!(device.transport().held_when_stopped, [0; 3]);
+    assert!(text.contains("interrupted (Ctrl-C)"), "{text}");
+    // The firmware would have kept the force: only the zero packet stopped it.
+    assert_eq!(device.transport().inner.motor(), [0; 3]);
+    assert_eq!(report.motors_after, Some([0; 3]));
+    assert!(report.zero_force_confirmed, "{text}");
+    assert!(
+        text.contains("the zero-force packet left the host"),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_slow_link_fails_the_link_step_and_a_timed_one_passes() {
+    // The thesis emulator's timed link: round trips well under a period.
+    let lp = thesis_emulator();
+    let (report, _) = run_on(&lp, &mut Script::answering(true));
+    let q = report
+        .link
+        .as_ref()
+        .and_then(|l| l.quality)
+        .expect("measured");
+    let text = report.lines().join("\n");
+    assert_eq!(verdict(&report, "link"), Verdict::Pass, "{text}");
+    assert!(q.round_trip_p99_ms.unwrap() < 1.0, "{q:?}");
+    // Every reply 1.5 ms late: over a tick, reported, not hidden.
+    let mut lp = thesis_emulator();
+    lp.profile.falcon.as_mut().unwrap().emulator.slow_link_ms = 1.5;
+    let (report, _) = run_on(&lp, &mut Script::answering(true));
+    let text = report.lines().join("\n");
+    let q = report
+        .link
+        .as_ref()
+        .and_then(|l| l.quality)
+        .expect("measured");
+    assert_eq!(verdict(&report, "link"), Verdict::Fail, "{text}");
+    assert!(
+        q.missed_per_1000 > 100.0 || q.round_trip_p99_ms.is_none_or(|p| p >= 1.0),
+        "{q:?}"
+    );
+    assert!(text.contains("the link is too slow"), "{text}");
 }
