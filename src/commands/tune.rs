@@ -68,7 +68,8 @@ fn profile_text(arg: &ProfileArg) -> Result<String, Failure> {
     if p.as_os_str() == "thesis" && !p.exists() {
         return Ok(THESIS_PROFILE.to_string());
     }
-    std::fs::read_to_string(p).map_err(|e| bad(format!("{}: cannot read: {e}", p.display())))
+    crate::recording::files::read_input_to_string(p)
+        .map_err(|e| bad(format!("{}: cannot read: {e}", p.display())))
 }
 
 pub fn run(a: TuneArgs) -> Result<(), Failure> {

@@ -36,7 +36,7 @@ const WRITE_TIMEOUT: Duration = Duration::from_millis(100);
 
 /// The udev rule (`contrib/70-novint-falcon.rules`), carried by the binary
 /// so that `hapticlab doctor --udev-rule` can print it without a checkout.
-pub const UDEV_RULE: &str = include_str!("../../../contrib/70-novint-falcon.rules");
+pub const UDEV_RULE: &str = include_str!("../../../../contrib/70-novint-falcon.rules");
 /// Where the rule goes, and the group its fallback names.
 pub const UDEV_RULE_FILE: &str = "/etc/udev/rules.d/70-novint-falcon.rules";
 pub const UDEV_GROUP: &str = "users";
