@@ -17,6 +17,7 @@ mod first_session;
 mod import;
 mod plot;
 mod rigless;
+mod safe_io;
 mod sweep_grid;
 mod sweep_simulated;
 mod validation;
