@@ -927,3 +927,64 @@ fn place_one(s: &Staged, force: bool) -> Result<(), Failure> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A staged file `name` holding `text`, bound for `out/name`.
+    fn staged(staging: &Path, out: &Path, name: &str, text: &str) -> Staged {
+        std::fs::create_dir_all(staging).unwrap();
+        let s = staging.join(name);
+        std::fs::write(&s, text).unwrap();
+        Staged {
+            path: out.join(name),
+            other: out.join(format!("{name}.gz")),
+            staged: s,
+        }
+    }
+
+    #[test]
+    fn a_name_taken_while_placing_undoes_only_this_runs_files() {
+        let dir = tempfile::tempdir().unwrap();
+        let (staging, out) = (dir.path().join(".import-1"), dir.path().join("out"));
+        let batch: Vec<Staged> = ["a.csv", "b.csv", "c.csv"]
+            .iter()
+            .map(|n| staged(&staging, &out, n, "ours"))
+            .collect();
+        // Another import placed c.csv after this one's check, before its move.
+        std::fs::create_dir_all(&out).unwrap();
+        std::fs::write(out.join("c.csv"), "theirs").unwrap();
+        let e = place(&batch, false).unwrap_err();
+        assert_eq!(e.exit_code(), 2);
+        assert!(
+            e.message().contains("c.csv: already exists"),
+            "{}",
+            e.message()
+        );
+        let mut left: Vec<String> = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
+        assert_eq!(left, ["c.csv"]);
+        assert_eq!(
+            std::fs::read_to_string(out.join("c.csv")).unwrap(),
+            "theirs"
+        );
+        // The other name of a recording placed is a collision too.
+        let one = [staged(&staging, &out, "d.csv", "ours")];
+        std::fs::write(out.join("d.csv.gz"), "theirs").unwrap();
+        let e = place(&one, false).unwrap_err();
+        assert!(
+            e.message().contains("d.csv.gz: already exists"),
+            "{}",
+            e.message()
+        );
+        assert!(!out.join("d.csv").exists());
+        // With --force the batch replaces.
+        let forced = [staged(&staging, &out, "c.csv", "ours")];
+        assert_eq!(place(&forced, true).unwrap(), [out.join("c.csv")]);
+        assert_eq!(std::fs::read_to_string(out.join("c.csv")).unwrap(), "ours");
+    }
+}

@@ -53,6 +53,49 @@ pub enum DatasetError {
     Analysis { file: String, source: AnalysisError },
     #[error("the analysis settings cannot be used: {0}")]
     Settings(AnalysisError),
+    /// More feature vectors or values than any run should hold ([`check_size`]).
+    #[error(
+        "{recordings} recording(s) × {per_recording} sub-window(s) = {vectors} feature vectors of {features} features ({values} values): over the limit of {MAX_VECTORS} vectors and {MAX_VALUES} values, which keeps a run within memory and time; use a longer windows.hop or a shorter windows.length (fewer sub-windows), fewer bins, or fewer recordings"
+    )]
+    TooLarge {
+        recordings: usize,
+        per_recording: usize,
+        vectors: usize,
+        features: usize,
+        values: usize,
+    },
+}
+
+/// At most this many feature vectors (sub-windows over the dataset) are
+/// made in one run: the thesis set gives 120, its three-window variant
+/// 360, a day of 10 kHz fingertip scans cut every 10 ms a few thousand.
+pub const MAX_VECTORS: usize = 200_000;
+/// At most this many feature values (vectors × features: 160 MB as
+/// numbers, about 0.4 GB as a model file).
+pub const MAX_VALUES: usize = 20_000_000;
+
+/// Refuses, before any work, a dataset of `recordings` that `analysis`
+/// would turn into more than [`MAX_VECTORS`] feature vectors or
+/// [`MAX_VALUES`] values.
+pub fn check_size(recordings: usize, analysis: &Analysis) -> Result<(), DatasetError> {
+    let per_recording = if analysis.windows.is_some() {
+        analysis.sub_windows().len()
+    } else {
+        1
+    };
+    let vectors = recordings.saturating_mul(per_recording);
+    let features = analysis.feature_count();
+    let values = vectors.saturating_mul(features);
+    if vectors > MAX_VECTORS || values > MAX_VALUES {
+        return Err(DatasetError::TooLarge {
+            recordings,
+            per_recording,
+            vectors,
+            features,
+            values,
+        });
+    }
+    Ok(())
 }
 
 impl DatasetError {
@@ -475,6 +518,9 @@ pub fn load(
     progress: &(dyn Fn() + Sync),
 ) -> Result<Loaded, DatasetError> {
     FeatureExtractor::try_new(analysis).map_err(DatasetError::Settings)?;
+    if options.keep == Keep::Features {
+        check_size(files.len(), analysis)?;
+    }
     let threads = options.threads.clamp(1, files.len().max(1));
     // Files are handed out one at a time (they differ in length), and each
     // result lands in its own slot, so the order is the files' whatever the
@@ -525,6 +571,32 @@ pub fn load(
 mod tests {
     use super::*;
     use crate::profile::LoadedProfile;
+
+    #[test]
+    fn a_dataset_cut_into_too_many_sub_windows_is_refused_before_any_work() {
+        let mut a = LoadedProfile::thesis().profile.analysis;
+        assert!(check_size(120, &a).is_ok(), "the thesis set");
+        // 20,001 sub-windows of 30 cm, 0.3 mm apart, 12 recordings.
+        a.window = [0.0, 0.3 + 20_000.0 * 0.0003];
+        a.windows = Some(crate::profile::Windows {
+            length: 0.3,
+            hop: 0.0003,
+        });
+        a.bins = [1, 24];
+        let e = check_size(12, &a).unwrap_err();
+        assert!(e.is_bad_input());
+        let m = e.to_string();
+        assert!(
+            m.contains("12 recording(s) × 20001 sub-window(s) = 240012 feature vectors")
+                && m.contains("windows.hop"),
+            "{m}"
+        );
+        assert!(check_size(9, &a).is_ok(), "180,009 vectors of 24");
+        // Fewer vectors, but too many values (180,009 × 400).
+        a.bins = [1, 400];
+        assert_eq!(a.feature_count(), 400);
+        assert!(check_size(9, &a).is_err());
+    }
 
     fn thesis_analysis() -> Analysis {
         LoadedProfile::thesis().profile.analysis

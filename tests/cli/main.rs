@@ -22,6 +22,7 @@ mod plot;
 mod profile_new;
 mod refusals;
 mod rigless;
+mod safe_io;
 mod sweep_grid;
 mod sweep_simulated;
 mod validation;

@@ -254,6 +254,24 @@ pub fn validate(
     validate_with_votes(profile, examples, groups, plan).map(|v| v.report)
 }
 
+/// At most this many feature-value comparisons (vectors² × features, what
+/// a k-NN validation over every vector costs): 10^10 is seconds on one
+/// core; the thesis set costs 7·10^5, its three-window variant 3·10^6.
+pub const MAX_COMPARISONS: f64 = 1e10;
+
+/// Refuses a validation that would compare more than [`MAX_COMPARISONS`]
+/// feature values, before any is made.
+pub fn check_comparisons(vectors: usize, features: usize) -> Result<(), EvaluateError> {
+    let comparisons = (vectors as f64).powi(2) * features as f64;
+    if comparisons > MAX_COMPARISONS {
+        return Err(bad(format!(
+            "validating {vectors} feature vectors of {features} features compares each with every other: {comparisons:.1e} value comparisons, over the limit of {MAX_COMPARISONS:.0e} that keeps evaluate within seconds; use a longer windows.hop or a shorter windows.length (fewer sub-windows), fewer bins, or fewer recordings (at most about {} vectors of {features} features)",
+            (MAX_COMPARISONS / features.max(1) as f64).sqrt() as usize
+        )));
+    }
+    Ok(())
+}
+
 /// [`validate`], with the sub-window votes of each test recording when the
 /// profile cuts recordings into sub-windows.
 pub fn validate_with_votes(
@@ -263,6 +281,7 @@ pub fn validate_with_votes(
     plan: &Plan,
 ) -> Result<Validated, EvaluateError> {
     super::check_two_labels(&examples)?;
+    check_comparisons(examples.len(), profile.analysis.feature_count())?;
     if profile.analysis.windows.is_some() {
         return validate_windows(profile, examples, groups, plan);
     }

@@ -609,6 +609,14 @@ pub fn check_windows(s: &Analysis, w: Windows) -> Result<(), String> {
             compact(w.hop)
         ));
     }
+    if w.hop < s.spacing * (1.0 - 1e-9) {
+        // Sub-windows closer than one resampled point repeat the same
+        // samples: only more work (issue 19: 30 s on 12 recordings).
+        return Err(format!(
+            "hop {}{unit} is below analysis.spacing ({}{unit}): sub-windows would start within one resampled point of each other; set hop to at least {} (a longer hop), or a finer spacing",
+            w.hop, s.spacing, s.spacing
+        ));
+    }
     let [w0, w1] = s.window;
     if w0 + w.length > w1 + 1e-9 * w.length {
         return Err(format!(
