@@ -479,12 +479,18 @@ pub fn execute(
         Action::Evaluate => jobs.evaluate(&app.profile, &dir),
         Action::OpenReplay => match recording::collect_files(std::slice::from_ref(&dir)) {
             Ok(mut files) if !files.is_empty() || curate::hidden_scans(&dir).next().is_some() => {
-                let n = files.len();
+                let stored = files.len();
                 // Scans not stored and excluded ones, listed after, to curate.
                 files.extend(curate::hidden_scans(&dir));
+                let hidden = files.len() - stored;
                 open_replay(app, jobs, dir.clone(), files, Some(dir));
+                let also = if hidden > 0 {
+                    format!(" and {hidden} not stored or excluded")
+                } else {
+                    String::new()
+                };
                 app.info(format!(
-                    "replaying {n} recordings; Esc returns to the live device"
+                    "replaying {stored} stored recordings{also}; Esc returns to the live device"
                 ));
             }
             Ok(_) => app.info(format!(

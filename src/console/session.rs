@@ -157,7 +157,8 @@ mod tests {
             "a month-old session is not resumed"
         );
         assert!(resumed.is_none());
-        let yesterday = touch_session(tmp.path(), "session-2020-01-02", day + day / 24);
+        let yesterday = touch_session(tmp.path(), "session-2020-01-02", day + day / 16);
+        // 25.5 h ago, less the moments since `now`.
         let (dir, resumed) = choose(tmp.path(), now);
         assert_eq!(dir, yesterday);
         assert_eq!(resumed.unwrap().age(now), "25 h ago");

@@ -8,7 +8,7 @@ use ratatui::style::{Modifier, Style};
 use ratatui::text::Line;
 use ratatui::widgets::{Paragraph, Widget};
 
-use super::frame_fit;
+use super::{cut_at_word, frame_fit};
 use crate::console::app::App;
 
 pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
@@ -77,6 +77,8 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
                 e.label.as_deref().unwrap_or("?"),
                 e.predicted.as_deref().unwrap_or("…"),
             );
+            // Cut with a sign, not by the panel's border.
+            let text = cut_at_word(&text, usize::from(inner.width));
             if i == r.selected {
                 Line::styled(text, Style::new().add_modifier(Modifier::REVERSED))
             } else {

@@ -206,7 +206,7 @@ fn the_second_day_resumes_stores_the_good_unsaved_scan_and_curates() {
     assert_eq!(files_in(&ds.join("S2")), 2);
     assert_eq!(files_in(&ds.join("S1")), 3);
     assert!(files_in(&ds.join(TRASH_DIR).join("S2")) >= 1);
-    let training = crate::recording::collect_files(&[ds.clone()]).unwrap();
+    let training = crate::recording::collect_files(std::slice::from_ref(&ds)).unwrap();
     assert_eq!(
         training.len(),
         12,
