@@ -73,8 +73,14 @@ impl App {
         self.last_scan = None;
         self.last_scan_earlier = false;
         self.replay = None;
+        // The built-in profile is `thesis` in session.toml; a file, its full path.
+        let origin = std::path::Path::new(&self.profile.origin);
+        let same = |p: &std::path::Path| {
+            (p.as_os_str() == "thesis" && self.profile.origin.starts_with("<built-in"))
+                || std::fs::canonicalize(p).ok() == std::fs::canonicalize(origin).ok() && p.exists()
+        };
         let profile = session::profile_of(&self.dataset.dir)
-            .filter(|p| p.display().to_string() != self.profile.origin)
+            .filter(|p| !same(p))
             .map(|p| {
                 format!(
                     " (recorded under profile {}: `hapticlab --dataset DIR` loads it)",
