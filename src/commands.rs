@@ -57,7 +57,7 @@ pub enum Command {
     Train(train::TrainArgs),
     /// Classify recordings with a trained model.
     #[command(
-        after_help = "Example:\n  hapticlab classify --model thesis.model.json recordings/thesis-sim/S3/S3_025.csv"
+        after_help = "Example:\n  hapticlab classify --model thesis.model.json recordings/thesis-sim/S3/S3_025.csv.gz"
     )]
     Classify(classify::ClassifyArgs),
     /// Train and test on a split of the recordings; print the confusion matrix (Table 4.1).
@@ -72,7 +72,7 @@ pub enum Command {
     Tune(tune::TuneArgs),
     /// Play recordings back through the console's dashboard (1×, 4×, 16×, single steps).
     #[command(
-        after_help = "Keys: ↑/↓ recording, space pause, +/- speed, . step, ← restart, p predict, q quit.\n\nExample:\n  hapticlab replay recordings/thesis-sim\n  hapticlab replay recordings/thesis-sim/S2/S2_003.csv"
+        after_help = "Keys: ↑/↓ PgUp/PgDn Home/End recording, j jump to a label, W next wrong, f filter by label, space pause, +/- speed, . step, ← restart, p predict, ? all keys, q quit.\n\nExamples:\n  hapticlab replay recordings/thesis-sim\n  hapticlab replay recordings/thesis-sim/S2/S2_003.csv.gz"
     )]
     Replay(replay::ReplayArgs),
     /// List attached Novint Falcons and HID triggers, and whether they can be opened; --self-test checks a Falcon step by step.

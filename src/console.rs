@@ -16,6 +16,7 @@
 //! frame): a loop stuck for a second stops the motion on its own.
 
 pub mod app;
+pub mod curate;
 pub mod dataset;
 pub mod estimate;
 pub mod event;
@@ -28,6 +29,7 @@ pub mod live;
 pub mod panels;
 pub mod replay;
 pub mod scan;
+pub mod session;
 #[cfg(test)]
 mod session_tests;
 
@@ -55,10 +57,12 @@ pub const FRAME_RATE: u32 = 30;
 pub const IDLE_FRAME_RATE: u32 = 20;
 const IDLE_AFTER: Duration = Duration::from_secs(2);
 
-/// The default dataset folder: `recordings/session-<date>`.
-pub fn default_dataset() -> PathBuf {
-    let now = humantime::format_rfc3339(std::time::SystemTime::now()).to_string();
-    PathBuf::from("recordings").join(format!("session-{}", &now[..10]))
+/// What the console opens: the dataset folder, whether it is an earlier
+/// session resumed, and the profile as the folder's `session.toml` names it.
+pub struct Opening {
+    pub dataset: PathBuf,
+    pub resumed: Option<session::Session>,
+    pub profile: String,
 }
 
 fn runtime(m: impl std::fmt::Display) -> Failure {
@@ -105,7 +109,7 @@ fn open_terminal() -> Result<crate::terminal::Screen, Failure> {
 }
 
 /// `hapticlab` / `hapticlab console`: the live console.
-pub fn run(lp: LoadedProfile, dataset: Option<PathBuf>) -> Result<(), Failure> {
+pub fn run(lp: LoadedProfile, opening: Opening) -> Result<(), Failure> {
     // Live mode drives the rig; replay works on an analysis-only profile.
     let rig = lp.rig().map_err(|e| {
         Failure::BadInput(format!(
@@ -114,7 +118,7 @@ pub fn run(lp: LoadedProfile, dataset: Option<PathBuf>) -> Result<(), Failure> {
         ))
     })?;
     let keys = KeyMap::from_settings(&lp.profile.console).map_err(Failure::BadInput)?;
-    let dataset = dataset.unwrap_or_else(default_dataset);
+    let dataset = opening.dataset.clone();
     let signals = Signals::register().map_err(runtime)?;
     let mut app = App::new(
         lp.clone(),
@@ -144,6 +148,10 @@ pub fn run(lp: LoadedProfile, dataset: Option<PathBuf>) -> Result<(), Failure> {
         app.on_unsaved_found(view);
     }
     dataset::adopt_saved_model(&mut app, &dataset);
+    if let Some(s) = &opening.resumed {
+        app.on_resumed(s, std::time::SystemTime::now());
+    }
+    let _ = session::remember(&dataset, &opening.profile);
     let jobs = Jobs::default();
     let mut screen = open_terminal()?;
     let ending = match event::Input::start() {
@@ -162,7 +170,18 @@ pub fn run(lp: LoadedProfile, dataset: Option<PathBuf>) -> Result<(), Failure> {
     let saved = lab.shutdown(&ending.stop_reason());
     // Then the terminal, fallibly (it may have gone).
     drop(screen);
-    let interrupted = saved.iter().filter(|s| !s.complete).count();
+    // The session's folder, made by its first scan, names its profile.
+    let dataset = app.dataset.dir.clone();
+    let _ = session::remember(&dataset, &opening.profile);
+    // Every scan cut short this session: those aborted on the way, and the
+    // one the shutdown stopped.
+    let mut cut = app.interrupted.clone();
+    for s in saved.iter().filter(|s| !s.complete) {
+        if !cut.contains(&s.path) {
+            cut.push(s.path.clone());
+        }
+    }
+    let interrupted = cut.len();
     let (counts, unsaved) = dataset::count(&dataset);
     let stored: usize = counts.iter().map(|(_, n)| n).sum();
     crate::terminal::out(format_args!(
@@ -177,7 +196,10 @@ pub fn run(lp: LoadedProfile, dataset: Option<PathBuf>) -> Result<(), Failure> {
             String::new()
         },
         if interrupted > 0 {
-            format!("; {interrupted} scan interrupted and kept as incomplete")
+            format!(
+                "; {} interrupted and kept as incomplete",
+                crate::classify::plural(interrupted, "scan", "scans")
+            )
         } else {
             String::new()
         }
@@ -456,11 +478,19 @@ pub fn execute(
         Action::Train { then_predict } => jobs.train(&app.profile, &dir, then_predict),
         Action::Evaluate => jobs.evaluate(&app.profile, &dir),
         Action::OpenReplay => match recording::collect_files(std::slice::from_ref(&dir)) {
-            Ok(files) if !files.is_empty() => {
-                let n = files.len();
+            Ok(mut files) if !files.is_empty() || curate::hidden_scans(&dir).next().is_some() => {
+                let stored = files.len();
+                // Scans not stored and excluded ones, listed after, to curate.
+                files.extend(curate::hidden_scans(&dir));
+                let hidden = files.len() - stored;
                 open_replay(app, jobs, dir.clone(), files, Some(dir));
+                let also = if hidden > 0 {
+                    format!(" and {hidden} not stored or excluded")
+                } else {
+                    String::new()
+                };
                 app.info(format!(
-                    "replaying {n} recordings; Esc returns to the live device"
+                    "replaying {stored} stored recordings{also}; Esc returns to the live device"
                 ));
             }
             Ok(_) => app.info(format!(
@@ -470,8 +500,60 @@ pub fn execute(
             Err(e) => app.error(e.to_string()),
         },
         Action::OpenRecording(i) => open_recording(app, i),
+        Action::OpenDataset(to) => {
+            if let Some(l) = lab {
+                l.set_dataset(&to);
+            }
+            app.on_dataset_opened(to.clone());
+            refresh_dataset(app);
+            dataset::adopt_saved_model(app, &to);
+            let mut ex = FeatureExtractor::new(&app.profile.profile.analysis);
+            if let Some(view) = scan::newest_unsaved(&to, &mut ex) {
+                app.on_unsaved_found(view);
+            }
+        }
+        Action::Curate(change) => {
+            let from = match &change {
+                curate::Change::Delete(f) | curate::Change::Exclude(f) => f.clone(),
+                curate::Change::Store { file, .. } => file.clone(),
+            };
+            let r = curate::apply(&change, &dir).map(|done| {
+                let out = (done.now.clone(), done.what.clone());
+                app.curated.push(done);
+                out
+            });
+            app.on_curated(&from, r);
+            refresh_dataset(app);
+            return follow_selection(app);
+        }
+        Action::UndoCurate => {
+            match app.curated.pop() {
+                None => app.info("nothing to undo"),
+                Some(done) => match curate::undo(&done) {
+                    Ok(what) => {
+                        let back = done.moves_back.last().map(|(_, to)| to.clone());
+                        app.dataset.edits += 1;
+                        if let Some(r) = app.replay.as_mut() {
+                            r.moved(done.now.as_deref(), back.as_deref());
+                        }
+                        app.info(what);
+                    }
+                    Err(e) => app.error(format!("cannot undo: {e}")),
+                },
+            }
+            refresh_dataset(app);
+            return follow_selection(app);
+        }
     }
     vec![]
+}
+
+/// After a change to the list, open the recording now selected.
+fn follow_selection(app: &App) -> Vec<Action> {
+    app.replay
+        .as_ref()
+        .filter(|r| !r.entries.is_empty())
+        .map_or_else(Vec::new, |r| vec![Action::OpenRecording(r.selected)])
 }
 
 /// The lab for one call (`as_deref_mut` cannot shorten the trait object's lifetime).

@@ -16,7 +16,7 @@ mod terminal;
 #[cfg(test)]
 mod tests;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
@@ -217,7 +217,14 @@ pub fn render_json(checks: &[Check]) -> serde_json::Value {
 pub fn run(profile: &ProfileArg, dataset: Option<PathBuf>, json: bool) -> Result<(), Failure> {
     let lp = load_profile(profile)?;
     let needs = Needs::of(&lp).map_err(|e| bad(format!("doctor: {e}")))?;
-    let dataset = dataset.unwrap_or_else(crate::console::default_dataset);
+    // The folder the console would open.
+    let dataset = dataset.unwrap_or_else(|| {
+        crate::console::session::choose(
+            Path::new(crate::console::session::SESSIONS_ROOT),
+            std::time::SystemTime::now(),
+        )
+        .0
+    });
     let facts = Facts::gather(&needs, &dataset);
     let checks = checks(&needs, &facts);
     if json {

@@ -21,9 +21,7 @@ fn main() {
         libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
     }
     // The console on the built-in thesis profile is the default.
-    let command = cli
-        .command
-        .unwrap_or(hapticlab::cli::Command::Console(Default::default()));
+    let command = cli.command();
     if let Err(f) = hapticlab::commands::run(command) {
         // Fallibly: the terminal may be the reason for the failure.
         hapticlab::terminal::err(format_args!("hapticlab: error: {}", f.message()));

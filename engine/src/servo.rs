@@ -598,7 +598,13 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
         if self.sink.is_active() {
             self.scan_stats.tick(now, missed);
         }
-        if self.stats.streak >= self.missed_limit {
+        // While nothing moves (Manual, no path, no scan) there is no motion
+        // to stop: the late ticks show on the Device panel instead.
+        let idle =
+            self.mode == Mode::Manual && self.trajectory.is_none() && self.scan_path.is_none();
+        if self.stats.streak >= self.missed_limit && idle {
+            self.stats.streak = 0;
+        } else if self.stats.streak >= self.missed_limit {
             let reason = format!(
                 "{} consecutive missed deadlines: the loop (or the device it waits on) cannot keep {} Hz",
                 self.stats.streak,

@@ -16,8 +16,10 @@ pub struct ClassifyArgs {
     /// The profile whose analysis settings the model must have been trained under.
     #[command(flatten)]
     pub profile: ProfileArg,
+    /// The trained model (JSON), as `hapticlab train --out` or the console's `T` writes it.
     #[arg(long, value_name = "MODEL")]
     pub model: PathBuf,
+    /// Recordings to classify (*.csv, *.csv.gz), or folders of them.
     #[arg(required = true, value_name = "FILE")]
     pub files: Vec<PathBuf>,
     /// Print JSON for scripts.

@@ -34,6 +34,8 @@ mod sweep;
 use sweep::SweepFigure;
 
 static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+/// The font an SVG's text names: the bundled one, then the viewer's default.
+pub const SVG_FONT: &str = "DejaVu Sans, sans-serif";
 
 #[derive(Debug, Args, Clone)]
 pub struct PlotArgs {
@@ -162,9 +164,20 @@ pub fn run(args: &PlotArgs) -> Result<(), Failure> {
             root.present().map_err(fail)?;
         }
         "svg" => {
-            let root = SVGBackend::new(&out, (w, h)).into_drawing_area();
-            data.draw(&root)?;
-            root.present().map_err(fail)?;
+            let mut svg = String::new();
+            {
+                let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
+                data.draw(&root)?;
+                root.present().map_err(fail)?;
+            }
+            // SVG text is drawn by the viewer: name the PNGs' bundled font
+            // first, the viewer's sans-serif only as the fallback.
+            let svg = svg.replace(
+                "font-family=\"sans-serif\"",
+                &format!("font-family=\"{SVG_FONT}\""),
+            );
+            std::fs::write(&out, svg)
+                .map_err(|e| Failure::Runtime(format!("{}: {e}", out.display())))?;
         }
         _ => {
             return Err(bad(format!(

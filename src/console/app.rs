@@ -10,6 +10,11 @@
 //! (`impl Widget for &App` in [`super::panels`]) only reads.
 
 #[cfg(test)]
+mod browse_tests;
+mod live_keys;
+mod replay_keys;
+mod sessions;
+#[cfg(test)]
 mod tests;
 mod world;
 
@@ -62,6 +67,12 @@ pub enum Action {
     OpenReplay,
     /// Open recording `i` of the replay list.
     OpenRecording(usize),
+    /// Make this folder the session's dataset (a recent session, or a new one).
+    OpenDataset(PathBuf),
+    /// A change to the dataset's files (curating), carried out by the runtime.
+    Curate(super::curate::Change),
+    /// Put back the last change undone (the trash, the exclusion, the label).
+    UndoCurate,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -108,6 +119,8 @@ pub struct App {
     pub queue_stored: usize,
     /// A target typed in the form, until the probe gets there.
     pub gliding_to: Option<[f64; 3]>,
+    /// The servo has been seen in Target mode since the glide was asked for.
+    pub glide_seen: bool,
     /// A scan was requested and has not ended yet.
     pub scan_running: bool,
     /// A scan's motion ended and its file is not reported saved yet:
@@ -129,8 +142,20 @@ pub struct App {
     /// The terminal's size, for the page count (set on resize).
     pub size: (u16, u16),
     pub status: Status,
+    /// Every message the status line showed, oldest first (the log shows
+    /// the newest first), up to [`LOG_LIMIT`].
+    pub log: Vec<Status>,
     pub quit: bool,
+    /// The quit dialog's `w`: quit once the scan is stored.
+    pub quit_after_store: bool,
+    /// Scans cut short this session (kept as incomplete), for the exit summary.
+    pub interrupted: Vec<PathBuf>,
+    /// Curating changes made, the last undone first.
+    pub curated: Vec<super::curate::Done>,
 }
+
+/// Messages the log keeps.
+pub const LOG_LIMIT: usize = 500;
 
 impl App {
     /// Where the probe rests: the path's first waypoint (the workspace's
@@ -153,6 +178,7 @@ impl App {
             text: format!("dataset folder: {} — press ? for help", dataset.display()),
             level: Level::Info,
         };
+        let log = vec![status.clone()];
         App {
             profile,
             keys,
@@ -167,6 +193,7 @@ impl App {
             queue_total: 0,
             queue_stored: 0,
             gliding_to: None,
+            glide_seen: false,
             scan_running: false,
             scan_saving: false,
             last_scan: None,
@@ -183,7 +210,11 @@ impl App {
             page: 0,
             size: (80, 24),
             status,
+            log,
             quit: false,
+            quit_after_store: false,
+            curated: Vec::new(),
+            interrupted: Vec::new(),
         }
     }
 
@@ -192,23 +223,24 @@ impl App {
         self.live.latest.as_ref().is_none_or(|t| t.homed)
     }
 
+    /// A message on the status line, kept in the log (once when repeated).
+    fn say(&mut self, text: String, level: Level) {
+        self.status = Status { text, level };
+        if self.log.last() != Some(&self.status) {
+            if self.log.len() >= LOG_LIMIT {
+                self.log.remove(0);
+            }
+            self.log.push(self.status.clone());
+        }
+    }
     pub fn info(&mut self, text: impl Into<String>) {
-        self.status = Status {
-            text: text.into(),
-            level: Level::Info,
-        };
+        self.say(text.into(), Level::Info);
     }
     pub fn warn(&mut self, text: impl Into<String>) {
-        self.status = Status {
-            text: text.into(),
-            level: Level::Warn,
-        };
+        self.say(text.into(), Level::Warn);
     }
     pub fn error(&mut self, text: impl Into<String>) {
-        self.status = Status {
-            text: text.into(),
-            level: Level::Error,
-        };
+        self.say(text.into(), Level::Error);
     }
 
     /// The feed the panels show: the replay's while one plays.
@@ -311,6 +343,10 @@ impl App {
                 self.overlay = Some(Overlay::Help);
                 return vec![];
             }
+            Key::Messages => {
+                self.overlay = Some(Overlay::Messages { scroll: 0 });
+                return vec![];
+            }
             Key::NextPage => {
                 self.page = (self.page + 1) % self.page_count();
                 return vec![];
@@ -396,213 +432,6 @@ impl App {
         vec![Action::Abort]
     }
 
-    fn live_key(&mut self, k: Key) -> Vec<Action> {
-        let busy_scan = |app: &mut App| {
-            let abort = app.key_name(Key::Abort);
-            app.warn(format!(
-                "a scan is running: wait for it, or {abort} then y aborts it"
-            ));
-            vec![]
-        };
-        match k {
-            Key::Quit => self.quit_key(),
-            Key::Mode => {
-                if self.scan_running {
-                    return busy_scan(self);
-                }
-                let next = match self.mode() {
-                    Mode::Manual => Mode::Target,
-                    Mode::Target => Mode::Test,
-                    Mode::Test => Mode::Manual,
-                };
-                if next == Mode::Target {
-                    self.target_m = self.live.latest.map(|t| t.pos_m);
-                }
-                self.info(match next {
-                    Mode::Manual => "Manual mode: no forces, the probe moves by hand".to_string(),
-                    Mode::Target => format!(
-                        "Target mode: holding here; {} types a target, arrows and PgUp/PgDn nudge it",
-                        self.key_name(Key::Target)
-                    ),
-                    Mode::Test => format!(
-                        "Test mode: {} starts a measurement along the waypoint path",
-                        self.key_name(Key::Start)
-                    ),
-                });
-                vec![Action::SetMode(next)]
-            }
-            Key::Target => {
-                if self.scan_running {
-                    return busy_scan(self);
-                }
-                let m = self
-                    .target_m
-                    .or(self.live.latest.map(|t| t.pos_m))
-                    .unwrap_or_else(|| self.home_m());
-                let hint = format!(
-                    "workspace x {:.0}…{:.0}, y {:.0}…{:.0}, z {:.0}…{:.0} cm; Tab next field, Enter go, Esc cancel",
-                    WORKSPACE_MIN_M[0] * 100.0,
-                    WORKSPACE_MAX_M[0] * 100.0,
-                    WORKSPACE_MIN_M[1] * 100.0,
-                    WORKSPACE_MAX_M[1] * 100.0,
-                    WORKSPACE_MIN_M[2] * 100.0,
-                    WORKSPACE_MAX_M[2] * 100.0
-                );
-                self.overlay = Some(Overlay::Form(Form::target(
-                    [m[0] * 100.0, m[1] * 100.0, m[2] * 100.0],
-                    hint,
-                )));
-                vec![]
-            }
-            Key::Start => {
-                if self.scan_running {
-                    return busy_scan(self);
-                }
-                if !self.homed() {
-                    self.warn(HOMING_HELP);
-                    return vec![];
-                }
-                self.scan_running = true;
-                self.info(format!(
-                    "measurement started: label {}{} — {} aborts",
-                    self.label,
-                    self.mounted
-                        .as_ref()
-                        .map_or(String::new(), |t| format!(", texture {t} mounted")),
-                    self.key_name(Key::Abort)
-                ));
-                vec![Action::StartScan]
-            }
-            Key::Abort => {
-                if self.scan_busy() {
-                    // A reflex Esc must not cost a scan: ask first.
-                    self.overlay = Some(Overlay::ConfirmAbort);
-                    vec![]
-                } else if self.mode() != Mode::Manual {
-                    self.info("motion stopped: Manual mode, forces off");
-                    vec![Action::Abort]
-                } else {
-                    self.info("nothing to abort");
-                    vec![]
-                }
-            }
-            Key::Store => {
-                match &self.last_scan {
-                    None => self.info("no scan yet to store"),
-                    Some(s) if s.stored.is_some() => {
-                        let p = s.path.display().to_string();
-                        self.info(format!("the last scan is already stored as {p}"));
-                    }
-                    Some(scan) => {
-                        let hint = format!(
-                            "saved as {}/<label>/<label>_NNN.csv; Enter store, Esc cancel",
-                            self.dataset.dir.display()
-                        );
-                        // The label it was recorded under (an earlier
-                        // session's may differ from the current one).
-                        let label = scan.label.clone().unwrap_or_else(|| self.label.clone());
-                        self.overlay = Some(Overlay::Form(Form::text(
-                            FormKind::Store,
-                            "label",
-                            &label,
-                            hint,
-                        )));
-                    }
-                }
-                vec![]
-            }
-            Key::Label | Key::Queue => {
-                if self.scan_running {
-                    return busy_scan(self);
-                }
-                let form = if k == Key::Label {
-                    let names: Vec<&str> = self
-                        .profile
-                        .profile
-                        .textures
-                        .iter()
-                        .map(|t| t.label.as_str())
-                        .collect();
-                    let hint = if matches!(&self.source, Source::Live { backend } if backend == "sim")
-                    {
-                        format!(
-                            "a texture's label ({}) also mounts it in the simulator",
-                            names.join(", ")
-                        )
-                    } else {
-                        "any name without / or \\, not starting with .".into()
-                    };
-                    Form::text(FormKind::Label, "label", &self.label, hint)
-                } else {
-                    let hint = format!(
-                        "each scan of {} is stored as it completes; {} then y stops them",
-                        self.label,
-                        self.key_name(Key::Abort)
-                    );
-                    Form::text(FormKind::Queue, "scans", "5", hint)
-                };
-                self.overlay = Some(Overlay::Form(form));
-                vec![]
-            }
-            Key::Predict => self.predict_key(),
-            Key::Replay => {
-                if self.scan_running {
-                    return busy_scan(self);
-                }
-                vec![Action::OpenReplay]
-            }
-            Key::Faster | Key::Slower => {
-                let i = SPEED_STEPS
-                    .iter()
-                    .position(|s| (*s - self.speed_scale).abs() < 1e-9)
-                    .unwrap_or(3);
-                let j = if k == Key::Faster {
-                    (i + 1).min(SPEED_STEPS.len() - 1)
-                } else {
-                    i.saturating_sub(1)
-                };
-                self.speed_scale = SPEED_STEPS[j];
-                self.info(format!("path speed ×{:.2}", self.speed_scale));
-                vec![Action::SetSpeed(self.speed_scale)]
-            }
-            Key::Left | Key::Right | Key::Up | Key::Down | Key::Away | Key::Toward => {
-                if self.scan_running {
-                    return busy_scan(self);
-                }
-                let (axis, sign) = match k {
-                    Key::Left => (0, -1.0),
-                    Key::Right => (0, 1.0),
-                    Key::Up => (1, 1.0),
-                    Key::Down => (1, -1.0),
-                    Key::Away => (2, -1.0),
-                    _ => (2, 1.0),
-                };
-                let mut t = self
-                    .target_m
-                    .or(self.live.latest.map(|t| t.pos_m))
-                    .unwrap_or_else(|| self.home_m());
-                t[axis] =
-                    (t[axis] + sign * NUDGE_M).clamp(WORKSPACE_MIN_M[axis], WORKSPACE_MAX_M[axis]);
-                self.target_m = Some(t);
-                self.info(format!(
-                    "target ({:.2}, {:.2}, {:.2}) cm",
-                    t[0] * 100.0,
-                    t[1] * 100.0,
-                    t[2] * 100.0
-                ));
-                vec![Action::SetTarget(t)]
-            }
-            Key::Pause | Key::Step => {
-                self.info(format!(
-                    "space and . control a replay; {} opens the replay browser",
-                    self.key_name(Key::Replay)
-                ));
-                vec![]
-            }
-            _ => vec![],
-        }
-    }
-
     fn predict_key(&mut self) -> Vec<Action> {
         let Some(scan) = self.scan() else {
             self.info(format!(
@@ -622,91 +451,33 @@ impl App {
         vec![Action::Predict]
     }
 
-    fn replay_key(&mut self, k: Key) -> Vec<Action> {
-        let standalone = self.source == Source::ReplayOnly;
-        let Some(r) = self.replay.as_mut() else {
-            return vec![];
-        };
-        match k {
-            Key::Quit => return self.quit_key(),
-            Key::Abort | Key::Replay => {
-                if standalone {
-                    let q = self.key_name(Key::Quit);
-                    self.info(format!("{q} quits"));
-                } else {
-                    self.replay = None;
-                    self.info("back to the live device");
-                }
-            }
-            Key::Up | Key::Down => {
-                let n = r.entries.len();
-                if n == 0 {
-                    return vec![];
-                }
-                let i = if k == Key::Up {
-                    r.selected.saturating_sub(1)
-                } else {
-                    (r.selected + 1).min(n - 1)
-                };
-                if i != r.selected || r.player.is_none() {
-                    r.selected = i;
-                    return vec![Action::OpenRecording(i)];
-                }
-            }
-            Key::Pause => {
-                if let Some(p) = r.player.as_mut() {
-                    if p.finished() {
-                        p.restart(&mut self.replay_feed);
-                        p.paused = false;
-                    } else {
-                        p.paused = !p.paused;
-                    }
-                }
-            }
-            Key::Step | Key::Right => {
-                if let Some(p) = r.player.as_mut() {
-                    p.step(&mut self.replay_feed);
-                }
-            }
-            Key::Left | Key::Start => {
-                if let Some(p) = r.player.as_mut() {
-                    p.restart(&mut self.replay_feed);
-                }
-            }
-            Key::Faster => {
-                if let Some(p) = r.player.as_mut() {
-                    p.faster();
-                }
-            }
-            Key::Slower => {
-                if let Some(p) = r.player.as_mut() {
-                    p.slower();
-                }
-            }
-            Key::Predict => return self.predict_key(),
-            _ => {
-                let back = self.key_name(Key::Abort);
-                self.info(if standalone {
-                    "replay: ↑/↓ recordings, space pause, +/- speed, . step".to_string()
-                } else {
-                    format!("replaying: {back} returns to the live device first")
-                });
-            }
-        }
-        vec![]
-    }
-
     fn overlay_key(&mut self, overlay: Overlay, ev: &KeyEvent) -> Vec<Action> {
         match overlay {
             Overlay::Help => vec![],
+            Overlay::Messages { scroll } => {
+                let last = self.log.len().saturating_sub(1);
+                let scroll = match ev.code {
+                    KeyCode::Down | KeyCode::Char('j') => (scroll + 1).min(last),
+                    KeyCode::Up | KeyCode::Char('k') => scroll.saturating_sub(1),
+                    KeyCode::PageDown => (scroll + 10).min(last),
+                    KeyCode::PageUp => scroll.saturating_sub(10),
+                    KeyCode::Home => 0,
+                    KeyCode::End => last,
+                    _ => return vec![],
+                };
+                self.overlay = Some(Overlay::Messages { scroll });
+                vec![]
+            }
+            Overlay::Sessions(list) => self.sessions_pick(list, ev),
             Overlay::ConfirmQuit => match ev.code {
                 KeyCode::Char('y') | KeyCode::Char('Y') => {
                     self.quit = true;
                     vec![Action::Quit]
                 }
                 KeyCode::Char('w') if self.unsaved_scan() => {
-                    self.overlay = None;
-                    self.live_key(Key::Store)
+                    // Stores, then quits (see `on_stored`).
+                    self.quit_after_store = true;
+                    self.store_key()
                 }
                 _ => {
                     self.info(if self.scan_busy() {
@@ -734,6 +505,7 @@ impl App {
                     vec![]
                 }
                 FormOutcome::Cancel => {
+                    self.quit_after_store = false;
                     self.info("cancelled");
                     vec![]
                 }
@@ -770,6 +542,7 @@ impl App {
                 }
                 self.target_m = Some(m);
                 self.gliding_to = Some(m);
+                self.glide_seen = false;
                 self.info(format!(
                     "Target mode: gliding to ({}, {}, {}) cm",
                     form.value(0),
@@ -777,6 +550,22 @@ impl App {
                     form.value(2)
                 ));
                 Ok(vec![Action::SetTarget(m)])
+            }
+            FormKind::Jump | FormKind::Filter => self.jump_or_filter(form.kind, form.value(0)),
+            FormKind::StoreAs => {
+                let label = self.profile_spelling(form.value(0));
+                check_label(&label)?;
+                let Some(file) = self
+                    .replay
+                    .as_ref()
+                    .and_then(|r| r.selected_path().cloned())
+                else {
+                    return Ok(vec![]);
+                };
+                Ok(vec![Action::Curate(super::curate::Change::Store {
+                    file,
+                    label,
+                })])
             }
             FormKind::Store => {
                 let label = self.profile_spelling(form.value(0));

@@ -41,6 +41,8 @@ pub struct DatasetView {
     pub report_method: Option<String>,
     /// Work in progress ("training on 120 recordings…").
     pub busy: Option<String>,
+    /// Curating changes since the model was trained (or loaded).
+    pub edits: usize,
 }
 
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -79,6 +81,12 @@ impl DatasetView {
     /// recordings are not the ones the model was trained on (by count).
     pub fn stale_model(&self) -> Option<String> {
         let m = self.model.as_ref()?;
+        if self.edits > 0 {
+            return Some(format!(
+                "trained before {} to the dataset",
+                crate::classify::plural(self.edits, "change", "changes")
+            ));
+        }
         let usable = self.total().saturating_sub(m.skipped);
         (usable != m.examples).then(|| {
             format!(
@@ -149,9 +157,27 @@ pub struct ReplayEntry {
     pub path: PathBuf,
     pub label: Option<String>,
     pub predicted: Option<String>,
+    /// Whether the recording ended complete, once read.
+    pub complete: Option<bool>,
 }
 
 impl ReplayEntry {
+    /// The label, or before the list is predicted, the folder's name
+    /// (`<label>/<label>_NNN.csv`).
+    pub fn label_or_folder(&self) -> String {
+        self.label.clone().unwrap_or_else(|| {
+            self.path
+                .parent()
+                .and_then(Path::file_name)
+                .map_or(String::new(), |n| n.to_string_lossy().into_owned())
+        })
+    }
+
+    /// Whether it is a scan not stored yet (in `<dataset>/.unsaved/`).
+    pub fn unsaved(&self, dataset: &Path) -> bool {
+        self.path.strip_prefix(dataset.join(UNSAVED_DIR)).is_ok()
+    }
+
     /// Whether the prediction matched the label, when both are known.
     pub fn right(&self) -> Option<bool> {
         Some(self.label.as_ref()? == self.predicted.as_ref()?)
@@ -188,6 +214,24 @@ pub enum JobResult {
     },
 }
 
+/// How much nicer than the console (and its servo) training and evaluating
+/// run: the loop keeps its rate on a machine they keep busy.
+pub const JOB_NICENESS: i32 = 10;
+
+/// Lower the calling thread's priority by [`JOB_NICENESS`] (Linux: the
+/// nice value is per thread, and the threads it starts inherit it). Best
+/// effort: a failure leaves the priority as it was.
+pub fn lower_priority() {
+    #[cfg(target_os = "linux")]
+    // SAFETY: getpriority/setpriority on the calling thread's own id have
+    // no memory-safety preconditions.
+    unsafe {
+        let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+        let now = libc::getpriority(libc::PRIO_PROCESS, tid);
+        libc::setpriority(libc::PRIO_PROCESS, tid, (now + JOB_NICENESS).min(19));
+    }
+}
+
 /// Worker threads and the channel their results come back on.
 pub struct Jobs {
     tx: Sender<JobResult>,
@@ -207,6 +251,7 @@ impl Jobs {
         let spawned = std::thread::Builder::new()
             .name("console-job".into())
             .spawn(move || {
+                lower_priority();
                 let _ = tx.send(f());
             });
         if let Err(e) = spawned {
@@ -299,6 +344,7 @@ impl Jobs {
                         path,
                         label,
                         predicted,
+                        complete: rec.as_ref().map(recording::Recording::is_complete),
                     }
                 })
                 .collect();

@@ -14,6 +14,12 @@ pub enum Overlay {
     /// Abort the running scan (and the rest of a queue)?
     ConfirmAbort,
     Form(Form),
+    /// The message log, newest first, scrolled by this many messages.
+    Messages {
+        scroll: usize,
+    },
+    /// Recent sessions to open, most recent first.
+    Sessions(Vec<super::session::Session>),
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -26,6 +32,13 @@ pub enum FormKind {
     Label,
     /// How many scans to run and store.
     Queue,
+    /// The replay browser: store the selected recording under a label
+    /// (relabel a stored one, store an unsaved or excluded one).
+    StoreAs,
+    /// The replay browser: the label to jump to.
+    Jump,
+    /// The replay browser: show only this label's recordings (empty: all).
+    Filter,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -97,6 +110,9 @@ impl Form {
             FormKind::Store => "Store the last scan",
             FormKind::Label => "Label for the next scans",
             FormKind::Queue => "Automatic scans",
+            FormKind::StoreAs => "Store the recording under a label",
+            FormKind::Jump => "Jump to a label",
+            FormKind::Filter => "Show one label's recordings",
         }
     }
 

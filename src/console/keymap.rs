@@ -40,6 +40,22 @@ pub enum Key {
     Page(u8),
     Pause,
     Step,
+    /// The recent sessions, to open one or start today's.
+    Sessions,
+    /// The message log.
+    Messages,
+    /// Curating, in the replay browser: the selected recording.
+    Delete,
+    Undo,
+    Relabel,
+    Exclude,
+    /// Replay browser: to a label, to the next wrong prediction, a filter,
+    /// the first and last recordings.
+    Jump,
+    NextWrong,
+    Filter,
+    First,
+    Last,
 }
 
 impl Key {
@@ -75,6 +91,17 @@ impl Key {
             "page_4" => Key::Page(4),
             "pause" => Key::Pause,
             "step" => Key::Step,
+            "sessions" => Key::Sessions,
+            "messages" => Key::Messages,
+            "delete" => Key::Delete,
+            "undo" => Key::Undo,
+            "relabel" => Key::Relabel,
+            "exclude" => Key::Exclude,
+            "jump" => Key::Jump,
+            "next_wrong" => Key::NextWrong,
+            "filter" => Key::Filter,
+            "first" => Key::First,
+            "last" => Key::Last,
             _ => return None,
         })
     }

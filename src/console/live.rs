@@ -38,6 +38,8 @@ pub trait LabPort {
     fn mount(&mut self, texture: &str, app: &mut App) -> Result<(), String>;
     /// The texture under the probe, when the device is simulated.
     fn texture(&self) -> Option<String>;
+    /// Record the next scans into another dataset folder (a session opened).
+    fn set_dataset(&mut self, dir: &Path);
 }
 
 impl LabPort for Lab {
@@ -55,6 +57,9 @@ impl LabPort for Lab {
     }
     fn texture(&self) -> Option<String> {
         self.texture.clone()
+    }
+    fn set_dataset(&mut self, dir: &Path) {
+        self.dataset = dir.to_path_buf();
     }
 }
 

@@ -227,6 +227,12 @@ pub fn frame(title: &str) -> Block<'static> {
     ))
 }
 
+/// A panel's frame whose title fits `width` (the panel's): cut at a word
+/// with `…` rather than cut off by the border without a sign.
+pub fn frame_fit(title: &str, width: u16) -> Block<'static> {
+    frame(&cut_at_word(title, usize::from(width).saturating_sub(4)))
+}
+
 /// Chart bounds around `values`, padded, never empty.
 pub fn bounds(values: impl Iterator<Item = f64>) -> [f64; 2] {
     bounds_spanning(values, 0.0)

@@ -7,7 +7,7 @@
 //! ([`Replay`]) holds the list of recordings and the analysis of the one
 //! playing. Reading files is the runtime's job, not this module's.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use crate::recording::Recording;
 use crate::servo::stats::LoopStats;
@@ -151,6 +151,8 @@ pub struct Replay {
     pub scan: Option<ScanView>,
     /// Why the selected recording could not be opened.
     pub error: Option<String>,
+    /// Only this label's recordings are shown.
+    pub filter: Option<String>,
 }
 
 impl Replay {
@@ -163,6 +165,7 @@ impl Replay {
                     path,
                     label: None,
                     predicted: None,
+                    complete: None,
                 })
                 .collect(),
             selected: 0,
@@ -170,7 +173,51 @@ impl Replay {
             player: None,
             scan: None,
             error: None,
+            filter: None,
         }
+    }
+
+    /// The entries shown (the filter's label, or all), by index.
+    pub fn visible(&self) -> Vec<usize> {
+        (0..self.entries.len())
+            .filter(|&i| {
+                self.filter
+                    .as_ref()
+                    .is_none_or(|f| self.entries[i].label_or_folder() == *f)
+            })
+            .collect()
+    }
+
+    /// A recording moved by curating: `from` is now `to` (none: deleted);
+    /// one put back (by an undo) is listed again.
+    pub fn moved(&mut self, from: Option<&Path>, to: Option<&Path>) {
+        let at = from.and_then(|f| self.entries.iter().position(|e| e.path == f));
+        match (at, to) {
+            (Some(i), Some(to)) => {
+                let e = &mut self.entries[i];
+                e.path = to.to_path_buf();
+                e.label = None;
+                e.predicted = None;
+            }
+            (Some(i), None) => {
+                self.entries.remove(i);
+            }
+            (None, Some(to)) => {
+                self.entries.push(ReplayEntry {
+                    path: to.to_path_buf(),
+                    label: None,
+                    predicted: None,
+                    complete: None,
+                });
+                self.entries.sort_by(|a, b| a.path.cmp(&b.path));
+            }
+            (None, None) => {}
+        }
+        let last = self.entries.len().saturating_sub(1);
+        if let Some(i) = to.and_then(|t| self.entries.iter().position(|e| e.path == t)) {
+            self.selected = i;
+        }
+        self.selected = self.selected.min(last);
     }
 
     pub fn selected_path(&self) -> Option<&PathBuf> {

@@ -194,21 +194,25 @@ pub fn analyse(rec: &Recording, path: &Path, ex: &mut FeatureExtractor) -> ScanV
     }
 }
 
-/// The newest scan an earlier session left in `<dataset>/.unsaved/`,
+/// The newest complete scan an earlier session left in `<dataset>/.unsaved/`,
 /// analysed, so the console can show and store it; `None` when there is
 /// none or it cannot be read (it stays where it is either way).
 pub fn newest_unsaved(dataset: &Path, ex: &mut FeatureExtractor) -> Option<ScanView> {
     let dir = dataset.join(super::dataset::UNSAVED_DIR);
-    let newest = std::fs::read_dir(&dir)
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
         .ok()?
         .filter_map(Result::ok)
         .map(|e| e.path())
         .filter(|p| p.extension().is_some_and(|x| x == "csv"))
         .filter_map(|p| Some((std::fs::metadata(&p).ok()?.modified().ok()?, p)))
-        .max()?
-        .1;
-    let rec = crate::recording::read(&newest).ok()?;
-    Some(analyse(&rec, &newest, ex))
+        .collect();
+    files.sort();
+    // An aborted scan is not offered as if it were good: the replay
+    // browser lists it, labelled incomplete.
+    files.into_iter().rev().find_map(|(_, p)| {
+        let rec = crate::recording::read(&p).ok()?;
+        rec.is_complete().then(|| analyse(&rec, &p, ex))
+    })
 }
 
 /// The model to classify `file` with: `model` itself, or, when the

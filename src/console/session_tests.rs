@@ -13,6 +13,8 @@
 //! a real-time loop can change (distances, votes, each replayed file's
 //! prediction) is checked by assertions or redacted.
 
+mod week;
+
 use std::cell::RefCell;
 use std::collections::VecDeque;
 use std::io;
@@ -137,6 +139,9 @@ impl LabPort for WatchedLab {
     }
     fn texture(&self) -> Option<String> {
         self.lab.texture.clone()
+    }
+    fn set_dataset(&mut self, dir: &Path) {
+        self.lab.set_dataset(dir);
     }
 }
 
@@ -425,6 +430,9 @@ impl LabPort for FollowedLab {
     }
     fn texture(&self) -> Option<String> {
         self.watched.texture()
+    }
+    fn set_dataset(&mut self, dir: &Path) {
+        self.watched.set_dataset(dir);
     }
 }
 

@@ -14,6 +14,7 @@ mod falcon_emulator;
 mod falcon_self_test;
 mod faults;
 mod first_session;
+mod help_examples;
 mod import;
 mod import_formats;
 mod import_refusals;

@@ -79,6 +79,12 @@ fn every_figure_as_png_and_svg() {
     for f in ["t.svg", "c.svg"] {
         let s = std::fs::read_to_string(p(f)).unwrap();
         assert!(s.contains("<svg") && s.contains("</svg>"), "{f}");
+        // The text names the bundled font first, not only the viewer's default.
+        assert!(
+            s.contains("font-family=\"DejaVu Sans, sans-serif\"")
+                && !s.contains("font-family=\"sans-serif\""),
+            "{f}"
+        );
     }
     let svg = std::fs::read_to_string(p("c.svg")).unwrap();
     assert!(svg.contains("classified as") && svg.contains("true class"));

@@ -275,6 +275,38 @@ fn a_streak_of_missed_deadlines_stops_the_motion_and_keeps_the_samples() {
     assert!(!rec.is_complete() && rec.len() > 1000);
 }
 
+/// Idle in Manual mode on a machine too busy for the loop: nothing moves,
+/// so nothing is stopped (the late ticks are counted for the Device panel).
+#[test]
+fn a_streak_of_missed_deadlines_while_nothing_moves_stops_nothing() {
+    let p = thesis();
+    let (_recorder, sink) = hapticlab::recorder::start();
+    let (dev, _safe) = faulty(&p, None, None);
+    let clock = Stalling {
+        inner: virtual_clock(&p),
+        ticks: 0,
+        from: 100,
+        extra: 0.0,
+    };
+    let (ev_tx, ev_rx) = crossbeam_channel::bounded(16);
+    let links = Links {
+        events: Some(ev_tx),
+        ..Links::default()
+    };
+    let mut servo = ServoLoop::new(dev, clock, p.rig().unwrap(), sink, links);
+    for _ in 0..2000 {
+        servo.tick().unwrap();
+    }
+    let events: Vec<_> = ev_rx.try_iter().collect();
+    assert!(
+        !events
+            .iter()
+            .any(|e| matches!(e, ServoEvent::MotionStopped { .. })),
+        "{events:?}"
+    );
+    assert!(servo.stats().missed_deadlines > 1000);
+}
+
 #[test]
 fn a_panic_in_the_servo_thread_zeroes_forces_and_keeps_the_samples() {
     let p = thesis();

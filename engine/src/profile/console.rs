@@ -51,6 +51,17 @@ pub const CONSOLE_ACTIONS: &[(&str, &str)] = &[
     ("page_4", "4"),
     ("pause", "Space"),
     ("step", "."),
+    ("sessions", "S"),
+    ("messages", "M"),
+    ("delete", "d"),
+    ("undo", "u"),
+    ("relabel", "R"),
+    ("exclude", "x"),
+    ("jump", "j"),
+    ("next_wrong", "W"),
+    ("filter", "f"),
+    ("first", "Home"),
+    ("last", "End"),
 ];
 
 /// The named (non-character) keys a binding may use.

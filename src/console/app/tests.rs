@@ -479,6 +479,9 @@ fn the_status_line_says_when_the_probe_reaches_the_target() {
         vec![Action::SetTarget([0.01, 0.0, -0.06])]
     );
     assert!(a.status.text.contains("gliding"), "{}", a.status.text);
+    // A frame sent before the servo took the target: still Manual.
+    a.on_telemetry(&fixtures::telemetry(0.05, Mode::Manual));
+    assert!(a.gliding_to.is_some(), "the glide goes on");
     let mut t = fixtures::telemetry(0.1, Mode::Target);
     t.pos_m = [0.004, 0.0, -0.06];
     t.setpoint_m = [0.005, 0.0, -0.06];
@@ -491,8 +494,10 @@ fn the_status_line_says_when_the_probe_reaches_the_target() {
     assert!(
         a.status
             .text
-            .contains("at the target (1.00, 0.00, -6.00) cm")
-            && a.status.text.contains("0.8 mm from it"),
+            .contains("the probe is at (1.00, -0.08, -6.00) cm")
+            && a.status
+                .text
+                .contains("the target (1.00, 0.00, -6.00) cm, 0.8 mm from it"),
         "{}",
         a.status.text
     );

@@ -30,25 +30,43 @@ impl App {
         self.gather(t);
         self.speed_scale = t.speed_scale;
         if let Some(g) = self.gliding_to {
-            if t.mode != Mode::Target {
-                self.gliding_to = None;
-            } else if (0..3).all(|a| (t.setpoint_m[a] - g[a]).abs() < ARRIVED_M) {
-                // The glide is over; the probe may rest a little off the
-                // target (its weight, a texture under it): say how far.
-                self.gliding_to = None;
-                let off = (0..3)
-                    .map(|a| (t.pos_m[a] - g[a]).powi(2))
-                    .sum::<f64>()
-                    .sqrt();
-                self.info(format!(
-                    "at the target ({:.2}, {:.2}, {:.2}) cm: holding, the probe {:.1} mm from it",
-                    g[0] * 100.0,
-                    g[1] * 100.0,
-                    g[2] * 100.0,
-                    off * 1000.0
-                ));
-            }
+            self.follow_glide(g, t);
         }
+    }
+
+    /// Target mode: say when the glide to the typed target is over, and
+    /// where the probe is. Frames sent before the servo took the target
+    /// (still in the old mode) do not end the glide.
+    fn follow_glide(&mut self, g: [f64; 3], t: &Telemetry) {
+        if t.mode == Mode::Target {
+            self.glide_seen = true;
+        } else {
+            if self.glide_seen {
+                self.gliding_to = None;
+            }
+            return;
+        }
+        if !(0..3).all(|a| (t.setpoint_m[a] - g[a]).abs() < ARRIVED_M) {
+            return;
+        }
+        // The glide is over; the probe may rest a little off the
+        // target (its weight, a texture under it): say how far.
+        self.gliding_to = None;
+        let off = (0..3)
+            .map(|a| (t.pos_m[a] - g[a]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        let p = t.pos_m.map(|v| v * 100.0);
+        self.info(format!(
+            "the probe is at ({:.2}, {:.2}, {:.2}) cm: holding at the target ({:.2}, {:.2}, {:.2}) cm, {:.1} mm from it",
+            p[0],
+            p[1],
+            p[2],
+            g[0] * 100.0,
+            g[1] * 100.0,
+            g[2] * 100.0,
+            off * 1000.0
+        ));
     }
 
     /// A scan's sample for the live estimate: the first of a scan starts
@@ -95,8 +113,14 @@ impl App {
                 ));
             }
             ServoEvent::ScanEnded {
-                aborted, samples, ..
+                aborted,
+                samples,
+                path,
+                ..
             } => {
+                if aborted.is_some() && samples > 0 && !self.interrupted.contains(&path) {
+                    self.interrupted.push(path);
+                }
                 self.scan_running = false;
                 // The recorder reports the file next (none without samples).
                 self.scan_saving = samples > 0;
@@ -209,6 +233,9 @@ impl App {
 
     /// The last scan was stored (or could not be).
     pub fn on_stored(&mut self, result: Result<PathBuf, String>) {
+        if std::mem::take(&mut self.quit_after_store) && result.is_ok() {
+            self.quit = true;
+        }
         match result {
             Ok(path) => {
                 let left = if self.queued_run || self.queue_left > 0 {
@@ -280,6 +307,7 @@ impl App {
                 info.skipped = skipped;
                 self.dataset.model = Some(info);
                 self.dataset.model_note = None;
+                self.dataset.edits = 0;
                 let skipped = if skipped > 0 {
                     format!(", {skipped} incomplete skipped")
                 } else {

@@ -221,7 +221,7 @@ fn a_stale_model_is_flagged_where_it_is_shown() {
     app.dataset.counts[0].1 += 1;
     assert!(
         dataset_panel(&app).contains(
-            "model: k-NN k = 10 trained on 121 recordings, the dataset has 122 — press T"
+            "model stale: T trains again (k = 10, trained on 121 recordings, the dataset has 122)"
         ),
         "{}",
         dataset_panel(&app)
@@ -229,6 +229,12 @@ fn a_stale_model_is_flagged_where_it_is_shown() {
     // Incomplete recordings that training skipped do not make it stale.
     app.dataset.model.as_mut().unwrap().skipped = 1;
     assert_eq!(app.dataset.stale_model(), None);
+    // A curating change does, even with the counts unchanged.
+    app.dataset.edits = 1;
+    assert_eq!(
+        app.dataset.stale_model().as_deref(),
+        Some("trained before 1 change to the dataset")
+    );
 }
 
 #[test]
@@ -278,4 +284,29 @@ fn a_saved_model_with_other_classifier_settings_is_not_used_silently() {
         Some(app.status.text.as_str())
     );
     assert!(dataset_panel(&app).contains("model.json not used"));
+}
+
+/// Training and evaluating run nicer than the servo: a job's thread, and
+/// the threads it starts, have a higher nice value than the console's.
+#[cfg(target_os = "linux")]
+#[test]
+fn jobs_run_at_a_lower_priority_than_the_console() {
+    fn nice() -> i32 {
+        // SAFETY: reading the calling thread's own priority.
+        unsafe {
+            let tid = libc::syscall(libc::SYS_gettid) as libc::id_t;
+            libc::getpriority(libc::PRIO_PROCESS, tid)
+        }
+    }
+    let before = nice();
+    let (job, inner) = std::thread::spawn(|| {
+        super::lower_priority();
+        let inner = std::thread::spawn(nice).join().unwrap();
+        (nice(), inner)
+    })
+    .join()
+    .unwrap();
+    assert_eq!(nice(), before, "the calling thread is untouched");
+    assert_eq!(job, (before + super::JOB_NICENESS).min(19));
+    assert_eq!(inner, job, "threads a job starts inherit its priority");
 }

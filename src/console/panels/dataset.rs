@@ -42,10 +42,11 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
     v.push(Line::raw(match (&d.model, &d.busy) {
         (_, Some(b)) => b.clone(),
         (Some(m), None) => match d.stale_model() {
+            // What to do first: a narrow panel cuts the end of the line.
             Some(stale) => format!(
-                "model: k-NN k = {} {stale} — press {}",
-                m.k,
-                app.keys.name(Key::Train)
+                "model stale: {} trains again (k = {}, {stale})",
+                app.keys.name(Key::Train),
+                m.k
             ),
             None => format!(
                 "model: k-NN k = {} on {} of {}",

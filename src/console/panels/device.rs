@@ -86,6 +86,26 @@ fn live_lines(app: &App, room: usize) -> Vec<Line<'_>> {
                     t.stats.dropped_telemetry, t.stats.missed_deadlines
                 ),
             ));
+            // Late ticks in a row that would stop a motion, while nothing
+            // moves: a busy machine, worth a warning, not an alarm.
+            let limit = app
+                .profile
+                .profile
+                .device
+                .as_ref()
+                .map_or(u32::MAX, |d| d.missed_deadline_streak);
+            if t.stats.longest_missed_streak >= limit {
+                lines.push(row(
+                    "Late",
+                    Span::styled(
+                        format!(
+                            "! {} ticks late in a row: the machine is busy (nothing was moving)",
+                            t.stats.longest_missed_streak
+                        ),
+                        Style::new().fg(Color::Yellow),
+                    ),
+                ));
+            }
             if let Some(l) = t.stats.link {
                 lines.push(row(
                     "Link",

@@ -61,7 +61,7 @@ pub fn hints(app: &App) -> Vec<(String, &'static str)> {
         Some(Overlay::ConfirmQuit) => {
             let mut v = vec![(s("y"), "quit")];
             if app.unsaved_scan() {
-                v.push((s("w"), "store first"));
+                v.push((s("w"), "store it, then quit"));
             }
             v.push((
                 s("any other key"),
@@ -77,6 +77,19 @@ pub fn hints(app: &App) -> Vec<(String, &'static str)> {
             return vec![
                 (s("y"), "abort the scan"),
                 (s("any other key"), "keep scanning"),
+            ];
+        }
+        Some(Overlay::Messages { .. }) => {
+            return vec![
+                (s("↑↓ PgUp/PgDn"), "scroll"),
+                (s("any other key"), "closes the log"),
+            ];
+        }
+        Some(Overlay::Sessions(_)) => {
+            return vec![
+                (s("1-9"), "open that session"),
+                (s("n"), "start today's"),
+                (s("any other key"), "stay"),
             ];
         }
         Some(Overlay::Form(f)) => {
@@ -159,18 +172,30 @@ pub fn render_footer(app: &App, pages: &[Page], area: Rect, buf: &mut Buffer) {
     } else {
         String::new()
     };
-    let room = width.saturating_sub(pager.chars().count());
-    for (key, what) in hints(app) {
-        let len = key.chars().count() + what.chars().count() + 2;
-        if used + len > room {
+    let hints = hints(app);
+    let len = |(key, what): &(String, &str)| key.chars().count() + what.chars().count() + 2;
+    let mut room = width.saturating_sub(pager.chars().count());
+    // Keys that do not fit: a sign that help lists them all.
+    let more = format!("{} more", app.keys.name(Key::Help));
+    let cut = hints.iter().map(len).sum::<usize>() > room;
+    if cut {
+        room = room.saturating_sub(more.chars().count() + 1);
+    }
+    for h in hints {
+        if used + len(&h) > room {
             break;
         }
-        used += len;
+        used += len(&h);
+        let (key, what) = h;
         spans.push(Span::styled(
             key,
             Style::new().add_modifier(Modifier::BOLD | Modifier::REVERSED),
         ));
         spans.push(Span::raw(format!(" {what} ")));
+    }
+    if cut {
+        spans.push(Span::raw(format!("{more} ")));
+        used += more.chars().count() + 1;
     }
     spans.push(Span::raw(format!(
         "{:>w$}",
@@ -189,7 +214,15 @@ pub fn render_footer(app: &App, pages: &[Page], area: Rect, buf: &mut Buffer) {
             Style::new().fg(Color::Red).add_modifier(Modifier::BOLD),
         ),
     };
-    let status = cut_at_word(&format!("{prefix}{}", app.status.text), width);
+    // A message too long for the line is cut with a sign that the log has it whole.
+    let full = format!("{prefix}{}", app.status.text);
+    let status = if full.chars().count() <= width {
+        full
+    } else {
+        let more = format!(" {} log", app.keys.name(Key::Messages));
+        let cut = cut_at_word(&full, width.saturating_sub(more.chars().count()));
+        format!("{cut}{more}")
+    };
     Line::styled(status, style).render(
         Rect {
             y: area.y + 1,

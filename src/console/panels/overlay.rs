@@ -7,10 +7,13 @@ use ratatui::style::{Modifier, Style};
 use ratatui::text::{Line, Span};
 use ratatui::widgets::{Clear, Paragraph, Widget, Wrap};
 
-use super::frame;
+use super::{fit_lines, frame, frame_fit};
 use crate::console::app::App;
+use crate::console::app::Level;
 use crate::console::form::{Form, Overlay};
 use crate::console::keymap::Key;
+use crate::console::session::Session;
+use ratatui::style::Color;
 
 fn centred(area: Rect, w: u16, h: u16) -> Rect {
     let w = w.min(area.width);
@@ -49,7 +52,79 @@ pub fn render(app: &App, o: &Overlay, area: Rect, buf: &mut Buffer) {
             .render(r, buf);
         }
         Overlay::Form(f) => form(f, area, buf),
+        Overlay::Messages { scroll } => messages(app, *scroll, area, buf),
+        Overlay::Sessions(list) => sessions(app, list, area, buf),
     }
+}
+
+/// The message log: newest first, each in full, wrapped.
+fn messages(app: &App, scroll: usize, area: Rect, buf: &mut Buffer) {
+    let r = centred(
+        area,
+        area.width.saturating_sub(4).max(20),
+        area.height.saturating_sub(2),
+    );
+    Clear.render(r, buf);
+    let mut lines = Vec::new();
+    for s in app.log.iter().rev().skip(scroll) {
+        let (mark, style) = match s.level {
+            Level::Info => ("", Style::new()),
+            Level::Warn => ("! ", Style::new().fg(Color::Yellow)),
+            Level::Error => (
+                "ERROR: ",
+                Style::new().fg(Color::Red).add_modifier(Modifier::BOLD),
+            ),
+        };
+        lines.push(Line::styled(format!("• {mark}{}", s.text), style));
+    }
+    let title = format!(
+        "Messages: {} of {}, newest first",
+        app.log.len().saturating_sub(scroll),
+        app.log.len()
+    );
+    Paragraph::new(lines)
+        .wrap(Wrap { trim: false })
+        .block(frame_fit(&title, r.width))
+        .render(r, buf);
+}
+
+/// The recent sessions to open, and today's new one.
+fn sessions(app: &App, list: &[Session], area: Rect, buf: &mut Buffer) {
+    let r = centred(area, 76, list.len() as u16 + 6);
+    Clear.render(r, buf);
+    let now = std::time::SystemTime::now();
+    let mut lines: Vec<Line> = list
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let here = if s.dir == app.dataset.dir {
+                "  (open)"
+            } else {
+                ""
+            };
+            Line::raw(format!(
+                "{} {}  {}, {} stored{here}",
+                i + 1,
+                s.dir.display(),
+                s.age(now),
+                s.recordings
+            ))
+        })
+        .collect();
+    if list.is_empty() {
+        lines.push(Line::raw(format!(
+            "no session folders in {}",
+            app.sessions_root().display()
+        )));
+    }
+    lines.push(Line::raw(""));
+    lines.push(Line::raw(format!(
+        "n  a new session: {}",
+        crate::console::session::today(&app.sessions_root(), now).display()
+    )));
+    Paragraph::new(fit_lines(lines, usize::from(r.width.saturating_sub(2))))
+        .block(frame("Sessions"))
+        .render(r, buf);
 }
 
 fn confirm_quit(app: &App, area: Rect, buf: &mut Buffer) {
@@ -75,13 +150,16 @@ fn confirm_quit(app: &App, area: Rect, buf: &mut Buffer) {
             .last_scan
             .as_ref()
             .map_or(String::new(), |s| s.path.display().to_string());
-        lines.push(Line::raw(format!(
-            "The last scan is not stored in the dataset (it stays in {name})."
-        )));
+        // During a scan the unstored one is the scan before it.
+        lines.push(Line::raw(if app.scan_busy() {
+            format!("The scan before it is not stored in the dataset (it stays in {name}).")
+        } else {
+            format!("The last scan is not stored in the dataset (it stays in {name}).")
+        }));
     }
     lines.push(Line::raw(""));
     lines.push(Line::raw(if app.unsaved_scan() {
-        "y: quit anyway   w: store it first   any other key: stay"
+        "y: quit anyway   w: store it, then quit   any other key: stay"
     } else {
         "y: quit anyway   any other key: stay"
     }));
@@ -148,29 +226,21 @@ fn help(app: &App, area: Rect, buf: &mut Buffer) {
             "store the last scan as <dataset>/<label>/<label>_NNN.csv",
         ),
         (
-            k(Key::Label),
-            "set the label of the next scans (a texture's label mounts it)",
-        ),
-        (
-            k(Key::Queue),
-            "queue N automatic scans, each stored as it completes",
+            format!("{} {}", k(Key::Label), k(Key::Queue)),
+            "label of the next scans (mounts its texture); queue N scans",
         ),
         (
             k(Key::Predict),
             "predict the scan on screen (trains first if no model)",
         ),
         (
-            k(Key::Train),
-            "train k-NN on the dataset (saved as model.json there)",
+            format!("{} {}", k(Key::Train), k(Key::Evaluate)),
+            "train k-NN (saved as model.json); evaluate: confusion matrix",
         ),
-        (
-            k(Key::Evaluate),
-            "evaluate: split, train, test; confusion matrix, SR/ER",
-        ),
-        (k(Key::Target), "type a target position in cm (Target mode)"),
         (
             format!(
-                "{}{}{}{} {}/{}",
+                "{} {}{}{}{} {}/{}",
+                k(Key::Target),
                 k(Key::Left),
                 k(Key::Right),
                 k(Key::Up),
@@ -178,7 +248,7 @@ fn help(app: &App, area: Rect, buf: &mut Buffer) {
                 k(Key::Away),
                 k(Key::Toward)
             ),
-            "nudge the target 1 mm in x, y, z",
+            "type a target (cm), or nudge it 1 mm in x, y, z",
         ),
         (
             format!("{}/{}", k(Key::Faster), k(Key::Slower)),
@@ -187,7 +257,30 @@ fn help(app: &App, area: Rect, buf: &mut Buffer) {
         (k(Key::Replay), "replay browser on the dataset folder"),
         (
             format!("{} {} {}", k(Key::Pause), k(Key::Step), k(Key::Left)),
-            "replay: pause, single step, restart; ↑/↓ recording",
+            "replay: pause, single step, restart",
+        ),
+        (
+            format!("↑↓ PgUp/PgDn {}/{}", k(Key::First), k(Key::Last)),
+            "replay: a recording, a page, the first/last",
+        ),
+        (
+            format!("{} {} {}", k(Key::Jump), k(Key::NextWrong), k(Key::Filter)),
+            "replay: jump to a label, next WRONG, show one label",
+        ),
+        (
+            format!(
+                "{} {} {} {} {}",
+                k(Key::Delete),
+                k(Key::Exclude),
+                k(Key::Relabel),
+                k(Key::Store),
+                k(Key::Undo)
+            ),
+            "replay: delete (.trash/), exclude, relabel, store, undo",
+        ),
+        (
+            format!("{} {}", k(Key::Messages), k(Key::Sessions)),
+            "the message log; recent sessions (open one, start today's)",
         ),
         (
             match app.page_count() {
@@ -217,10 +310,7 @@ fn help(app: &App, area: Rect, buf: &mut Buffer) {
         })
         .collect();
     lines.push(Line::raw(
-        "  any key closes; in forms Esc closes, the first key replaces the value;",
-    ));
-    lines.push(Line::raw(
-        "  change keys in the profile's [console] keys table",
+        "  any key closes; keys are set in the profile's [console] keys table",
     ));
     Paragraph::new(lines).block(frame("Keys")).render(r, buf);
 }

@@ -130,6 +130,12 @@ fn titles(s: &ScanView, f: &[f64], per: usize, peak_i: usize) -> Vec<String> {
 pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
     match app.scan() {
         Some(s) => render_view(s, area, buf),
+        None if app.scan_running || app.scan_saving => {
+            Paragraph::new("the first scan is running: its spectrum shows when it ends")
+                .wrap(ratatui::widgets::Wrap { trim: true })
+                .block(frame("Spectrum"))
+                .render(area, buf);
+        }
         None => Paragraph::new("no scan yet")
             .block(frame("Spectrum"))
             .render(area, buf),

@@ -25,12 +25,19 @@ fn min_span(unit: &str) -> f64 {
 
 pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
     let Some(s) = app.scan() else {
-        Paragraph::new(
-            "no scan yet: press s (in any mode) to run the waypoint path and record the stroke",
-        )
-        .wrap(Wrap { trim: true })
-        .block(frame("Surface trace"))
-        .render(area, buf);
+        // The first scan's trace is drawn once the scan ends and is analysed.
+        let text = if app.scan_running || app.scan_saving {
+            "the first scan is running: its trace shows when it ends".to_string()
+        } else {
+            format!(
+                "no scan yet: press {} (in any mode) to run the waypoint path and record the stroke",
+                app.keys.name(crate::console::keymap::Key::Start)
+            )
+        };
+        Paragraph::new(text)
+            .wrap(Wrap { trim: true })
+            .block(frame("Surface trace"))
+            .render(area, buf);
         return;
     };
     let (_, au) = unit_of(&s.axis);
