@@ -18,6 +18,7 @@ pub mod device;
 pub mod doctor;
 pub mod evaluate;
 pub mod import;
+pub mod predictor;
 pub mod profile;
 pub mod recorder;
 pub mod recording;
