@@ -72,19 +72,6 @@ fn dataset_panel(app: &App) -> String {
     text(&buf)
 }
 
-fn examples(per_class: &[(&str, usize)]) -> Vec<TrainingExample> {
-    per_class
-        .iter()
-        .flat_map(|&(l, n)| {
-            (0..n).map(move |i| TrainingExample {
-                file: format!("{l}/{i}.csv"),
-                label: l.to_string(),
-                features: vec![i as f64],
-            })
-        })
-        .collect()
-}
-
 #[test]
 fn a_first_session_of_five_scans_per_texture_trains_and_evaluates_a_sound_model() {
     let (d, lp) = simulated(5);
