@@ -348,7 +348,7 @@ pub fn evaluate_dataset(lp: &LoadedProfile, dir: &Path) -> Result<Evaluated, Str
 /// Write [`REPORT_FILE`] and [`REPORT_JSON`] into `dir`, each whole or not
 /// at all.
 fn save_report(lp: &LoadedProfile, dir: &Path, ev: &Evaluation) -> Result<(), String> {
-    use crate::commands::evaluate::{header, k_text, table};
+    use crate::support::evaluation_text::{header, k_text, table};
     let mut text = format!("{}\n{}", header(lp, ev), table(&ev.outcome));
     if let Some(note) = ev.outcome.k_notice() {
         text.push_str(&format!("note: {note}\n"));
