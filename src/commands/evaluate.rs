@@ -19,7 +19,6 @@ use indicatif::ProgressBar;
 use crate::evaluate::plan::Overrides;
 use crate::evaluate::request::{self, Evaluation, Outcome, Progress, Request, Source};
 use crate::evaluate::sweep::{Sweep, Swept};
-use crate::profile::LoadedProfile;
 use crate::support::evaluation_text::{header, source_text, table};
 use crate::support::{Failure, ProfileArg, bad, load_profile, progress_bar, runtime, warn_skipped};
 
