@@ -67,6 +67,9 @@ pub struct AnalysisOption {
     same: fn(&Analysis, &Analysis) -> bool,
 }
 
+/// How an option is written and compared.
+type Compare = (fn(&Analysis) -> String, fn(&Analysis, &Analysis) -> bool);
+
 fn json<T: serde::Serialize>(value: &T) -> String {
     serde_json::to_string(value).unwrap_or_else(|e| format!("<{e}>"))
 }
@@ -91,7 +94,7 @@ const fn opt(
     group: Group,
     advice: &'static str,
     search: Option<&'static str>,
-    (value, same): (fn(&Analysis) -> String, fn(&Analysis, &Analysis) -> bool),
+    (value, same): Compare,
 ) -> AnalysisOption {
     AnalysisOption {
         name,
