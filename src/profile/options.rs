@@ -425,8 +425,10 @@ mod tests {
 
     #[test]
     fn bins_do_not_matter_under_a_band() {
-        let mut a = Analysis::default();
-        a.band = Some([1.0, 2.0]);
+        let a = Analysis {
+            band: Some([1.0, 2.0]),
+            ..Analysis::default()
+        };
         let mut b = a.clone();
         b.bins = [1, 3];
         assert!(first_difference(&a, &b).is_none());

@@ -32,13 +32,11 @@ fn listed(
     jobs.list(lp, files.to_vec(), Some(model.clone()), None);
     let since = Instant::now();
     loop {
-        for r in jobs.poll() {
-            match r {
-                JobResult::Listed { entries, .. } => {
-                    return entries.into_iter().map(|e| (e.path, e.predicted)).collect();
-                }
-                other => panic!("not a list: {other:?}"),
-            }
+        if let Some(r) = jobs.poll().into_iter().next() {
+            let JobResult::Listed { entries, .. } = r else {
+                panic!("not a list: {r:?}");
+            };
+            return entries.into_iter().map(|e| (e.path, e.predicted)).collect();
         }
         assert!(since.elapsed() < PATIENCE, "the list never came");
         std::thread::sleep(Duration::from_millis(20));
