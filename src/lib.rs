@@ -12,8 +12,8 @@
 //! `hapticlab::dataset` and `crate::dataset` name the same thing.
 
 pub use hapticlab_engine::{
-    acquire, analysis, classify, clock, dataset, device, evaluate, profile, recorder, recording,
-    servo, triggers, tune,
+    acquire, analysis, classify, clock, dataset, device, evaluate, predictor, profile, recorder,
+    recording, servo, triggers, tune,
 };
 
 pub mod cli;

@@ -9,6 +9,8 @@
 //! It must never import a front end (`commands`, `cli`, `console`, …):
 //! they all stand on it.
 
+pub mod evaluation_text;
+
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 

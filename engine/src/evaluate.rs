@@ -13,6 +13,7 @@
 
 pub mod cv;
 pub mod plan;
+pub mod request;
 pub mod sweep;
 pub mod windows;
 

@@ -28,6 +28,7 @@ pub mod clock;
 pub mod dataset;
 pub mod device;
 pub mod evaluate;
+pub mod predictor;
 pub mod profile;
 pub mod recorder;
 pub mod recording;

@@ -31,6 +31,7 @@ pub mod evaluation;
 pub mod falcon_reach;
 pub mod hardware;
 pub mod locate;
+pub mod options;
 pub mod path;
 pub mod simulator;
 pub mod textures;

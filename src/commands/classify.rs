@@ -1,15 +1,19 @@
 //! `hapticlab classify`: recordings named by a trained model, one line (or
-//! a JSON row) each, with the votes and the nearest neighbour.
+//! a JSON row) each, with the votes and the nearest neighbour. The answer
+//! is the engine's [`Predictor`]'s: a recording the model was trained on
+//! is predicted with itself left out, as the console's Predict does.
 
 use std::path::{Path, PathBuf};
 
 use clap::Args;
 
-use crate::analysis::FeatureExtractor;
 use crate::classify::Model;
-use crate::dataset::{self, DatasetError};
+use crate::dataset::DatasetError;
+use crate::predictor::{Answer, Predictor};
 use crate::recording;
-use crate::support::{Failure, ProfileArg, bad, find_recordings, load_profile, warn_skipped};
+use crate::support::{
+    Failure, ProfileArg, bad, find_recordings, load_profile, runtime, warn_skipped,
+};
 
 #[derive(Debug, Args)]
 pub struct ClassifyArgs {
@@ -54,7 +58,8 @@ fn classify(
     if let Some(note) = model.k_notice() {
         crate::errln!("note: {}: {note}", model_path.display());
     }
-    let mut ex = FeatureExtractor::new(&model.analysis);
+    let predictor = Predictor::new(&model);
+    let mut ex = predictor.extractor();
     let files = find_recordings(files)?;
     let mut rows = Vec::new();
     for f in &files {
@@ -64,7 +69,7 @@ fn classify(
             Err(recording::RecordingError::Io { source, .. })
                 if crate::recording::files::not_regular(&source) =>
             {
-                warn_skipped(&[dataset::Skipped::Unusable {
+                warn_skipped(&[crate::dataset::Skipped::Unusable {
                     file: f.display().to_string(),
                     reason: source.to_string(),
                     unreadable: true,
@@ -73,59 +78,36 @@ fn classify(
             }
             Err(e) => return Err(DatasetError::from(e).into()),
         };
-        // An incomplete scan is classified when its samples cover the
-        // analysis; when they do not, one error says both things.
-        let incomplete = (!rec.is_complete()).then(|| {
-            format!(
-                "incomplete scan: {}",
-                rec.aborted().unwrap_or("no end marker")
-            )
-        });
-        let in_context = |e: Failure| match (&incomplete, e) {
-            (Some(why), Failure::BadInput(m)) => bad(format!("{m} ({why})")),
-            (_, e) => e,
-        };
-        let warn_incomplete = || {
-            if let Some(why) = &incomplete {
-                crate::errln!("warning: {}: {why}; classified anyway", f.display());
+        let answer = match predictor.answer_recording(&rec, f, &mut ex) {
+            Ok(a) => a,
+            // Left out of a model that then lacks its texture: said, and
+            // the other recordings go on.
+            Err(e) if e.is_unanswerable() => {
+                if !json {
+                    crate::outln!("{}: no prediction: {e}", f.display());
+                }
+                rows.push(serde_json::json!({
+                    "file": f.display().to_string(),
+                    "label": rec.label(),
+                    "predicted": null,
+                    "left_out": true,
+                    "reason": e.to_string(),
+                }));
+                continue;
             }
+            Err(e) if e.is_bad_input() => return Err(bad(e)),
+            Err(e) => return Err(runtime(e)),
         };
-        if model.analysis.windows.is_some() {
-            rows.push(classify_by_windows(&model, &rec, f, &mut ex, json).map_err(in_context)?);
-            warn_incomplete();
-            continue;
-        }
-        let feats = dataset::features_of(&rec, f, &mut ex)
-            .map_err(Failure::from)
-            .map_err(in_context)?;
-        warn_incomplete();
-        let p = model
-            .classify(&feats)
-            .map_err(|e| bad(format!("{}: {e}", f.display())))?;
-        if !json {
-            let votes: Vec<String> = p.votes.iter().map(|(l, v)| format!("{l}:{v}")).collect();
-            let truth = rec.label().map_or(String::new(), |l| {
-                format!(
-                    " (recorded as {l}{})",
-                    if l == p.label { ", right" } else { ", WRONG" }
-                )
-            });
-            crate::outln!(
-                "{}: {}{} — votes {}, nearest {:.3e}",
-                f.display(),
-                p.label,
-                truth,
-                votes.join(" "),
-                p.neighbours.first().map_or(f64::NAN, |n| n.distance)
+        if let Some(why) = &answer.incomplete {
+            crate::errln!(
+                "warning: {}: incomplete scan: {why}; classified anyway",
+                f.display()
             );
         }
-        rows.push(serde_json::json!({
-            "file": f.display().to_string(),
-            "label": rec.label(),
-            "predicted": p.label,
-            "votes": p.votes,
-            "neighbours": p.neighbours,
-        }));
+        if !json {
+            crate::outln!("{}", line(f, rec.label(), &answer));
+        }
+        rows.push(row(f, rec.label(), &answer));
     }
     if json {
         crate::outln!("{}", serde_json::Value::Array(rows));
@@ -133,48 +115,65 @@ fn classify(
     Ok(())
 }
 
-/// `classify` of one recording by its sub-windows' vote: the line (unless
-/// `json`) and the JSON row, which adds the tally and each sub-window's vote.
-fn classify_by_windows(
-    model: &Model,
-    rec: &recording::Recording,
-    f: &Path,
-    ex: &mut FeatureExtractor,
-    json: bool,
-) -> Result<serde_json::Value, Failure> {
-    let windows = dataset::window_features_of(rec, f, ex)?;
-    let p = model
-        .classify_windows(&windows)
-        .map_err(|e| bad(format!("{}: {e}", f.display())))?;
-    let votes: Vec<(String, usize)> = p
-        .tally
-        .iter()
-        .map(|t| (t.label.clone(), t.windows))
-        .collect();
-    if !json {
-        let shown: Vec<String> = votes.iter().map(|(l, v)| format!("{l}:{v}")).collect();
-        let truth = rec.label().map_or(String::new(), |l| {
-            format!(
-                " (recorded as {l}{})",
-                if l == p.label { ", right" } else { ", WRONG" }
-            )
-        });
-        crate::outln!(
+/// One recording's line: the prediction, right or wrong against its
+/// label, and the votes (of the neighbours, or of the sub-windows).
+fn line(f: &Path, label: Option<&str>, a: &Answer) -> String {
+    let p = &a.prediction;
+    let truth = label.map_or(String::new(), |l| {
+        format!(
+            " (recorded as {l}{}{})",
+            if l == p.label { ", right" } else { ", WRONG" },
+            if a.left_out {
+                "; left out of the model"
+            } else {
+                ""
+            }
+        )
+    });
+    let votes: Vec<String> = p.votes.iter().map(|(l, v)| format!("{l}:{v}")).collect();
+    match &a.windows {
+        Some(w) => format!(
             "{}: {}{} — {} of {} windows, window votes {}",
             f.display(),
             p.label,
             truth,
-            p.tally[0].windows,
-            p.windows.len(),
-            shown.join(" ")
-        );
+            w.tally[0].windows,
+            w.windows.len(),
+            votes.join(" ")
+        ),
+        None => format!(
+            "{}: {}{} — votes {}, nearest {:.3e}",
+            f.display(),
+            p.label,
+            truth,
+            votes.join(" "),
+            p.neighbours.first().map_or(f64::NAN, |n| n.distance)
+        ),
     }
-    Ok(serde_json::json!({
+}
+
+/// One recording's JSON row; a vote over sub-windows adds the tally and
+/// each sub-window's vote.
+fn row(f: &Path, label: Option<&str>, a: &Answer) -> serde_json::Value {
+    let p = &a.prediction;
+    let mut row = serde_json::json!({
         "file": f.display().to_string(),
-        "label": rec.label(),
+        "label": label,
         "predicted": p.label,
-        "votes": votes,
-        "tally": p.tally,
-        "windows": p.windows,
-    }))
+        "votes": p.votes,
+    });
+    let o = row.as_object_mut().expect("an object");
+    match &a.windows {
+        Some(w) => {
+            o.insert("tally".into(), serde_json::json!(w.tally));
+            o.insert("windows".into(), serde_json::json!(w.windows));
+        }
+        None => {
+            o.insert("neighbours".into(), serde_json::json!(p.neighbours));
+        }
+    }
+    if a.left_out {
+        o.insert("left_out".into(), true.into());
+    }
+    row
 }

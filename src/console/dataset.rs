@@ -17,8 +17,8 @@ use crate::analysis::FeatureExtractor;
 use crate::classify::{Model, TrainingExample};
 use crate::dataset;
 use crate::evaluate::Report;
-use crate::evaluate::plan::{self, Dataset, Overrides, Plan};
-use crate::profile::{Analysis, LoadedProfile, SplitMethod};
+use crate::evaluate::request::{self, Evaluation, Request};
+use crate::profile::{Analysis, LoadedProfile};
 use crate::recording;
 
 /// The model file the console writes into (and reads from) a dataset folder.
@@ -39,6 +39,8 @@ pub struct DatasetView {
     pub report: Option<Report>,
     /// How the last evaluation split the recordings ("leave-one-out").
     pub report_method: Option<String>,
+    /// Where the last evaluation's report was written.
+    pub report_file: Option<PathBuf>,
     /// Work in progress ("training on 120 recordings…").
     pub busy: Option<String>,
     /// Curating changes since the model was trained (or loaded).
@@ -193,14 +195,7 @@ pub enum JobResult {
         saved: Result<PathBuf, String>,
         then_predict: bool,
     },
-    Evaluated {
-        report: Box<Report>,
-        /// How it was split ("leave-one-out").
-        method: String,
-        /// Why not as the profile says, and why k is not the profile's: one
-        /// line, or empty.
-        note: String,
-    },
+    Evaluated(Box<Evaluated>),
     Listed {
         entries: Vec<ReplayEntry>,
         /// The model the predictions came from, when one was trained for it.
@@ -296,11 +291,7 @@ impl Jobs {
     pub fn evaluate(&self, lp: &LoadedProfile, dir: &Path) {
         let (lp, dir) = (lp.clone(), dir.to_path_buf());
         self.spawn(move || match evaluate_dataset(&lp, &dir) {
-            Ok((report, method, note)) => JobResult::Evaluated {
-                report: Box::new(report),
-                method,
-                note,
-            },
+            Ok(e) => JobResult::Evaluated(Box::new(e)),
             Err(error) => JobResult::Failed {
                 what: "evaluate",
                 error,
@@ -357,90 +348,85 @@ impl Jobs {
     }
 }
 
-/// The validation the profile's `[evaluation]` asks for, or, when its
-/// holdout split needs more scans of a texture than there are, stratified
-/// 5-fold cross-validation (every texture has at least 5) or leave-one-out;
-/// and the note saying so.
-pub fn evaluation_plan(lp: &LoadedProfile, examples: &[TrainingExample]) -> (Plan, Option<String>) {
-    let mut plan = Plan::new(&lp.profile, &Overrides::default());
-    plan.threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let mut counts: std::collections::BTreeMap<&str, usize> = std::collections::BTreeMap::new();
-    // Recordings, not sub-windows: with `[analysis] windows` a recording's
-    // examples are consecutive and share its file.
-    for (i, e) in examples.iter().enumerate() {
-        if i == 0 || examples[i - 1].file != e.file {
-            *counts.entry(e.label.as_str()).or_default() += 1;
-        }
-    }
-    let Some((label, fewest)) =
-        counts
-            .iter()
-            .fold(None, |b: Option<(&str, usize)>, (l, n)| match b {
-                Some((_, m)) if m <= *n => b,
-                _ => Some((l, *n)),
-            })
-    else {
-        return (plan, None);
-    };
-    let recordings: usize = counts.values().sum();
-    let e = &lp.profile.evaluation;
-    let why = match plan.method {
-        SplitMethod::Holdout if fewest < e.train_per_class + e.test_per_class => format!(
-            "the holdout split needs {} per texture ({} to train, {} to test), {label} has {fewest}",
-            crate::classify::scans(e.train_per_class + e.test_per_class),
-            e.train_per_class,
-            e.test_per_class
-        ),
-        SplitMethod::KFold if plan.group_by.is_none() && plan.folds > recordings => format!(
-            "{}-fold cross-validation needs at least {}, there are {}",
-            plan.folds,
-            crate::classify::plural(plan.folds, "recording", "recordings"),
-            recordings
-        ),
-        _ => return (plan, None),
-    };
-    if fewest >= 5 {
-        plan.method = SplitMethod::KFold;
-        plan.folds = 5;
-        plan.group_by = None;
-    } else {
-        plan.method = SplitMethod::LeaveOneOut;
-        plan.group_by = None;
-    }
-    let how = if plan.method == SplitMethod::KFold {
-        "stratified 5-fold cross-validation".to_string()
-    } else {
-        "leave-one-out".to_string()
-    };
-    (plan, Some(format!("{why}: evaluating by {how} instead")))
+/// The console's evaluation of its dataset, as the engine makes it for
+/// `hapticlab evaluate DIR --fallback`: the profile's `[evaluation]`, or,
+/// when the dataset cannot meet it, the small-data fallback.
+#[derive(Debug)]
+pub struct Evaluated {
+    pub report: Report,
+    /// How it was split ("leave-one-out").
+    pub method: String,
+    /// Why not as the profile says, and why k is not the profile's: one
+    /// line, or empty.
+    pub note: String,
+    /// Where the report was written (text and JSON), or why it was not.
+    pub saved: Result<PathBuf, String>,
 }
 
-/// Evaluate the complete recordings in `dir`: the report, how it was split,
-/// and a note (empty, or why not as the profile says; why not its k).
-pub fn evaluate_dataset(
-    lp: &LoadedProfile,
-    dir: &Path,
-) -> Result<(Report, String, String), String> {
-    let an = &lp.profile.analysis;
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let data = Dataset::load(&[dir.to_path_buf()], an, dataset::Keep::Features, threads)
-        .map_err(|f| f.to_string())?;
-    if data.scans.is_empty() {
-        return Err(format!(
-            "no complete recordings in {} to evaluate",
-            dir.display()
-        ));
-    }
-    let examples = data.examples(an).map_err(|f| f.to_string())?;
-    let (plan, why) = evaluation_plan(lp, &examples);
-    let groups = match &plan.group_by {
-        Some(g) => Some(data.groups(g).map_err(|f| f.to_string())?),
-        None => None,
+/// The report files `e` writes beside the model: plain text (the
+/// command's header and table) and JSON (`evaluate --json --fallback`'s,
+/// plus the method, k and dataset state).
+pub const REPORT_FILE: &str = "evaluation.txt";
+pub const REPORT_JSON: &str = "evaluation.json";
+
+/// Evaluate the complete recordings in `dir` (see [`Evaluated`]) and keep
+/// the report in `dir`.
+pub fn evaluate_dataset(lp: &LoadedProfile, dir: &Path) -> Result<Evaluated, String> {
+    let mut req = Request::of_recordings(vec![dir.to_path_buf()]);
+    req.fallback = true;
+    let ev = request::run(lp, &req, &request::Quiet).map_err(|e| e.to_string())?;
+    let Some(report) = ev.outcome.report().cloned() else {
+        return Err("the evaluation gave no report".into());
     };
-    let r = plan::validate(&lp.profile, examples, groups.as_deref(), &plan)
-        .map_err(|f| f.to_string())?;
-    let note: Vec<String> = why.into_iter().chain(r.k_notice()).collect();
-    Ok((r.report, plan.describe(), note.join("; ")))
+    let method = ev.plan.describe();
+    let note: Vec<String> = ev
+        .fell_back
+        .clone()
+        .into_iter()
+        .chain(ev.outcome.k_notice())
+        .collect();
+    let saved = save_report(lp, dir, &ev).map(|()| dir.join(REPORT_FILE));
+    Ok(Evaluated {
+        report,
+        method,
+        note: note.join("; "),
+        saved,
+    })
+}
+
+/// Write [`REPORT_FILE`] and [`REPORT_JSON`] into `dir`, each whole or not
+/// at all.
+fn save_report(lp: &LoadedProfile, dir: &Path, ev: &Evaluation) -> Result<(), String> {
+    use crate::support::evaluation_text::{header, k_text, table};
+    let mut text = format!("{}\n{}", header(lp, ev), table(&ev.outcome));
+    if let Some(note) = ev.outcome.k_notice() {
+        text.push_str(&format!("note: {note}\n"));
+    }
+    let mut json = serde_json::to_value(&ev.outcome).map_err(|e| e.to_string())?;
+    if let Some(o) = json.as_object_mut() {
+        o.entry("method")
+            .or_insert_with(|| ev.plan.describe().into());
+        o.insert("k_used".into(), serde_json::json!(ev.outcome.k_used()));
+        o.insert("k".into(), k_text(lp, ev).into());
+        o.insert("fallback".into(), serde_json::json!(ev.fell_back));
+        let model = dir.join(MODEL_FILE);
+        o.insert(
+            "dataset".into(),
+            serde_json::json!({
+                "folder": dir.display().to_string(),
+                "profile": lp.profile.name,
+                "recordings": ev.recordings,
+                "skipped": ev.skipped.iter().map(ToString::to_string).collect::<Vec<_>>(),
+                "model": model.exists().then(|| model.display().to_string()),
+            }),
+        );
+    }
+    let json = serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?;
+    crate::support::write_atomically(&dir.join(REPORT_FILE), &[], text.as_bytes())
+        .and_then(|()| {
+            crate::support::write_atomically(&dir.join(REPORT_JSON), &[], json.as_bytes())
+        })
+        .map_err(|e| e.message().to_string())
 }
 
 fn train(lp: &LoadedProfile, dir: &Path) -> Result<(Model, usize), String> {

@@ -75,6 +75,7 @@ fn prediction() -> PredictionView {
         },
         windows: None,
         left_out: false,
+        incomplete: None,
     }
 }
 

@@ -8,7 +8,8 @@
 use std::path::{Path, PathBuf};
 
 use crate::analysis::FeatureExtractor;
-use crate::classify::{Model, Prediction, RecordingPrediction};
+use crate::classify::Model;
+use crate::predictor::{Answer, Features, Predictor, Query};
 use crate::profile::{Analysis, SpectrumKind};
 use crate::recording::Recording;
 
@@ -47,6 +48,9 @@ pub struct ScanView {
     /// has `[analysis] windows` (`None` without): what a model that votes
     /// over sub-windows classifies.
     pub windows: Option<Result<Vec<Vec<f64>>, String>>,
+    /// What the engine's [`Predictor`] classifies the scan by (its
+    /// sub-windows' features or the whole window's), or why there is none.
+    pub query: Result<Query, String>,
     /// Set by `p`, or by the replay browser.
     pub prediction: Option<Result<PredictionView, String>>,
     /// Stored into the dataset (its final path), or still unsaved.
@@ -98,38 +102,8 @@ impl FeatureNames {
     }
 }
 
-#[derive(Debug, Clone, PartialEq)]
-pub struct PredictionView {
-    /// The prediction. For a model that votes over sub-windows it is the
-    /// recording's vote in the shape `classify --json` gives it: the label
-    /// and, as votes, the sub-windows that chose each class; no neighbours
-    /// (they are per sub-window).
-    pub prediction: Prediction,
-    /// The vote over sub-windows, with its tally and each sub-window's
-    /// outcome, when the model has `[analysis] windows`.
-    pub windows: Option<RecordingPrediction>,
-    /// The recording was one of the training examples and was left out.
-    pub left_out: bool,
-}
-
-impl PredictionView {
-    /// A recording's vote over its sub-windows, as the view holds it.
-    pub fn of_windows(p: RecordingPrediction, left_out: bool) -> PredictionView {
-        PredictionView {
-            prediction: Prediction {
-                label: p.label.clone(),
-                votes: p
-                    .tally
-                    .iter()
-                    .map(|t| (t.label.clone(), t.windows))
-                    .collect(),
-                neighbours: Vec::new(),
-            },
-            windows: Some(p),
-            left_out,
-        }
-    }
-}
+/// A prediction as the console holds it: the engine's [`Answer`].
+pub type PredictionView = Answer;
 
 /// Display scale and unit of a column: metres as mm, the rest as is.
 pub fn unit_of(column: &str) -> (f64, &'static str) {
@@ -165,13 +139,19 @@ pub fn analyse(rec: &Recording, path: &Path, ex: &mut FeatureExtractor) -> ScanV
         .map(|j| (dir * (axis[j] - axis[0]) * ascale, signal[j] * sscale))
         .collect();
     // The features `train` and `classify` make: every channel the
-    // analysis reads, through the one loader's `features_of` (and
-    // `window_features_of` for each sub-window).
+    // analysis reads, through the one loader's `features_of`; what is
+    // classified, the predictor's query (each sub-window's, with
+    // `[analysis] windows`).
     let features = crate::dataset::features_of(rec, path, ex).map_err(|e| e.to_string());
-    let windows = s
-        .windows
-        .is_some()
-        .then(|| crate::dataset::window_features_of(rec, path, ex).map_err(|e| e.to_string()));
+    let query = Query::of(rec, path, ex).map_err(|e| e.to_string());
+    let windows = s.windows.is_some().then(|| match &query {
+        Ok(Query {
+            features: Features::Windows(w),
+            ..
+        }) => Ok(w.clone()),
+        Ok(_) => Err("not cut into sub-windows".to_string()),
+        Err(e) => Err(e.clone()),
+    });
     let t = rec.column("t_s").unwrap_or(&[]);
     ScanView {
         path: path.to_path_buf(),
@@ -189,6 +169,7 @@ pub fn analyse(rec: &Recording, path: &Path, ex: &mut FeatureExtractor) -> ScanV
         names: FeatureNames::of(&s),
         channels: s.all_channels().map(str::to_string).collect(),
         windows,
+        query,
         prediction: None,
         stored: None,
     }
@@ -215,113 +196,35 @@ pub fn newest_unsaved(dataset: &Path, ex: &mut FeatureExtractor) -> Option<ScanV
     })
 }
 
-/// The model to classify `file` with: `model` itself, or, when the
-/// recording is one of its training examples (every sub-window of it, with
-/// `[analysis] windows`), `model` trained again without it (leave-one-out),
-/// so replaying a training set does not find each scan as its own nearest
-/// neighbour. `Some` only in the second case.
-fn leaving_out(model: &Model, file: &Path) -> Result<Option<Model>, String> {
-    let name = file.display().to_string();
-    let canonical = std::fs::canonicalize(file).ok();
-    let same = |f: &str| {
-        f == name
-            || canonical
-                .as_ref()
-                .is_some_and(|c| std::fs::canonicalize(f).ok().as_ref() == Some(c))
-    };
-    if !model.examples.iter().any(|e| same(&e.file)) {
-        return Ok(None);
-    }
-    let rest: Vec<_> = model
-        .examples
-        .iter()
-        .filter(|e| !same(&e.file))
-        .cloned()
-        .collect();
-    if rest.is_empty() {
-        return Err(
-            "this scan is the model's only training scan, and a scan is predicted \
-             with itself left out: store scans of other textures and train again"
-                .into(),
-        );
-    }
-    // k as the profile asked, chosen again without this recording where
-    // the profile's k needed choosing: no leak of the test scan.
-    Model::train_adapting_k(
-        &model.profile,
-        &model.analysis,
-        &model.asked_classifier(),
-        rest,
-    )
-    .map(Some)
-    .map_err(|e| e.to_string())
-}
-
-/// Classify features with `model` (leaving the recording out of it when it
-/// is one of its training examples, see [`leaving_out`]).
-pub fn predict(model: &Model, features: &[f64], file: &Path) -> Result<PredictionView, String> {
-    let reduced = leaving_out(model, file)?;
-    let prediction = reduced
-        .as_ref()
-        .unwrap_or(model)
-        .classify(features)
-        .map_err(|e| e.to_string())?;
-    Ok(PredictionView {
-        prediction,
-        windows: None,
-        left_out: reduced.is_some(),
-    })
-}
-
-/// Classify a recording by the vote of its sub-windows' feature vectors
-/// ([`Model::classify_windows`], as `classify` does), leaving it out of
-/// the model as [`predict`] does.
-pub fn predict_windows(
-    model: &Model,
-    windows: &[Vec<f64>],
-    file: &Path,
-) -> Result<PredictionView, String> {
-    let reduced = leaving_out(model, file)?;
-    let p = reduced
-        .as_ref()
-        .unwrap_or(model)
-        .classify_windows(windows)
-        .map_err(|e| e.to_string())?;
-    Ok(PredictionView::of_windows(p, reduced.is_some()))
-}
-
-/// Classify the scan on screen as `classify` would its recording: by the
-/// vote of its sub-windows when the model has `[analysis] windows`, else
-/// by its features. `None` when there is nothing to classify (the scan
-/// has no features; the view says why).
+/// Classify the scan on screen as `classify` classifies its recording:
+/// the engine's [`Predictor`] decides sub-windows or the whole window and
+/// leaves a training scan out. `None` when the scan has no features (the
+/// view says why).
 pub fn predict_view(model: &Model, view: &ScanView) -> Option<Result<PredictionView, String>> {
-    if model.analysis.windows.is_some() {
-        return Some(match &view.windows {
-            Some(Ok(w)) => predict_windows(model, w, &view.path),
-            Some(Err(e)) => Err(e.clone()),
-            None => Err(
-                "the model votes over sub-windows but the profile has no [analysis] windows".into(),
-            ),
-        });
+    match &view.query {
+        Ok(q) => Some(
+            Predictor::new(model)
+                .answer(q, &view.path)
+                .map_err(|e| e.to_string()),
+        ),
+        // A scan without features shows why in the Spectrum panel; one
+        // whose sub-windows alone failed says it here.
+        Err(e) if view.features.is_ok() => Some(Err(e.clone())),
+        Err(_) => None,
     }
-    let f = view.features.as_ref().ok()?;
-    Some(predict(model, f, &view.path))
 }
 
-/// Classify a stored recording as [`predict_view`] does its view (for the
-/// replay browser's list): its sub-windows' vote or its features.
+/// Classify a stored recording (for the replay browser's list), as
+/// [`predict_view`] does its view.
 pub fn predict_recording(
     model: &Model,
     rec: &Recording,
     file: &Path,
     ex: &mut FeatureExtractor,
 ) -> Result<PredictionView, String> {
-    if model.analysis.windows.is_some() {
-        let w = crate::dataset::window_features_of(rec, file, ex).map_err(|e| e.to_string())?;
-        return predict_windows(model, &w, file);
-    }
-    let f = crate::dataset::features_of(rec, file, ex).map_err(|e| e.to_string())?;
-    predict(model, &f, file)
+    Predictor::new(model)
+        .answer_recording(rec, file, ex)
+        .map_err(|e| e.to_string())
 }
 
 #[cfg(test)]
@@ -370,13 +273,20 @@ mod tests {
         };
         let model =
             Model::train_adapting_k("thesis", a, &lp.profile.classifier, vec![example]).unwrap();
-        let e = predict(&model, &features, Path::new("session/S1/S1_001.csv")).unwrap_err();
+        let mut view = crate::console::fixtures::scan_view(false);
+        view.query = Ok(Query {
+            features: crate::predictor::Features::Whole(features),
+            incomplete: None,
+        });
+        view.path = "session/S1/S1_001.csv".into();
+        let e = predict_view(&model, &view).unwrap().unwrap_err();
         assert!(
             e.contains("only training scan") && e.contains("left out"),
             "{e}"
         );
         // Another scan is predicted by that one.
-        let p = predict(&model, &features, Path::new("session/S2/S2_001.csv")).unwrap();
+        view.path = "session/S2/S2_001.csv".into();
+        let p = predict_view(&model, &view).unwrap().unwrap();
         assert_eq!(p.prediction.label, "S1");
     }
 

@@ -577,7 +577,9 @@ fn the_consoles_predict_and_classify_see_the_same_features_under_two_channels() 
         features
     );
     // And the same prediction, votes and neighbours as `classify --json`.
-    let predicted = hapticlab::console::scan::predict(&model, &features, &held).unwrap();
+    let predicted = hapticlab::console::scan::predict_view(&model, &view)
+        .unwrap()
+        .unwrap();
     assert!(!predicted.left_out);
     let pr = &predicted.prediction;
     assert_eq!(row["predicted"].as_str(), Some(pr.label.as_str()), "{row}");

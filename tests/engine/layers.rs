@@ -12,11 +12,12 @@ const FRONT_END_CRATES: [&str; 4] = ["clap", "ratatui", "crossterm", "indicatif"
 /// The engine's top-level modules by layer: a module may import its own
 /// layer's ground modules listed before it and any module of a lower layer.
 /// Written as in engine/src/lib.rs's doc comment.
-const LAYERS: [&[&str]; 7] = [
+const LAYERS: [&[&str]; 8] = [
     &["recording", "profile"],
     &["clock", "analysis", "triggers", "recorder"],
     &["device", "classify"],
     &["dataset", "servo"],
+    &["predictor"],
     &["acquire"],
     &["evaluate"],
     &["tune"],

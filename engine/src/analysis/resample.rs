@@ -98,99 +98,21 @@ impl Resampler {
         };
         // Distance along the direction of travel (NaN ends are caught below).
         let direction = if last >= origin { 1.0 } else { -1.0 };
-
-        let inv_spacing = 1.0 / self.spacing;
-        let upper = self.n as f64 - 0.5;
-        // Nearest grid point: bin i holds u in [i − ½, i + ½). The cast
-        // truncates, which is the floor here since u + ½ ≥ 0; `upper` is
-        // exclusive, but rounding in `u + 0.5` can still reach n.
-        let bin_of = |a: f64| {
-            let u = (direction * (a - origin) - self.start) * inv_spacing;
-            let i = (u + 0.5) as usize;
-            ((-0.5..upper).contains(&u) && i < self.n).then_some((i, u))
+        let grid = Grid {
+            origin,
+            direction,
+            start: self.start,
+            inv_spacing: 1.0 / self.spacing,
+            upper: self.n as f64 - 0.5,
+            n: self.n,
         };
         self.centroid_u.clear();
         self.centroid_v.clear();
-        let mut first = None;
-        let mut last_bin = 0;
-        if in_order {
-            debug_assert!(axis.windows(2).all(|w| w[0] <= w[1]));
-            // A grid point's bin reaches half a spacing out; one spacing of
-            // margin keeps rounding on the safe side (`bin_of` still decides
-            // each sample).
-            let lo = origin + self.start - self.spacing;
-            let hi = origin + self.start + (self.n as f64 + 0.5) * self.spacing;
-            let from = axis.partition_point(|&a| a < lo);
-            let to = axis.partition_point(|&a| a <= hi).max(from);
-            // In order, each bin's samples are one run: its centroid is
-            // pushed when the run ends, with the sums the bin arrays would
-            // hold (0 + x is x), so the result is the same to the bit.
-            let (mut run_bin, mut run_n, mut run_u, mut run_v) = (usize::MAX, 0u32, 0.0, 0.0);
-            let mut push = |bin: usize, n: u32, su: f64, sv: f64| {
-                if n == 0 {
-                    return;
-                }
-                first.get_or_insert(bin);
-                last_bin = bin;
-                let (cu, cv) = centroid(n, su, sv);
-                self.centroid_u.push(cu);
-                self.centroid_v.push(cv);
-            };
-            for (&a, &v) in axis[from..to].iter().zip(&signal[from..to]) {
-                let Some((i, u)) = bin_of(a) else { continue };
-                if i != run_bin {
-                    push(run_bin, run_n, run_u, run_v);
-                    (run_bin, run_n, run_u, run_v) = (i, 0, 0.0, 0.0);
-                }
-                run_n += 1;
-                run_u += u;
-                run_v += v;
-            }
-            push(run_bin, run_n, run_u, run_v);
+        let (first, last_bin) = if in_order {
+            self.centroids_in_order(&grid, axis, signal)
         } else {
-            self.count.fill(0);
-            self.sum_u.fill(0.0);
-            self.sum_v.fill(0.0);
-            // Scans arrive mostly in order, so consecutive samples share a
-            // bin: summing a run in registers and storing it once avoids a
-            // chain of store-to-load round trips through the bin arrays.
-            let mut run_bin = 0;
-            let (mut run_n, mut run_u, mut run_v) = (0u32, 0.0, 0.0);
-            let mut finite = true;
-            for (&a, &v) in axis.iter().zip(signal) {
-                // One flag for the whole loop keeps it branch-light; the
-                // rare failure is located afterwards.
-                finite &= a.is_finite() & v.is_finite();
-                let Some((i, u)) = bin_of(a) else { continue };
-                if i != run_bin {
-                    self.count[run_bin] += run_n;
-                    self.sum_u[run_bin] += run_u;
-                    self.sum_v[run_bin] += run_v;
-                    (run_bin, run_n, run_u, run_v) = (i, 0, 0.0, 0.0);
-                }
-                run_n += 1;
-                run_u += u;
-                run_v += v;
-            }
-            self.count[run_bin] += run_n;
-            self.sum_u[run_bin] += run_u;
-            self.sum_v[run_bin] += run_v;
-            if !finite {
-                return Err(first_non_finite(axis, signal));
-            }
-            for i in 0..self.n {
-                let c = self.count[i];
-                if c > 0 {
-                    first.get_or_insert(i);
-                    last_bin = i;
-                    let (cu, cv) = centroid(c, self.sum_u[i], self.sum_v[i]);
-                    self.centroid_u.push(cu);
-                    self.centroid_v.push(cv);
-                }
-            }
-        }
-        let filled = self.centroid_u.len();
-        let end = self.start + (self.n - 1) as f64 * self.spacing;
+            self.centroids_any_order(&grid, axis, signal)?
+        };
         let first_gap = first != Some(0);
         let last_gap = last_bin != self.n - 1;
         // The extent costs a pass over the samples: only when it decides.
@@ -201,6 +123,121 @@ impl Resampler {
         } else {
             (0.0, 0.0)
         };
+        self.check_coverage(axis_name, (lo, hi), first_gap, last_gap)?;
+        self.interpolate(out);
+        self.has_run = true;
+        Ok(())
+    }
+
+    /// The bins' centroids of samples whose axis never decreases: only the
+    /// samples near the window are visited. The first and last bins filled.
+    fn centroids_in_order(
+        &mut self,
+        grid: &Grid,
+        axis: &[f64],
+        signal: &[f64],
+    ) -> (Option<usize>, usize) {
+        debug_assert!(axis.windows(2).all(|w| w[0] <= w[1]));
+        let (mut first, mut last_bin) = (None, 0);
+        // A grid point's bin reaches half a spacing out; one spacing of
+        // margin keeps rounding on the safe side (`bin` still decides
+        // each sample).
+        let lo = grid.origin + self.start - self.spacing;
+        let hi = grid.origin + self.start + (self.n as f64 + 0.5) * self.spacing;
+        let from = axis.partition_point(|&a| a < lo);
+        let to = axis.partition_point(|&a| a <= hi).max(from);
+        // In order, each bin's samples are one run: its centroid is
+        // pushed when the run ends, with the sums the bin arrays would
+        // hold (0 + x is x), so the result is the same to the bit.
+        let (mut run_bin, mut run_n, mut run_u, mut run_v) = (usize::MAX, 0u32, 0.0, 0.0);
+        let mut push = |bin: usize, n: u32, su: f64, sv: f64| {
+            if n == 0 {
+                return;
+            }
+            first.get_or_insert(bin);
+            last_bin = bin;
+            let (cu, cv) = centroid(n, su, sv);
+            self.centroid_u.push(cu);
+            self.centroid_v.push(cv);
+        };
+        for (&a, &v) in axis[from..to].iter().zip(&signal[from..to]) {
+            let Some((i, u)) = grid.bin(a) else { continue };
+            if i != run_bin {
+                push(run_bin, run_n, run_u, run_v);
+                (run_bin, run_n, run_u, run_v) = (i, 0, 0.0, 0.0);
+            }
+            run_n += 1;
+            run_u += u;
+            run_v += v;
+        }
+        push(run_bin, run_n, run_u, run_v);
+        (first, last_bin)
+    }
+
+    /// The bins' centroids of samples in any order (every value checked
+    /// finite). The first and last bins filled.
+    fn centroids_any_order(
+        &mut self,
+        grid: &Grid,
+        axis: &[f64],
+        signal: &[f64],
+    ) -> Result<(Option<usize>, usize), AnalysisError> {
+        self.count.fill(0);
+        self.sum_u.fill(0.0);
+        self.sum_v.fill(0.0);
+        // Scans arrive mostly in order, so consecutive samples share a
+        // bin: summing a run in registers and storing it once avoids a
+        // chain of store-to-load round trips through the bin arrays.
+        let mut run_bin = 0;
+        let (mut run_n, mut run_u, mut run_v) = (0u32, 0.0, 0.0);
+        let mut finite = true;
+        for (&a, &v) in axis.iter().zip(signal) {
+            // One flag for the whole loop keeps it branch-light; the
+            // rare failure is located afterwards.
+            finite &= a.is_finite() & v.is_finite();
+            let Some((i, u)) = grid.bin(a) else { continue };
+            if i != run_bin {
+                self.count[run_bin] += run_n;
+                self.sum_u[run_bin] += run_u;
+                self.sum_v[run_bin] += run_v;
+                (run_bin, run_n, run_u, run_v) = (i, 0, 0.0, 0.0);
+            }
+            run_n += 1;
+            run_u += u;
+            run_v += v;
+        }
+        self.count[run_bin] += run_n;
+        self.sum_u[run_bin] += run_u;
+        self.sum_v[run_bin] += run_v;
+        if !finite {
+            return Err(first_non_finite(axis, signal));
+        }
+        let (mut first, mut last_bin) = (None, 0);
+        for i in 0..self.n {
+            let c = self.count[i];
+            if c > 0 {
+                first.get_or_insert(i);
+                last_bin = i;
+                let (cu, cv) = centroid(c, self.sum_u[i], self.sum_v[i]);
+                self.centroid_u.push(cu);
+                self.centroid_v.push(cv);
+            }
+        }
+        Ok((first, last_bin))
+    }
+
+    /// Whether the centroids cover the window well enough to interpolate:
+    /// the scan reaches both ends (within the slack), few bins are empty,
+    /// no empty end bin was passed over, and at least two are filled.
+    fn check_coverage(
+        &self,
+        axis_name: &str,
+        (lo, hi): (f64, f64),
+        first_gap: bool,
+        last_gap: bool,
+    ) -> Result<(), AnalysisError> {
+        let filled = self.centroid_u.len();
+        let end = self.start + (self.n - 1) as f64 * self.spacing;
         let half = 0.5 * self.spacing;
         let slack = END_SLACK as f64 * self.spacing;
         // The scan stops short of the window by more than the slack.
@@ -239,11 +276,15 @@ impl Resampler {
                 filled,
             });
         }
+        Ok(())
+    }
 
-        // Walk the grid and the centroids together; segment m runs from
-        // centroid m to m + 1, and the first and last segments extend
-        // outwards to extrapolate.
+    /// Walk the grid and the centroids together; segment m runs from
+    /// centroid m to m + 1, and the first and last segments extend
+    /// outwards to extrapolate.
+    fn interpolate(&self, out: &mut [f64]) {
         let (cu, cv) = (&self.centroid_u, &self.centroid_v);
+        let filled = cu.len();
         let mut m = 0;
         for (i, slot) in out.iter_mut().enumerate() {
             let g = i as f64;
@@ -257,8 +298,29 @@ impl Resampler {
                 0.5 * (cv[m] + cv[m + 1])
             };
         }
-        self.has_run = true;
-        Ok(())
+    }
+}
+
+/// The resampling grid as one run sees it.
+struct Grid {
+    origin: f64,
+    direction: f64,
+    start: f64,
+    inv_spacing: f64,
+    /// Exclusive upper end of a grid coordinate, n − ½.
+    upper: f64,
+    n: usize,
+}
+
+impl Grid {
+    /// Nearest grid point: bin i holds u in [i − ½, i + ½). The cast
+    /// truncates, which is the floor here since u + ½ ≥ 0; `upper` is
+    /// exclusive, but rounding in `u + 0.5` can still reach n.
+    #[inline]
+    fn bin(&self, a: f64) -> Option<(usize, f64)> {
+        let u = (self.direction * (a - self.origin) - self.start) * self.inv_spacing;
+        let i = (u + 0.5) as usize;
+        ((-0.5..self.upper).contains(&u) && i < self.n).then_some((i, u))
     }
 }
 

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use crate::recording::files::OutputError;
 
-use super::{ClassifyError, MODEL_FORMAT, Model, check_parts, json, sorted_labels};
+use super::{ClassifyError, MODEL_FORMAT, Model, check_parts, sorted_labels};
 use crate::profile::Analysis;
 
 impl Model {
@@ -134,72 +134,15 @@ impl Model {
     /// Using the model on features made with other analysis settings is an
     /// error naming the first field that differs.
     pub fn check_settings(&self, analysis: &Analysis) -> Result<(), ClassifyError> {
-        let (m, p) = (&self.analysis, analysis);
-        let differ = |field: &'static str, model: String, profile: String| {
-            Err(ClassifyError::SettingsDiffer {
+        // Every option that changes the features, from the one list.
+        match crate::profile::options::first_difference(&self.analysis, analysis) {
+            None => Ok(()),
+            Some((field, model, profile)) => Err(ClassifyError::SettingsDiffer {
                 field,
                 model,
                 profile,
-            })
-        };
-        if m.channel != p.channel {
-            return differ("analysis.channel", json(&m.channel), json(&p.channel));
+            }),
         }
-        if m.axis != p.axis {
-            return differ("analysis.axis", json(&m.axis), json(&p.axis));
-        }
-        if m.window != p.window {
-            return differ("analysis.window", json(&m.window), json(&p.window));
-        }
-        if m.spacing != p.spacing {
-            return differ("analysis.spacing", json(&m.spacing), json(&p.spacing));
-        }
-        if m.detrend != p.detrend {
-            return differ("analysis.detrend", json(&m.detrend), json(&p.detrend));
-        }
-        if m.spectrum != p.spectrum {
-            return differ("analysis.spectrum", json(&m.spectrum), json(&p.spectrum));
-        }
-        if m.bands != p.bands {
-            return differ("analysis.bands", json(&m.bands), json(&p.bands));
-        }
-        if m.cepstra != p.cepstra {
-            return differ("analysis.cepstra", json(&m.cepstra), json(&p.cepstra));
-        }
-        if m.drop_level != p.drop_level {
-            return differ(
-                "analysis.drop_level",
-                json(&m.drop_level),
-                json(&p.drop_level),
-            );
-        }
-        if m.bins != p.bins && m.band.is_none() && m.bands.is_none() {
-            return differ("analysis.bins", json(&m.bins), json(&p.bins));
-        }
-        if m.channels != p.channels {
-            return differ("analysis.channels", json(&m.channels), json(&p.channels));
-        }
-        if m.taper != p.taper {
-            return differ("analysis.taper", json(&m.taper), json(&p.taper));
-        }
-        if m.band != p.band {
-            return differ("analysis.band", json(&m.band), json(&p.band));
-        }
-        if m.dft_points() != p.dft_points() {
-            return differ(
-                "analysis.welch_segment",
-                json(&m.welch_segment),
-                json(&p.welch_segment),
-            );
-        }
-        if m.overlap() != p.overlap() && m.spectrum.is_welch() {
-            return differ(
-                "analysis.welch_overlap",
-                json(&m.welch_overlap),
-                json(&p.welch_overlap),
-            );
-        }
-        Ok(())
     }
 }
 

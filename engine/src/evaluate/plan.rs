@@ -8,15 +8,16 @@
 //! ([`super::windows`]); [`validate_with_votes`] also hands back the votes.
 //! Like the rest of `evaluate`, this never prints and knows no front end.
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use serde::Serialize;
 
-use super::EvaluateError;
 use super::cv::{self, CvReport};
 use super::windows::{self as win, RecordingVote};
+use super::{EvaluateError, Report};
 use crate::analysis::FeatureExtractor;
-use crate::classify::TrainingExample;
+use crate::classify::{KFallback, Model, TrainingExample};
 use crate::dataset::Unusable;
 use crate::dataset::{self, Entry, Keep, Options, Skipped};
 use crate::profile::{Analysis, Profile, SplitMethod};
@@ -27,7 +28,7 @@ fn bad(m: impl std::fmt::Display) -> EvaluateError {
 
 /// What the command line sets over the profile's `[evaluation]` (each
 /// `None`/`false` leaves the profile's choice).
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct Overrides {
     /// k-fold with this many folds.
     pub folds: Option<usize>,
@@ -207,6 +208,57 @@ impl Plan {
         }
     }
 
+    /// The small-data fallback, a policy the caller asks for: when the
+    /// profile's holdout split needs more scans of a texture than
+    /// `examples` have (or k-fold more recordings than there are), evaluate
+    /// by stratified 5-fold cross-validation (when every texture has at
+    /// least 5 recordings) or else leave-one-out, ungrouped. Returns why,
+    /// when it fell back; the plan is left as it is otherwise.
+    pub fn fall_back(&mut self, p: &Profile, examples: &[TrainingExample]) -> Option<String> {
+        let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
+        // Recordings, not sub-windows: with `[analysis] windows` a
+        // recording's examples are consecutive and share its file.
+        for (i, e) in examples.iter().enumerate() {
+            if i == 0 || examples[i - 1].file != e.file {
+                *counts.entry(e.label.as_str()).or_default() += 1;
+            }
+        }
+        let (label, fewest) =
+            counts
+                .iter()
+                .fold(None, |b: Option<(&str, usize)>, (l, n)| match b {
+                    Some((_, m)) if m <= *n => b,
+                    _ => Some((l, *n)),
+                })?;
+        let recordings: usize = counts.values().sum();
+        let e = &p.evaluation;
+        let why = match self.method {
+            SplitMethod::Holdout if fewest < e.train_per_class + e.test_per_class => format!(
+                "the holdout split needs {} per texture ({} to train, {} to test), {label} has {fewest}",
+                crate::classify::scans(e.train_per_class + e.test_per_class),
+                e.train_per_class,
+                e.test_per_class
+            ),
+            SplitMethod::KFold if self.group_by.is_none() && self.folds > recordings => format!(
+                "{}-fold cross-validation needs at least {}, there are {}",
+                self.folds,
+                crate::classify::plural(self.folds, "recording", "recordings"),
+                recordings
+            ),
+            _ => return None,
+        };
+        self.group_by = None;
+        let how = if fewest >= 5 {
+            self.method = SplitMethod::KFold;
+            self.folds = 5;
+            "stratified 5-fold cross-validation"
+        } else {
+            self.method = SplitMethod::LeaveOneOut;
+            "leave-one-out"
+        };
+        Some(format!("{why}: evaluating by {how} instead"))
+    }
+
     pub fn describe(&self) -> String {
         let g = self
             .group_by
@@ -282,12 +334,103 @@ pub fn validate_with_votes(
 ) -> Result<Validated, EvaluateError> {
     super::check_two_labels(&examples)?;
     check_comparisons(examples.len(), profile.analysis.feature_count())?;
+    if plan.method == SplitMethod::Holdout {
+        return holdout(profile, examples, plan).map(|h| h.pooled(plan.seed));
+    }
     if profile.analysis.windows.is_some() {
         return validate_windows(profile, examples, groups, plan);
     }
     validate_plain(profile, examples, groups, plan).map(|report| Validated {
         report,
         windows: None,
+    })
+}
+
+/// The holdout split's one run, written once for every caller: per
+/// class, the first `train_per_class` recordings (file-name order, or the
+/// plan's shuffle) train and the next `test_per_class` test ([`super::split`]);
+/// with `[analysis] windows` the split is made over recordings, the model
+/// trained on every sub-window of the training ones and each test
+/// recording classified by its sub-windows' vote. Its JSON is the
+/// `evaluate --json` [`Report`] (plus `windows`, each test recording's
+/// votes, with sub-windows).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Holdout {
+    #[serde(flatten)]
+    pub report: Report,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub windows: Option<Vec<RecordingVote>>,
+    /// The k the model used (the profile's, or chosen: see `k_fallback`).
+    #[serde(skip)]
+    pub k: usize,
+    #[serde(skip)]
+    pub k_fallback: Option<KFallback>,
+    /// What the model says of its k, when it is not the profile's.
+    #[serde(skip)]
+    pub k_notice: Option<String>,
+    /// Every recording split, training ones first: labels and files.
+    #[serde(skip)]
+    split_labels: Vec<String>,
+    #[serde(skip)]
+    split_files: Vec<String>,
+}
+
+impl Holdout {
+    /// As a one-fold cross-validation's report (what sweeps and the
+    /// validated forms show).
+    fn pooled(self, seed: u64) -> Validated {
+        let run = (self.report, self.k, self.k_fallback);
+        Validated {
+            report: cv::pool(
+                self.split_labels,
+                self.split_files,
+                vec![run],
+                "holdout",
+                seed,
+            ),
+            windows: self.windows,
+        }
+    }
+}
+
+/// Run `profile`'s holdout split on `examples` (see [`Holdout`]).
+pub fn holdout(
+    profile: &Profile,
+    examples: Vec<TrainingExample>,
+    plan: &Plan,
+) -> Result<Holdout, EvaluateError> {
+    let mut eval = profile.evaluation.clone();
+    eval.shuffle_seed = plan.holdout_shuffle;
+    let train_model = |train: Vec<TrainingExample>| {
+        Model::train_adapting_k(&profile.name, &profile.analysis, &profile.classifier, train)
+    };
+    let (report, windows, model, split_labels, split_files) = if profile.analysis.windows.is_some()
+    {
+        let recs = win::recordings_of(examples, None)?;
+        let (train, test) = win::split_recordings(&recs, &eval)?;
+        let model = train_model(win::window_examples(&train))?;
+        let r = win::evaluate_recordings(&model, &test)?;
+        let all = || train.iter().chain(&test);
+        let labels = all().map(|r| r.label.clone()).collect();
+        let files = all().map(|r| r.file.clone()).collect();
+        (r.report, Some(r.windows), model, labels, files)
+    } else {
+        let split = super::split(examples, &eval)?;
+        let all = || split.train.iter().chain(&split.test);
+        let labels = all().map(|e| e.label.clone()).collect();
+        let files = all().map(|e| e.file.clone()).collect();
+        let model = train_model(split.train)?;
+        let report = super::evaluate(&model, &split.test)?;
+        (report, None, model, labels, files)
+    };
+    Ok(Holdout {
+        report,
+        windows,
+        k: model.classifier.k,
+        k_notice: model.k_notice(),
+        k_fallback: model.k_fallback,
+        split_labels,
+        split_files,
     })
 }
 
@@ -301,27 +444,16 @@ fn validate_windows(
     plan: &Plan,
 ) -> Result<Validated, EvaluateError> {
     let recs = win::recordings_of(examples, groups)?;
-    let (recs, folds, method, threads) = if plan.method == SplitMethod::Holdout {
-        let mut eval = profile.evaluation.clone();
-        eval.shuffle_seed = plan.holdout_shuffle;
-        let (mut all, test) = win::split_recordings(&recs, &eval)?;
-        let n_train = all.len();
-        all.extend(test);
-        let folds = vec![(n_train..all.len()).collect()];
-        (all, folds, "holdout".to_string(), 1)
-    } else {
-        let folds = win::recording_folds(&recs, plan.method, plan.folds, plan.seed)?;
-        (recs, folds, plan.describe(), plan.threads)
-    };
+    let folds = win::recording_folds(&recs, plan.method, plan.folds, plan.seed)?;
     let r = win::cross_validate_recordings(
         &recs,
         &folds,
         &profile.name,
         &profile.analysis,
         &profile.classifier,
-        &method,
+        &plan.describe(),
         plan.seed,
-        threads,
+        plan.threads,
     )?;
     Ok(Validated {
         report: r.report,
@@ -335,25 +467,6 @@ fn validate_plain(
     groups: Option<&[String]>,
     plan: &Plan,
 ) -> Result<CvReport, EvaluateError> {
-    if plan.method == SplitMethod::Holdout {
-        let mut eval = profile.evaluation.clone();
-        eval.shuffle_seed = plan.holdout_shuffle;
-        let split = super::split(examples, &eval)?;
-        let mut all = split.train.clone();
-        all.extend(split.test.iter().cloned());
-        let n_train = split.train.len();
-        let folds = vec![(n_train..all.len()).collect()];
-        return cv::cross_validate(
-            &all,
-            &folds,
-            &profile.name,
-            &profile.analysis,
-            &profile.classifier,
-            "holdout",
-            plan.seed,
-            1,
-        );
-    }
     let labels: Vec<&str> = examples.iter().map(|e| e.label.as_str()).collect();
     let folds = cv::make_folds(&labels, groups, plan.method, plan.folds, plan.seed)?;
     cv::cross_validate(

@@ -254,6 +254,32 @@ pub trait Scratch: Sync {
     fn checkpoint(&self);
 }
 
+/// A plain temporary folder, for a caller with no interruption to handle.
+struct TempScratch(tempfile::TempDir);
+
+impl Scratch for TempScratch {
+    fn path(&self) -> &std::path::Path {
+        self.0.path()
+    }
+    fn watch<'a>(
+        &'a self,
+        _workers: usize,
+        progress: &'a (dyn Fn(usize, usize) + Sync),
+    ) -> Box<dyn Fn(usize, usize) + Sync + 'a> {
+        Box::new(progress)
+    }
+    fn checkpoint(&self) {}
+}
+
+/// A [`Scratch`] that is only a temporary folder named `hapticlab-simulate-…`.
+pub fn temp_scratch<'a>() -> Result<Box<dyn Scratch + 'a>, String> {
+    let dir = tempfile::Builder::new()
+        .prefix("hapticlab-simulate-")
+        .tempdir()
+        .map_err(|e| e.to_string())?;
+    Ok(Box::new(TempScratch(dir)))
+}
+
 /// Makes a [`Scratch`] folder for each simulated dataset.
 pub type MakeScratch<'a> = dyn Fn() -> Result<Box<dyn Scratch + 'a>, String> + Sync + 'a;
 

@@ -8,7 +8,7 @@ use crate::acquire::HOMING_HELP;
 use crate::classify::plural;
 use crate::servo::{Mode, ServoEvent, Telemetry};
 
-use super::super::dataset::{JobResult, ModelInfo};
+use super::super::dataset::{Evaluated, JobResult, ModelInfo};
 use super::super::estimate::Estimate;
 use super::super::keymap::Key;
 use super::super::scan::{ScanView, predict_view};
@@ -334,25 +334,35 @@ impl App {
                 }
                 vec![]
             }
-            JobResult::Evaluated {
-                report,
-                method,
-                note,
-            } => {
+            JobResult::Evaluated(e) => {
+                let Evaluated {
+                    report,
+                    method,
+                    note,
+                    saved,
+                } = *e;
                 // The result first: a narrow status line cuts the end.
-                let text = format!(
+                let mut text = format!(
                     "evaluated: {}/{} right ({:.1} %) by {method}",
                     report.correct(),
                     report.tested(),
                     report.accuracy * 100.0
                 );
-                if note.is_empty() {
+                if !note.is_empty() {
+                    text.push_str(&format!("; {note}"));
+                }
+                match &saved {
+                    Ok(file) => text.push_str(&format!("; report in {}", file.display())),
+                    Err(e) => text.push_str(&format!("; report not saved: {e}")),
+                }
+                if note.is_empty() && saved.is_ok() {
                     self.info(text);
                 } else {
-                    self.warn(format!("{text}; {note}"));
+                    self.warn(text);
                 }
-                self.dataset.report = Some(*report);
+                self.dataset.report = Some(report);
                 self.dataset.report_method = Some(method);
+                self.dataset.report_file = saved.ok();
                 vec![]
             }
             JobResult::Listed {

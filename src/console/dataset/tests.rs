@@ -72,50 +72,6 @@ fn dataset_panel(app: &App) -> String {
     text(&buf)
 }
 
-fn examples(per_class: &[(&str, usize)]) -> Vec<TrainingExample> {
-    per_class
-        .iter()
-        .flat_map(|&(l, n)| {
-            (0..n).map(move |i| TrainingExample {
-                file: format!("{l}/{i}.csv"),
-                label: l.to_string(),
-                features: vec![i as f64],
-            })
-        })
-        .collect()
-}
-
-#[test]
-fn e_follows_the_profiles_evaluation_and_falls_back_when_the_split_cannot_be_met() {
-    let mut lp = LoadedProfile::thesis();
-    let (plan, note) = evaluation_plan(&lp, &examples(&[("S1", 30), ("S2", 31)]));
-    assert_eq!(plan.method, SplitMethod::Holdout);
-    assert_eq!(note, None);
-    let (plan, note) = evaluation_plan(&lp, &examples(&[("S1", 5), ("S2", 6)]));
-    assert_eq!((plan.method, plan.folds), (SplitMethod::KFold, 5));
-    assert_eq!(
-        note.as_deref(),
-        Some(
-            "the holdout split needs 30 scans per texture (20 to train, 10 to test), S1 has 5: \
-             evaluating by stratified 5-fold cross-validation instead"
-        )
-    );
-    let (plan, note) = evaluation_plan(&lp, &examples(&[("S1", 4), ("S2", 3)]));
-    assert_eq!(plan.method, SplitMethod::LeaveOneOut);
-    assert!(
-        note.unwrap()
-            .ends_with("S2 has 3: evaluating by leave-one-out instead")
-    );
-    // A profile asking for k-fold gets k-fold, with its folds.
-    lp.profile.evaluation.method = SplitMethod::KFold;
-    lp.profile.evaluation.folds = Some(4);
-    let (plan, note) = evaluation_plan(&lp, &examples(&[("S1", 5), ("S2", 5)]));
-    assert_eq!(
-        (plan.method, plan.folds, note),
-        (SplitMethod::KFold, 4, None)
-    );
-}
-
 #[test]
 fn a_first_session_of_five_scans_per_texture_trains_and_evaluates_a_sound_model() {
     let (d, lp) = simulated(5);
@@ -131,14 +87,29 @@ fn a_first_session_of_five_scans_per_texture_trains_and_evaluates_a_sound_model(
     // e: the holdout split needs 30 per texture; it cross-validates instead.
     jobs.evaluate(&lp, d.path());
     let r = next_result(&jobs);
-    let JobResult::Evaluated {
-        report,
-        method,
-        note,
-    } = &r
-    else {
+    let JobResult::Evaluated(e) = &r else {
         panic!("{r:?}");
     };
+    let (report, method, note) = (&e.report, &e.method, &e.note);
+    // The report kept beside the model: text and JSON, with the method
+    // and k, and the same numbers as `hapticlab evaluate DIR --fallback`.
+    let saved = e.saved.as_ref().unwrap();
+    assert_eq!(saved, &d.path().join(super::REPORT_FILE));
+    let text = std::fs::read_to_string(saved).unwrap();
+    assert!(text.contains("5-fold cross-validation, seed 0"), "{text}");
+    assert!(
+        text.contains("fallback: the holdout split needs 30"),
+        "{text}"
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(d.path().join(super::REPORT_JSON)).unwrap())
+            .unwrap();
+    assert_eq!(json["method"], "5-fold cross-validation, seed 0");
+    assert_eq!(json["dataset"]["recordings"], 20);
+    assert!(
+        json["k_used"].as_array().is_some_and(|k| !k.is_empty()),
+        "{json}"
+    );
     assert!(report.accuracy >= 0.9, "accuracy {}", report.accuracy);
     assert_eq!(method, "5-fold cross-validation, seed 0");
     assert!(
@@ -163,8 +134,11 @@ fn a_first_session_of_five_scans_per_texture_trains_and_evaluates_a_sound_model(
         app.status.text
     );
     assert!(
+        dataset_panel(&app).contains(
+            "evaluation: 20/20 right (100.0 %) by 5-fold cross-validation, seed 0, in evaluation.txt"
+        ),
+        "{}",
         dataset_panel(&app)
-            .contains("evaluation: 20/20 right (100.0 %) by 5-fold cross-validation")
     );
 
     // T: k = 10 cannot be met by 5 per texture; the status line says so.

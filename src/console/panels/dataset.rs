@@ -79,13 +79,17 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
             v.push(Line::styled(
                 // The accuracy first: a narrow panel cuts the end of the line.
                 format!(
-                    "evaluation: {}/{} right ({:.1} %){}; rows true, columns classified as",
+                    "evaluation: {}/{} right ({:.1} %){}{}; rows true, columns classified as",
                     r.correct(),
                     r.tested(),
                     r.accuracy * 100.0,
                     d.report_method
                         .as_ref()
                         .map_or(String::new(), |m| format!(" by {m}")),
+                    d.report_file
+                        .as_ref()
+                        .and_then(|f| f.file_name())
+                        .map_or(String::new(), |f| format!(", in {}", f.to_string_lossy())),
                 ),
                 Style::new().add_modifier(Modifier::DIM),
             ));

@@ -311,21 +311,8 @@ pub fn profile_with(
 /// Optional keys a table may lack (because they are at their default).
 fn known_field(table: &str, field: &str) -> bool {
     match table {
-        "analysis" => [
-            "channels",
-            "taper",
-            "band",
-            "welch_segment",
-            "welch_overlap",
-            "detrend",
-            "spectrum",
-            "bins",
-            "bands",
-            "cepstra",
-            "drop_level",
-            "windows",
-        ]
-        .contains(&field),
+        // The one list of analysis options.
+        "analysis" => crate::profile::options::option(field).is_some(),
         "classifier" => ["metric", "weights", "standardize", "k_candidates"].contains(&field),
         "evaluation" => ["shuffle_seed", "method", "folds", "group_by"].contains(&field),
         "path" => ["transit_speed_m_per_s"].contains(&field),

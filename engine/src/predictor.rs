@@ -1,0 +1,276 @@
+//! From a recording to a verdict, once for every front end: `classify`, the
+//! console's Predict, the replay browser's list and the end of a scan
+//! followed live all ask a [`Predictor`], so they cannot disagree.
+//!
+//! A predictor is a trained [`Model`] with the analysis it was trained
+//! under. It decides three things no caller decides for itself:
+//! - **whole or sub-windows**: under `[analysis] windows` a recording is
+//!   classified by the vote of its sub-windows, else by its one feature
+//!   vector ([`Query`]);
+//! - **leave-out**: a recording that is one of the model's training
+//!   examples is predicted by the model trained again without it (so a
+//!   training scan is not its own nearest neighbour); when that leaves no
+//!   example of its texture, there is no answer that could be right and the
+//!   predictor says so ([`PredictError::NoOtherScans`]) instead of
+//!   guessing another texture;
+//! - **incomplete scans**: one is classified when its samples cover the
+//!   analysis, and the answer says it was incomplete; when they do not, the
+//!   one error says both things.
+//!
+//! Never prints; errors are [`PredictError`].
+
+use std::path::Path;
+
+use thiserror::Error;
+
+use crate::analysis::FeatureExtractor;
+use crate::classify::{ClassifyError, Model, Prediction, RecordingPrediction};
+use crate::dataset::{self, DatasetError};
+use crate::recording::Recording;
+
+/// Why there is no answer for a recording.
+#[derive(Debug, Error)]
+pub enum PredictError {
+    /// The recording's features could not be made (with the reason it was
+    /// incomplete, when it was).
+    #[error("{source}{}", incomplete_suffix(.incomplete))]
+    Features {
+        source: DatasetError,
+        incomplete: Option<String>,
+    },
+    #[error(transparent)]
+    Classify(#[from] ClassifyError),
+    #[error(
+        "this scan is the model's only training scan, and a scan is predicted \
+         with itself left out: store scans of other textures and train again"
+    )]
+    OnlyScan,
+    #[error(
+        "{label} has no other scans: this scan is one of the model's training scans and is \
+         predicted with itself left out, so no answer could be right; store more scans of \
+         {label} and train again"
+    )]
+    NoOtherScans { label: String },
+    #[error("the model votes over sub-windows but the profile has no [analysis] windows")]
+    NoSubWindows,
+}
+
+fn incomplete_suffix(incomplete: &Option<String>) -> String {
+    incomplete
+        .as_ref()
+        .map_or(String::new(), |why| format!(" (incomplete scan: {why})"))
+}
+
+impl PredictError {
+    /// Whether the user can fix it (exit code 2) rather than a runtime failure.
+    pub fn is_bad_input(&self) -> bool {
+        match self {
+            PredictError::Features { source, .. } => source.is_bad_input(),
+            _ => true,
+        }
+    }
+
+    /// Whether the recording simply has no possible answer (left out of a
+    /// model that then lacks its texture), rather than a failure.
+    pub fn is_unanswerable(&self) -> bool {
+        matches!(
+            self,
+            PredictError::OnlyScan | PredictError::NoOtherScans { .. }
+        )
+    }
+}
+
+/// What a recording is classified by: its feature vector, or its
+/// sub-windows' feature vectors (under `[analysis] windows`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Features {
+    Whole(Vec<f64>),
+    Windows(Vec<Vec<f64>>),
+}
+
+/// A recording made ready to classify: its features as the analysis says,
+/// and why it was incomplete, if it was.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Query {
+    pub features: Features,
+    pub incomplete: Option<String>,
+}
+
+/// Why a recording is incomplete (`None` when it is complete).
+pub fn incomplete_reason(rec: &Recording) -> Option<String> {
+    (!rec.is_complete()).then(|| rec.aborted().unwrap_or("no end marker").to_string())
+}
+
+impl Query {
+    /// The recording's features under the extractor's analysis: its
+    /// sub-windows' when the analysis cuts them, else the whole window's.
+    pub fn of(
+        rec: &Recording,
+        file: &Path,
+        ex: &mut FeatureExtractor,
+    ) -> Result<Query, PredictError> {
+        let incomplete = incomplete_reason(rec);
+        let features = if ex.settings().windows.is_some() {
+            dataset::window_features_of(rec, file, ex).map(Features::Windows)
+        } else {
+            dataset::features_of(rec, file, ex).map(Features::Whole)
+        };
+        match features {
+            Ok(features) => Ok(Query {
+                features,
+                incomplete,
+            }),
+            Err(source) => Err(PredictError::Features { source, incomplete }),
+        }
+    }
+}
+
+/// A recording's answer.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Answer {
+    /// The prediction. For a vote over sub-windows: the label and, as
+    /// votes, the sub-windows that chose each class; no neighbours (they
+    /// are per sub-window).
+    pub prediction: Prediction,
+    /// The vote over sub-windows, with its tally and each one's outcome.
+    pub windows: Option<RecordingPrediction>,
+    /// The recording was one of the training examples and was left out.
+    pub left_out: bool,
+    /// Why the recording was incomplete, when it was (classified anyway).
+    pub incomplete: Option<String>,
+}
+
+impl Answer {
+    fn of_windows(p: RecordingPrediction) -> Answer {
+        Answer {
+            prediction: Prediction {
+                label: p.label.clone(),
+                votes: p
+                    .tally
+                    .iter()
+                    .map(|t| (t.label.clone(), t.windows))
+                    .collect(),
+                neighbours: Vec::new(),
+            },
+            windows: Some(p),
+            left_out: false,
+            incomplete: None,
+        }
+    }
+}
+
+/// A trained model and its analysis, answering for recordings (see the
+/// module documentation).
+#[derive(Debug, Clone, Copy)]
+pub struct Predictor<'m> {
+    model: &'m Model,
+}
+
+impl<'m> Predictor<'m> {
+    pub fn new(model: &'m Model) -> Predictor<'m> {
+        Predictor { model }
+    }
+
+    pub fn model(&self) -> &'m Model {
+        self.model
+    }
+
+    /// An extractor for the model's analysis.
+    pub fn extractor(&self) -> FeatureExtractor {
+        FeatureExtractor::new(&self.model.analysis)
+    }
+
+    /// The answer for a recording read from `file`.
+    pub fn answer_recording(
+        &self,
+        rec: &Recording,
+        file: &Path,
+        ex: &mut FeatureExtractor,
+    ) -> Result<Answer, PredictError> {
+        let q = Query::of(rec, file, ex)?;
+        self.answer(&q, file)
+    }
+
+    /// The answer for a recording's features (made by [`Query::of`] under
+    /// the model's analysis), `file` naming it for the leave-out.
+    pub fn answer(&self, q: &Query, file: &Path) -> Result<Answer, PredictError> {
+        let reduced = self.leaving_out(file)?;
+        let model = reduced.as_ref().unwrap_or(self.model);
+        let mut a = match (&q.features, self.model.analysis.windows.is_some()) {
+            (Features::Windows(w), true) => Answer::of_windows(model.classify_windows(w)?),
+            (Features::Whole(f), false) => Answer {
+                prediction: model.classify(f)?,
+                windows: None,
+                left_out: false,
+                incomplete: None,
+            },
+            (Features::Whole(_), true) => return Err(PredictError::NoSubWindows),
+            // A model of whole windows classifies the first sub-window's
+            // features only if they were its own: they are not.
+            (Features::Windows(_), false) => {
+                return Err(ClassifyError::Settings(
+                    "the recording was cut into sub-windows but the model was not".into(),
+                )
+                .into());
+            }
+        };
+        a.left_out = reduced.is_some();
+        a.incomplete.clone_from(&q.incomplete);
+        Ok(a)
+    }
+
+    /// Whether `file` is one of the model's training recordings (the same
+    /// name, or the same file on disk).
+    pub fn trained_on(&self, file: &Path) -> bool {
+        let same = same_file(file);
+        self.model.examples.iter().any(|e| same(&e.file))
+    }
+
+    /// The model without `file`'s examples when it is one of its training
+    /// recordings (k as the profile asked, chosen again without it where it
+    /// needed choosing: no leak of the test scan); `None` when it is not.
+    fn leaving_out(&self, file: &Path) -> Result<Option<Model>, PredictError> {
+        let same = same_file(file);
+        let Some(own) = self.model.examples.iter().find(|e| same(&e.file)) else {
+            return Ok(None);
+        };
+        let rest: Vec<_> = self
+            .model
+            .examples
+            .iter()
+            .filter(|e| !same(&e.file))
+            .cloned()
+            .collect();
+        if rest.is_empty() {
+            return Err(PredictError::OnlyScan);
+        }
+        if !rest.iter().any(|e| e.label == own.label) {
+            return Err(PredictError::NoOtherScans {
+                label: own.label.clone(),
+            });
+        }
+        let m = self.model;
+        Ok(Some(Model::train_adapting_k(
+            &m.profile,
+            &m.analysis,
+            &m.asked_classifier(),
+            rest,
+        )?))
+    }
+}
+
+/// A test of "names the same recording as `file`": the same text, or the
+/// same file once both are canonical.
+fn same_file(file: &Path) -> impl Fn(&str) -> bool {
+    let name = file.display().to_string();
+    let canonical = std::fs::canonicalize(file).ok();
+    move |f: &str| {
+        f == name
+            || canonical
+                .as_ref()
+                .is_some_and(|c| std::fs::canonicalize(f).ok().as_ref() == Some(c))
+    }
+}
+
+#[cfg(test)]
+mod tests;

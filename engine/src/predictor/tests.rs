@@ -1,0 +1,144 @@
+use std::path::Path;
+
+use super::*;
+use crate::classify::TrainingExample;
+use crate::profile::LoadedProfile;
+
+fn example(file: &str, label: &str, x: f64, n: usize) -> TrainingExample {
+    TrainingExample {
+        file: file.into(),
+        label: label.into(),
+        features: vec![x; n],
+    }
+}
+
+fn model(examples: Vec<TrainingExample>) -> Model {
+    let lp = LoadedProfile::thesis();
+    Model::train_adapting_k(
+        "thesis",
+        &lp.profile.analysis,
+        &lp.profile.classifier,
+        examples,
+    )
+    .unwrap()
+}
+
+fn whole(x: f64, n: usize) -> Query {
+    Query {
+        features: Features::Whole(vec![x; n]),
+        incomplete: None,
+    }
+}
+
+#[test]
+fn a_recording_not_trained_on_is_answered_by_the_whole_model() {
+    let n = LoadedProfile::thesis().profile.analysis.feature_count();
+    let m = model(vec![
+        example("d/S1/a.csv", "S1", 0.0, n),
+        example("d/S2/b.csv", "S2", 10.0, n),
+    ]);
+    let a = Predictor::new(&m)
+        .answer(&whole(1.0, n), Path::new("d/S1/new.csv"))
+        .unwrap();
+    assert_eq!(a.prediction.label, "S1");
+    assert!(!a.left_out);
+    assert!(a.windows.is_none());
+}
+
+#[test]
+fn a_training_recording_is_left_out_of_the_model() {
+    let n = LoadedProfile::thesis().profile.analysis.feature_count();
+    // Left in, a.csv would be its own nearest neighbour (S1); left out,
+    // the nearest is b.csv (S2).
+    let m = model(vec![
+        example("d/S1/a.csv", "S1", 0.0, n),
+        example("d/S1/c.csv", "S1", 100.0, n),
+        example("d/S2/b.csv", "S2", 1.0, n),
+    ]);
+    let a = Predictor::new(&m)
+        .answer(&whole(0.0, n), Path::new("d/S1/a.csv"))
+        .unwrap();
+    assert!(a.left_out);
+    assert_eq!(a.prediction.label, "S2");
+    assert!(Predictor::new(&m).trained_on(Path::new("d/S1/a.csv")));
+    assert!(!Predictor::new(&m).trained_on(Path::new("d/S1/z.csv")));
+}
+
+#[test]
+fn a_textures_only_scan_has_no_answer_that_could_be_right() {
+    let n = LoadedProfile::thesis().profile.analysis.feature_count();
+    let m = model(vec![
+        example("d/S1/a.csv", "S1", 0.0, n),
+        example("d/S1/c.csv", "S1", 1.0, n),
+        example("d/S4/only.csv", "S4", 10.0, n),
+    ]);
+    let e = Predictor::new(&m)
+        .answer(&whole(10.0, n), Path::new("d/S4/only.csv"))
+        .unwrap_err();
+    assert!(
+        matches!(&e, PredictError::NoOtherScans { label } if label == "S4"),
+        "{e}"
+    );
+    assert!(e.is_unanswerable());
+    assert!(e.to_string().contains("S4 has no other scans"), "{e}");
+}
+
+#[test]
+fn the_models_only_scan_says_it_is_left_out() {
+    let n = LoadedProfile::thesis().profile.analysis.feature_count();
+    let m = model(vec![example("d/S1/a.csv", "S1", 0.0, n)]);
+    let e = Predictor::new(&m)
+        .answer(&whole(0.0, n), Path::new("d/S1/a.csv"))
+        .unwrap_err();
+    assert!(matches!(e, PredictError::OnlyScan), "{e}");
+    assert!(e.to_string().contains("only training scan"), "{e}");
+}
+
+#[test]
+fn an_incomplete_scan_is_answered_and_says_so() {
+    let n = LoadedProfile::thesis().profile.analysis.feature_count();
+    let m = model(vec![
+        example("d/S1/a.csv", "S1", 0.0, n),
+        example("d/S2/b.csv", "S2", 10.0, n),
+    ]);
+    let mut q = whole(9.0, n);
+    q.incomplete = Some("stopped by the user".into());
+    let a = Predictor::new(&m)
+        .answer(&q, Path::new("d/S2/new.csv"))
+        .unwrap();
+    assert_eq!(a.prediction.label, "S2");
+    assert_eq!(a.incomplete.as_deref(), Some("stopped by the user"));
+}
+
+#[test]
+fn a_whole_window_query_to_a_sub_window_model_is_refused() {
+    let lp = LoadedProfile::thesis();
+    let mut an = lp.profile.analysis.clone();
+    an.windows = Some(crate::profile::Windows {
+        length: 0.0147,
+        hop: 0.0075,
+    });
+    an.bins = [1, 24];
+    let n = an.features_per_channel();
+    let m = Model::train_adapting_k(
+        "thesis",
+        &an,
+        &lp.profile.classifier,
+        vec![
+            example("d/S1/a.csv", "S1", 0.0, n),
+            example("d/S2/b.csv", "S2", 5.0, n),
+        ],
+    )
+    .unwrap();
+    let e = Predictor::new(&m)
+        .answer(&whole(0.0, n), Path::new("x.csv"))
+        .unwrap_err();
+    assert!(matches!(e, PredictError::NoSubWindows), "{e}");
+    let q = Query {
+        features: Features::Windows(vec![vec![0.0; n], vec![0.1; n], vec![5.0; n]]),
+        incomplete: None,
+    };
+    let a = Predictor::new(&m).answer(&q, Path::new("x.csv")).unwrap();
+    assert_eq!(a.prediction.label, "S1");
+    assert_eq!(a.windows.as_ref().unwrap().windows.len(), 3);
+}

@@ -1,0 +1,134 @@
+//! An evaluation's plain text, for every front end that shows one
+//! (`hapticlab evaluate`, and the report the console's `e` keeps): the
+//! header naming the method and the k actually used, and the table.
+
+use crate::evaluate::request::{Evaluation, Outcome};
+use crate::profile::LoadedProfile;
+
+/// The report's plain text: Table 4.1, and for cross-validation the
+/// spread and the macro-F1.
+pub fn table(outcome: &Outcome) -> String {
+    match outcome {
+        Outcome::Holdout(h) => h.report.table(),
+        Outcome::Validated(v) => v.report.table(),
+        Outcome::Sweep(s) => s.table(),
+    }
+}
+
+/// The k actually used: "10", "3 (k = auto)", "1 or 10 (per fold)", with
+/// why when it is not the profile's.
+pub fn k_text(lp: &LoadedProfile, ev: &Evaluation) -> String {
+    let used: Vec<String> = ev
+        .outcome
+        .k_used()
+        .iter()
+        .map(ToString::to_string)
+        .collect();
+    let mut text = used.join(" or ");
+    if used.len() > 1 {
+        text.push_str(" (per fold)");
+    }
+    if lp.profile.classifier.k_is_auto() {
+        text.push_str(" (k = auto, chosen by CV inside the training part)");
+    } else if ev.outcome.k_notice().is_some() {
+        text.push_str(&format!(
+            ", not the profile's {}: chosen by CV where a texture had too few training scans (see the note)",
+            lp.profile.classifier.k_text()
+        ));
+    }
+    text
+}
+
+/// The line above the table: the profile, the k and the method actually
+/// used, what was evaluated, and why the method is not the profile's when
+/// it fell back.
+pub fn header(lp: &LoadedProfile, ev: &Evaluation) -> String {
+    let p = &lp.profile;
+    let fell_back = ev
+        .fell_back
+        .as_ref()
+        .map_or(String::new(), |why| format!(" — fallback: {why}"));
+    if let Outcome::Holdout(h) = &ev.outcome {
+        let e = &p.evaluation;
+        let voted = if h.windows.is_some() {
+            format!(
+                "; {}, classified by the vote of their windows",
+                recordings_and_windows(
+                    ev.recordings.min(h.report.train.len() + h.report.tested()),
+                    held_windows(ev, h)
+                )
+            )
+        } else {
+            String::new()
+        };
+        return format!(
+            "profile {}: k-NN k = {}, {} training and {} test recordings per class{}{voted}",
+            p.name,
+            k_text(lp, ev),
+            e.train_per_class,
+            e.test_per_class,
+            ev.plan
+                .holdout_shuffle
+                .map_or(" (file-name order)".into(), |s| format!(
+                    " (shuffled, seed {s})"
+                )),
+        );
+    }
+    format!(
+        "profile {}: k-NN k = {} ({:?}, {:?} votes{}), {}, {}{}{fell_back}",
+        p.name,
+        k_text(lp, ev),
+        p.classifier.metric,
+        p.classifier.weights,
+        if p.classifier.standardize {
+            ", standardised"
+        } else {
+            ""
+        },
+        ev.plan.describe(),
+        source_text(ev),
+        if ev.outcome.voted() {
+            ", each recording classified by the vote of its windows"
+        } else {
+            ""
+        },
+    )
+}
+
+/// The windows of the recordings a holdout used.
+fn held_windows(ev: &Evaluation, h: &crate::evaluate::plan::Holdout) -> usize {
+    let per = ev.windows.unwrap_or(0) / ev.recordings.max(1);
+    per * (h.report.train.len() + h.report.tested())
+}
+
+/// "40 recordings, 120 windows".
+fn recordings_and_windows(recordings: usize, windows: usize) -> String {
+    format!(
+        "{}, {}",
+        crate::classify::plural(recordings, "recording", "recordings"),
+        crate::classify::plural(windows, "window", "windows")
+    )
+}
+
+/// What was evaluated: "120 recordings", "120 recordings, 360 windows",
+/// "120 simulated recordings (seed 7)", "each on 30 simulated scans per
+/// texture (seed 7)".
+pub fn source_text(ev: &Evaluation) -> String {
+    let windows = ev.windows.map_or(String::new(), |w| {
+        format!(", {}", crate::classify::plural(w, "window", "windows"))
+    });
+    match ev.simulated {
+        Some(s) if s.per_point => format!(
+            "each on {} simulated scans per texture (seed {})",
+            s.per_class, s.seed
+        ),
+        Some(s) => format!(
+            "{} simulated recordings{windows} (seed {})",
+            ev.recordings, s.seed
+        ),
+        None => format!(
+            "{}{windows}",
+            crate::classify::plural(ev.recordings, "recording", "recordings")
+        ),
+    }
+}
