@@ -7,12 +7,16 @@
 //!
 //! ```text
 //! tune                             the nested search over analysis and k-NN settings
-//! acquire · evaluate               simulate / scan; holdout, folds, sweeps
-//! dataset                          recordings → labelled feature vectors, on every core
-//! servo · recorder · classify      the 1 kHz loop; samples to disk; k-NN and its model file
-//! device · triggers · analysis     the Falcon, its emulator and simulation; hands-free triggers; spectra
-//! clock                            real and virtual time, real-time scheduling
-//! profile · recording              ground: the TOML schema and checks; recording format v1
+//! evaluate                         the one evaluation: holdout, folds, LOO, groups, sweeps
+//! acquire                          simulate / scan
+//! predictor                        a model's answer for a recording (windows, leave-out)
+//! dataset · servo                  recordings → feature vectors on every core; the 1 kHz loop
+//! device · classify                the Falcon, its emulator and simulation; k-NN and its model file
+//! clock · analysis · triggers · recorder
+//!                                  time and real-time scheduling; spectra; hands-free triggers;
+//!                                  samples to disk
+//! recording · profile              ground: recording format v1 (and the files a command may read
+//!                                  and write); the TOML schema, its checks, the list of options
 //! ```
 //!
 //! It knows nothing of any user interface: it never prints, reads the

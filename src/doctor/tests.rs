@@ -164,6 +164,7 @@ fn a_well_set_up_pc_for_the_sim_profile_has_nothing_to_fix() {
         names,
         [
             "usb",
+            "udev",
             "firmware",
             "rt-priority",
             "memory-lock",

@@ -82,7 +82,7 @@ fn the_sim_profile_on_a_writable_folder_passes_with_a_line_per_check() {
         .copied()
         .filter(|l| !l.trim_start().starts_with("fix:"))
         .collect();
-    assert_eq!(checks.len(), 8, "{r:?}");
+    assert_eq!(checks.len(), 9, "{r:?}");
     for l in &checks {
         let word = l.split_whitespace().next().unwrap();
         assert!(WORDS.contains(&word), "no status word: {l}\n{r:?}");
@@ -127,6 +127,7 @@ fn json_has_every_check_with_a_status_and_ok() {
         names,
         [
             "usb",
+            "udev",
             "firmware",
             "realtime",
             "terminal",

@@ -28,6 +28,8 @@ const SKIPPED: &[(&str, &str)] = &[
     ("raw/", "a rig's own files to import"),
     ("sound/", "a rig's own files to import"),
     ("recordings/rig", "a rig's own recordings"),
+    ("rec/finger", "a rig's own recordings"),
+    ("rec/sound", "a rig's own recordings"),
     (
         "--simulate",
         "minutes of simulation: the sweep_simulated tests run it smaller",

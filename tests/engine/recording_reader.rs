@@ -212,8 +212,8 @@ fn a_recording_without_trailer_reads_but_is_incomplete() {
 }
 
 /// A file that does not exist was named wrongly: an I/O error naming it,
-/// counted as bad input (exit code 2, as for any argument). Other I/O
-/// failures are runtime ones (exit code 1): here, a folder read as a file.
+/// counted as bad input (exit code 2, as for any argument), and so is a
+/// folder read as a file (not a regular file).
 #[test]
 fn a_missing_file_is_an_io_error_naming_it() {
     let path = broken("no_such_file.csv");
@@ -221,10 +221,13 @@ fn a_missing_file_is_an_io_error_naming_it() {
     assert!(matches!(err, RecordingError::Io { .. }));
     assert!(err.is_bad_input());
     assert!(err.to_string().starts_with(&path.display().to_string()));
+    // A folder named as a recording is not a regular file: refused as bad
+    // input too (only regular files are read, so nothing can block).
     let dir = tempfile::tempdir().unwrap();
     let err = recording::read(dir.path()).unwrap_err();
     assert!(matches!(err, RecordingError::Io { .. }), "{err}");
-    assert!(!err.is_bad_input(), "{err}");
+    assert!(err.is_bad_input(), "{err}");
+    assert!(err.to_string().contains("not a regular file"), "{err}");
 }
 
 #[test]

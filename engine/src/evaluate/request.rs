@@ -340,6 +340,8 @@ fn thesis_holdout(
             data.skipped.len()
         )));
     }
+    // One texture cannot be told from another: 100 % would mean nothing.
+    super::check_two_labels(&examples)?;
     let windows = lp.profile.analysis.windows.is_some().then_some(held);
     let fell_back = if req.fallback {
         plan.fall_back(&lp.profile, &examples)

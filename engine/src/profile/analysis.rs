@@ -614,7 +614,9 @@ pub fn check_windows(s: &Analysis, w: Windows) -> Result<(), String> {
         // samples: only more work (issue 19: 30 s on 12 recordings).
         return Err(format!(
             "hop {}{unit} is below analysis.spacing ({}{unit}): sub-windows would start within one resampled point of each other; set hop to at least {} (a longer hop), or a finer spacing",
-            w.hop, s.spacing, s.spacing
+            compact(w.hop),
+            compact(s.spacing),
+            compact(s.spacing)
         ));
     }
     let [w0, w1] = s.window;

@@ -234,7 +234,9 @@ mod tests {
             assert_eq!(g.check(0.0005, true), None);
             assert_eq!(g.check(0.001, true), None);
         }
-        // A starved CPU alone, the force well inside its limit: no trip.
+        // A starved CPU alone, the force well inside its limit: no trip
+        // (a guard of its own, so no saturated tick from above is in its window).
+        let mut g = IntervalGuard::new([2400.0, 270.0, 2400.0], [7.2, 2.4, 7.2]);
         for k in 0..1000 {
             let dt = if k % 4 == 0 { 0.006 } else { 0.001 };
             assert_eq!(g.check(dt, false), None);

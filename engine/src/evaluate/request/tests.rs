@@ -56,7 +56,7 @@ fn the_fallback_keeps_the_profiles_split_and_falls_back_when_it_cannot_be_met() 
 fn a_holdout_the_recordings_cannot_meet_says_how_to_go_on() {
     let lp = LoadedProfile::thesis();
     let dir = tempfile::tempdir().unwrap();
-    let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("recordings/thesis-sim");
+    let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../recordings/thesis-sim");
     for label in ["S1", "S2"] {
         std::fs::create_dir_all(dir.path().join(label)).unwrap();
         for i in 1..=5 {
