@@ -90,7 +90,7 @@ fn the_sim_profile_on_a_writable_folder_passes_with_a_line_per_check() {
     }
     let summary = lines.last().unwrap();
     assert!(
-        summary.starts_with("8 checks:") && summary.ends_with("— ready"),
+        summary.starts_with("9 checks:") && summary.ends_with("— ready"),
         "{r:?}"
     );
     assert!(
