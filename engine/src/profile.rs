@@ -178,28 +178,23 @@ impl LoadedProfile {
                 reason: e.message().trim().to_string(),
             }
         })?;
-        if let Some(v) = one_feature_choice(text) {
+        // A check that failed, placed at its key's line in the file.
+        let at_key = |v: Invalid| {
             let (line, column) = locate_key(text, &v.key);
-            return Err(ProfileError {
+            ProfileError {
                 origin: origin.to_string(),
                 line,
                 column,
                 key: Some(v.key),
                 reason: v.reason,
-            });
+            }
+        };
+        if let Some(v) = one_feature_choice(text) {
+            return Err(at_key(v));
         }
         let mut profile = profile;
         profile.resolve_window();
-        if let Err(v) = profile.validate() {
-            let (line, column) = locate_key(text, &v.key);
-            return Err(ProfileError {
-                origin: origin.to_string(),
-                line,
-                column,
-                key: Some(v.key),
-                reason: v.reason,
-            });
-        }
+        profile.validate().map_err(at_key)?;
         Ok(LoadedProfile {
             profile,
             origin: origin.to_string(),
