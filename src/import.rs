@@ -798,9 +798,9 @@ pub fn run(args: &ImportArgs) -> Result<Vec<PathBuf>, Failure> {
     };
     let out_existed = args.out.exists();
     if out_existed && !args.out.is_dir() {
-        // Said before the staging folder inside it is named; a runtime
-        // failure, as any folder that cannot be made.
-        return Err(Failure::Runtime(format!(
+        // Said before the staging folder inside it is named. A bad
+        // argument (exit 2), like every other `--out` the user can fix.
+        return Err(bad(format!(
             "--out {}: not a folder; name a folder (it is made if missing)",
             args.out.display()
         )));

@@ -152,6 +152,19 @@ pub struct KFallback {
     pub folds: usize,
 }
 
+/// At most this many feature-value comparisons in one run of k-NN (query
+/// vectors × training vectors × features): 10^10 is seconds on one core.
+/// `evaluate` (every vector against every other) and a prediction (a
+/// recording's sub-windows against the model's examples) both refuse more,
+/// before any is made. The thesis set's validation costs 7·10^5.
+pub const MAX_COMPARISONS: f64 = 1e10;
+
+/// The feature-value comparisons of classifying `queries` vectors against
+/// `examples` training vectors of `features` features.
+pub fn comparisons(queries: usize, examples: usize, features: usize) -> f64 {
+    queries as f64 * examples as f64 * features as f64
+}
+
 /// "S1 has 5 scans" in words: "1 scan", "5 scans".
 pub fn scans(n: usize) -> String {
     plural(n, "scan", "scans")

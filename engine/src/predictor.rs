@@ -53,6 +53,20 @@ pub enum PredictError {
     NoOtherScans { label: String },
     #[error("the model votes over sub-windows but the profile has no [analysis] windows")]
     NoSubWindows,
+    #[error(
+        "{file}: classifying its {queries} sub-window(s) against the model's {examples} \
+         training vectors of {features} features compares {comparisons:.1e} values, over the \
+         limit of {limit:.0e} that keeps a prediction within seconds; train the model with a \
+         longer windows.hop or a shorter windows.length (fewer sub-windows), or fewer bins",
+        comparisons = crate::classify::comparisons(*.queries, *.examples, *.features),
+        limit = crate::classify::MAX_COMPARISONS
+    )]
+    TooMuchWork {
+        file: String,
+        queries: usize,
+        examples: usize,
+        features: usize,
+    },
 }
 
 fn incomplete_suffix(incomplete: &Option<String>) -> String {
@@ -194,6 +208,7 @@ impl<'m> Predictor<'m> {
     /// The answer for a recording's features (made by [`Query::of`] under
     /// the model's analysis), `file` naming it for the leave-out.
     pub fn answer(&self, q: &Query, file: &Path) -> Result<Answer, PredictError> {
+        self.check_work(q, file)?;
         let reduced = self.leaving_out(file)?;
         let model = reduced.as_ref().unwrap_or(self.model);
         let mut a = match (&q.features, self.model.analysis.windows.is_some()) {
@@ -217,6 +232,26 @@ impl<'m> Predictor<'m> {
         a.left_out = reduced.is_some();
         a.incomplete.clone_from(&q.incomplete);
         Ok(a)
+    }
+
+    /// Refuses a query whose k-NN would compare more than
+    /// [`crate::classify::MAX_COMPARISONS`] values, before any is made.
+    fn check_work(&self, q: &Query, file: &Path) -> Result<(), PredictError> {
+        let queries = match &q.features {
+            Features::Whole(_) => 1,
+            Features::Windows(w) => w.len(),
+        };
+        let (examples, features) = (self.model.examples.len(), self.model.feature_count());
+        let work = crate::classify::comparisons(queries, examples, features);
+        if work > crate::classify::MAX_COMPARISONS {
+            return Err(PredictError::TooMuchWork {
+                file: file.display().to_string(),
+                queries,
+                examples,
+                features,
+            });
+        }
+        Ok(())
     }
 
     /// Whether `file` is one of the model's training recordings (the same

@@ -176,8 +176,8 @@ fn bad_names_are_blamed_on_the_input_and_the_flag_not_the_staging_folder() {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         refused(&args, says);
     }
-    // An --out that is a file: named, and left as it was (a runtime
-    // failure, as any folder that cannot be made).
+    // An --out that is a file: a bad argument (exit 2), named, and left as
+    // it was.
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("taken");
     std::fs::write(&file, "mine").unwrap();
@@ -191,7 +191,7 @@ fn bad_names_are_blamed_on_the_input_and_the_flag_not_the_staging_folder() {
         p(&file),
         &csv,
     ]);
-    assert_eq!(r.code, Some(1), "{r:?}");
+    assert_eq!(r.code, Some(2), "{r:?}");
     assert!(
         r.stderr.contains("--out") && r.stderr.contains("not a folder"),
         "{r:?}"

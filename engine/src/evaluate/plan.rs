@@ -307,14 +307,13 @@ pub fn validate(
 }
 
 /// At most this many feature-value comparisons (vectors² × features, what
-/// a k-NN validation over every vector costs): 10^10 is seconds on one
-/// core; the thesis set costs 7·10^5, its three-window variant 3·10^6.
-pub const MAX_COMPARISONS: f64 = 1e10;
+/// a k-NN validation over every vector costs): the classifier's limit.
+pub const MAX_COMPARISONS: f64 = crate::classify::MAX_COMPARISONS;
 
 /// Refuses a validation that would compare more than [`MAX_COMPARISONS`]
 /// feature values, before any is made.
 pub fn check_comparisons(vectors: usize, features: usize) -> Result<(), EvaluateError> {
-    let comparisons = (vectors as f64).powi(2) * features as f64;
+    let comparisons = crate::classify::comparisons(vectors, vectors, features);
     if comparisons > MAX_COMPARISONS {
         return Err(bad(format!(
             "validating {vectors} feature vectors of {features} features compares each with every other: {comparisons:.1e} value comparisons, over the limit of {MAX_COMPARISONS:.0e} that keeps evaluate within seconds; use a longer windows.hop or a shorter windows.length (fewer sub-windows), fewer bins, or fewer recordings (at most about {} vectors of {features} features)",

@@ -142,3 +142,37 @@ fn a_whole_window_query_to_a_sub_window_model_is_refused() {
     assert_eq!(a.prediction.label, "S1");
     assert_eq!(a.windows.as_ref().unwrap().windows.len(), 3);
 }
+
+#[test]
+fn a_query_over_the_comparison_limit_is_refused_before_any_is_made() {
+    let n = LoadedProfile::thesis().profile.analysis.feature_count();
+    let examples: Vec<_> = (0..10_000)
+        .map(|i| {
+            example(
+                &format!("d/S{}/{i}.csv", i % 2),
+                &format!("S{}", i % 2),
+                i as f64,
+                n,
+            )
+        })
+        .collect();
+    let m = model(examples);
+    // 20,500 sub-windows × 10,000 examples × 49 features > 10^10.
+    let q = Query {
+        features: Features::Windows(vec![Vec::new(); 20_500]),
+        incomplete: None,
+    };
+    let e = Predictor::new(&m)
+        .answer(&q, Path::new("d/S1/long.csv"))
+        .unwrap_err();
+    assert!(matches!(e, PredictError::TooMuchWork { .. }), "{e}");
+    assert!(e.is_bad_input());
+    let text = e.to_string();
+    assert!(
+        text.starts_with("d/S1/long.csv: ") && text.contains("windows.hop"),
+        "{text}"
+    );
+    // Under the limit, the same model answers (here: a whole window).
+    let a = Predictor::new(&m).answer(&whole(1.0, n), Path::new("d/S1/new.csv"));
+    assert!(a.is_ok(), "{a:?}");
+}
