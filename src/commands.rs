@@ -90,11 +90,11 @@ pub enum Command {
         after_help = "Example:\n  hapticlab inspect recordings/thesis-sim\n  hapticlab inspect recordings/lab --threshold 4 --json"
     )]
     Inspect(inspect::InspectArgs),
-    /// Import CSV or WAV files from other rigs as recordings v1.
+    /// Import other rigs' files (CSV, text, WAV, NumPy, MATLAB v5) as recordings v1.
     #[command(
         after_help = "Examples:\n  hapticlab import rig/*.csv --out recordings/rig --time-column time --channels ax,ay --label S2 --meta session=3\n  hapticlab import raw/S1/a.csv --out recordings/rig --rate 3200 --channels a0,a1,a2,a3 --burst 4 --names acc\n  hapticlab import sound/S3/*.wav --out recordings/sound"
     )]
-    Import(crate::import::ImportArgs),
+    Import(import::ImportArgs),
     /// Draw figures (PNG or SVG): a trace and its spectrum, a confusion matrix, features per class, a sweep.
     #[command(
         after_help = "Examples:\n  hapticlab plot trace recordings/thesis-sim/S2/S2_001.csv.gz --out s2.png\n  hapticlab evaluate recordings/thesis-sim --folds 10 --json > r.json && hapticlab plot confusion r.json --out confusion.svg\n  hapticlab plot features recordings/thesis-sim --per-class 5 --out features.png\n  hapticlab evaluate recordings/thesis-sim --folds 5 --sweep k=1..15 --json > s.json && hapticlab plot sweep s.json --out sweep.png\n  hapticlab evaluate recordings/thesis-sim --folds 5 --sweep 'bins=[1,1],[1,2]' --sweep k=1,10 --json > g.json && hapticlab plot sweep g.json --out grid.svg"

@@ -4,23 +4,21 @@
 //! Tecnológico de Monterrey, 2011.
 //!
 //! This package holds the front ends: the command line (`cli`, `commands`),
-//! the console (`console`), `doctor`, `import`'s file readers and the
-//! terminal. They are the only code that prints, reads keys or knows clap.
-//! The engine (devices, servo loop, recordings, analysis, classifier,
-//! evaluation) is the `hapticlab-engine` crate in `engine/`, which cannot
+//! the console (`console`), `doctor` and the terminal. They are the only code that prints, reads keys or knows clap.
+//! The engine (devices, servo loop, recordings, import, analysis,
+//! classifier, evaluation) is the `hapticlab-engine` crate in `engine/`, which cannot
 //! see this package; its modules are re-exported here so that
 //! `hapticlab::dataset` and `crate::dataset` name the same thing.
 
 pub use hapticlab_engine::{
-    acquire, analysis, classify, clock, dataset, device, evaluate, predictor, profile, recorder,
-    recording, servo, triggers, tune,
+    acquire, analysis, classify, clock, dataset, device, evaluate, import, predictor, profile,
+    recorder, recording, servo, triggers, tune,
 };
 
 pub mod cli;
 pub mod commands;
 pub mod console;
 pub mod doctor;
-pub mod import;
 pub mod scratch;
 pub mod support;
 pub mod terminal;

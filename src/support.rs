@@ -65,6 +65,12 @@ impl From<acquire::AcquireError> for Failure {
     }
 }
 
+impl From<crate::import::ImportError> for Failure {
+    fn from(e: crate::import::ImportError) -> Failure {
+        if e.is_bad_input() { bad(e) } else { runtime(e) }
+    }
+}
+
 impl From<crate::evaluate::EvaluateError> for Failure {
     fn from(e: crate::evaluate::EvaluateError) -> Failure {
         if e.is_bad_input() { bad(e) } else { runtime(e) }

@@ -12,9 +12,10 @@
 //! predictor                        a model's answer for a recording (windows, leave-out)
 //! dataset · servo                  recordings → feature vectors on every core; the 1 kHz loop
 //! device · classify                the Falcon, its emulator and simulation; k-NN and its model file
-//! clock · analysis · triggers · recorder
+//! clock · analysis · triggers · recorder · import
 //!                                  time and real-time scheduling; spectra; hands-free triggers;
-//!                                  samples to disk
+//!                                  samples to disk; other rigs' files (CSV, text, WAV, NumPy,
+//!                                  MATLAB) to recordings
 //! recording · profile              ground: recording format v1 (and the files a command may read
 //!                                  and write); the TOML schema, its checks, the list of options
 //! ```
@@ -32,6 +33,7 @@ pub mod clock;
 pub mod dataset;
 pub mod device;
 pub mod evaluate;
+pub mod import;
 pub mod predictor;
 pub mod profile;
 pub mod recorder;

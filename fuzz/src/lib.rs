@@ -10,11 +10,12 @@ use std::io::Write;
 use std::path::Path;
 
 use clap::Parser;
+use hapticlab::commands::import::ImportArgs;
 use hapticlab::device::falcon::packet::{
     self, PACKET_LEN, PacketReader, decode_command, decode_reply, encode_command, encode_reply,
 };
 use hapticlab::device::falcon::usb::strip_modem_status;
-use hapticlab::import::{self, ImportArgs, Imported};
+use hapticlab::import::{self, ImportError, Imported, Request};
 use hapticlab::profile::{self, LoadedProfile};
 use hapticlab::recording::{self, Recording};
 
@@ -170,26 +171,25 @@ pub fn import_csv(data: &[u8]) -> Outcome {
         .into_iter()
         .chain(options.split_whitespace());
     let cli = ImportCli::try_parse_from(argv).map_err(|e| e.to_string())?;
-    imported(&cli.args, file.to_vec(), "csv")
+    imported(&Request::from(cli.args), file.to_vec(), "csv")
 }
 
 /// A WAV import of the file's bytes, as `import::run` does for a `.wav`.
 pub fn import_wav(data: &[u8]) -> Outcome {
-    let args = ImportArgs {
+    let args = Request {
         files: vec!["fuzz.wav".into()],
         out: "out".into(),
-        burst: 1,
-        ..ImportArgs::default()
+        ..Request::default()
     };
     imported(&args, data.to_vec(), "wav")
 }
 
-fn imported(args: &ImportArgs, bytes: Vec<u8>, ext: &str) -> Outcome {
+fn imported(args: &Request, bytes: Vec<u8>, ext: &str) -> Outcome {
     let origin = format!("fuzz.{ext}");
     let result = import::check_options(args).and_then(|_| {
         let imp = import::parse_file(bytes, &origin, ext, args)?;
         if let (None, Some(label)) = (&args.label, &imp.label) {
-            profile::check_label(label).map_err(hapticlab::support::Failure::BadInput)?;
+            profile::check_label(label).map_err(ImportError::BadInput)?;
         }
         Ok(imp)
     });
@@ -200,8 +200,8 @@ fn imported(args: &ImportArgs, bytes: Vec<u8>, ext: &str) -> Outcome {
         }
         Err(e) => {
             // A bad file is bad input (exit 2), never a runtime failure.
-            assert_eq!(e.exit_code(), 2, "{}", e.message());
-            Err(e.message().to_string())
+            assert!(e.is_bad_input(), "{e}");
+            Err(e.to_string())
         }
     }
 }

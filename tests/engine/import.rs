@@ -4,8 +4,9 @@
 
 use std::path::Path;
 
-use hapticlab::import::{ImportArgs, run};
+use hapticlab::import::{Quiet, Request};
 use hapticlab::recording;
+use hapticlab::support::Failure;
 use proptest::prelude::*;
 
 use crate::common::mutation::{mutate, mutation};
@@ -14,12 +15,17 @@ use crate::common::mutation::{mutate, mutation};
 // mapping as options on the first line, then the file) and `import_wav`.
 use crate::entries;
 
-fn args(files: &[&Path], out: &Path) -> ImportArgs {
-    ImportArgs {
+/// The import with nothing shown, its error as the command line sees it.
+fn run(a: &Request) -> Result<Vec<std::path::PathBuf>, Failure> {
+    Ok(hapticlab::import::run(a, &Quiet)?)
+}
+
+fn args(files: &[&Path], out: &Path) -> Request {
+    Request {
         files: files.iter().map(|p| p.to_path_buf()).collect(),
         out: out.to_path_buf(),
         burst: 1,
-        ..ImportArgs::default()
+        ..Request::default()
     }
 }
 
@@ -460,13 +466,13 @@ fn a_bad_input_among_many_on_several_threads_writes_nothing() {
     std::fs::create_dir(&out).unwrap();
     run(&a).unwrap_err();
     assert_eq!(std::fs::read_dir(&out).unwrap().count(), 0);
-    // An --out that cannot be a folder is a runtime failure, not bad input.
+    // An --out that names a file is a bad argument, said before anything.
     let file = dir.path().join("a-file");
     std::fs::write(&file, "").unwrap();
     let mut a = args(&refs[..1], &file);
     a.label = Some("S3".into());
     let e = run(&a).unwrap_err();
-    assert_eq!(e.exit_code(), 1, "{}", e.message());
+    assert_eq!(e.exit_code(), 2, "{}", e.message());
     assert!(e.message().contains("a-file"), "{}", e.message());
 }
 

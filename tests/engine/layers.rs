@@ -14,7 +14,7 @@ const FRONT_END_CRATES: [&str; 4] = ["clap", "ratatui", "crossterm", "indicatif"
 /// Written as in engine/src/lib.rs's doc comment.
 const LAYERS: [&[&str]; 8] = [
     &["recording", "profile"],
-    &["clock", "analysis", "triggers", "recorder"],
+    &["clock", "analysis", "triggers", "recorder", "import"],
     &["device", "classify"],
     &["dataset", "servo"],
     &["predictor"],

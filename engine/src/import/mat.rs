@@ -8,9 +8,8 @@
 use std::io::Read as _;
 
 use super::npy::{Array, channels_of, signal};
-use super::{ImportArgs, Imported, bad};
+use super::{ImportError, Imported, Request, bad};
 use crate::recording::Digits;
-use crate::support::Failure;
 
 const MI_MATRIX: u32 = 14;
 const MI_COMPRESSED: u32 = 15;
@@ -84,7 +83,7 @@ fn numbers(e: &Element, big: bool) -> Option<(Vec<f64>, bool)> {
 
 /// A numeric matrix variable: its name and array (column-major made
 /// row-major); `None` for any other class.
-fn variable(m: &[u8], big: bool, origin: &str) -> Result<Option<(String, Array)>, Failure> {
+fn variable(m: &[u8], big: bool, origin: &str) -> Result<Option<(String, Array)>, ImportError> {
     let err = |what: &str| bad(format!("{origin}: a damaged MATLAB variable: {what}"));
     let (flags, at) = element(m, 0, big).ok_or_else(|| err("no array flags"))?;
     let class = numbers(&flags, big)
@@ -160,7 +159,7 @@ fn variable(m: &[u8], big: bool, origin: &str) -> Result<Option<(String, Array)>
 }
 
 /// A `.mat` file's recording.
-pub fn parse_mat_file(b: &[u8], origin: &str, args: &ImportArgs) -> Result<Imported, Failure> {
+pub fn parse_mat_file(b: &[u8], origin: &str, args: &Request) -> Result<Imported, ImportError> {
     let v73 = b.get(512..520) == Some(b"\x89HDF\r\n\x1a\n")
         || b.starts_with(b"MATLAB 7.3")
         || b.get(124..126) == Some(&[0, 2]);

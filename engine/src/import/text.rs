@@ -3,9 +3,8 @@
 //! column per channel, sampled at `--rate`. Lines starting with `#` or `%`
 //! are comments. A file is headerless when its first line is all numbers.
 
-use super::{ImportArgs, Imported, bad};
+use super::{ImportError, Imported, Request, bad};
 use crate::recording::Digits;
-use crate::support::Failure;
 
 /// The lines of `text` that hold data, numbered from 1.
 fn data_lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
@@ -29,7 +28,7 @@ pub fn is_headerless(text: &str) -> bool {
 }
 
 /// Parses headerless text: channels `ch1`, `ch2`, … (or `--names`) at `--rate`.
-pub fn parse(text: &str, origin: &str, args: &ImportArgs) -> Result<Imported, Failure> {
+pub fn parse(text: &str, origin: &str, args: &Request) -> Result<Imported, ImportError> {
     if args.time_column.is_some() || args.label_column.is_some() {
         return Err(bad(format!(
             "{origin}: a file without a header has no column names for --time-column or --label-column: give --rate and --label (or the folder's name)"
@@ -92,9 +91,9 @@ mod tests {
 
     #[test]
     fn one_column_and_whitespace_columns_read_at_the_rate() {
-        let args = ImportArgs {
+        let args = Request {
             rate: Some(10_000.0),
-            ..ImportArgs::default()
+            ..Request::default()
         };
         assert!(is_headerless("% LMT\n0.012\n-0.03\n"));
         assert!(!is_headerless("acc\n1\n"));
@@ -109,16 +108,16 @@ mod tests {
 
     #[test]
     fn a_ragged_line_a_word_and_no_rate_are_refused_naming_the_line() {
-        let args = ImportArgs {
+        let args = Request {
             rate: Some(100.0),
-            ..ImportArgs::default()
+            ..Request::default()
         };
-        let m = |r: Result<Imported, Failure>| match r.unwrap_err() {
-            Failure::BadInput(m) | Failure::Runtime(m) => m,
+        let m = |r: Result<Imported, ImportError>| match r.unwrap_err() {
+            ImportError::BadInput(m) | ImportError::Runtime(m) => m,
         };
         assert!(m(parse("1 2\n3\n", "r.txt", &args)).contains("r.txt:2: 1 values"));
         assert!(m(parse("1\nnan\n", "n.txt", &args)).contains("n.txt:2: value 1"));
-        let e = m(parse("1\n2\n", "x.txt", &ImportArgs::default()));
+        let e = m(parse("1\n2\n", "x.txt", &Request::default()));
         assert!(e.contains("x.txt") && e.contains("--rate"), "{e}");
     }
 }

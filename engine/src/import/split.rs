@@ -4,15 +4,14 @@
 //! from (`segment`, `segment_start_s`, `segment_length_s`; the input is the
 //! recording's `source`).
 
-use super::{Imported, bad};
-use crate::support::Failure;
+use super::{ImportError, Imported, bad};
 
 /// At most this many trials from one input: a hop far below the length
 /// would otherwise write a file per sample.
 const MOST_SEGMENTS: usize = 100_000;
 
 /// Checks `--split` and `--split-hop`: (length, hop) in seconds.
-pub fn check(length: f64, hop: Option<f64>) -> Result<(f64, f64), Failure> {
+pub fn check(length: f64, hop: Option<f64>) -> Result<(f64, f64), ImportError> {
     if !(length.is_finite() && length > 0.0) {
         return Err(bad(format!(
             "--split must be a positive number of seconds, got {length}"
@@ -34,7 +33,7 @@ pub fn split(
     origin: &str,
     length: f64,
     hop: f64,
-) -> Result<Vec<Imported>, Failure> {
+) -> Result<Vec<Imported>, ImportError> {
     let n = imp.time.len();
     let (t0, last) = (imp.time[0], imp.time[n - 1]);
     // One sample period (the mean): a segment is whole when its samples
@@ -106,9 +105,9 @@ mod tests {
     use super::*;
     use crate::recording::Digits;
 
-    fn message(e: Failure) -> String {
+    fn message(e: ImportError) -> String {
         match e {
-            Failure::BadInput(m) | Failure::Runtime(m) => m,
+            ImportError::BadInput(m) | ImportError::Runtime(m) => m,
         }
     }
 

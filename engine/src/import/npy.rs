@@ -9,9 +9,8 @@
 
 use std::io::Read as _;
 
-use super::{ImportArgs, Imported, bad};
+use super::{ImportError, Imported, Request, bad};
 use crate::recording::{Digits, time_decimals};
-use crate::support::Failure;
 
 /// One array read from a `.npy`: its shape, its values in C order, how they
 /// are written back (integers as integers).
@@ -22,7 +21,7 @@ pub(super) struct Array {
 }
 
 /// Parses the bytes of a `.npy` file.
-pub(super) fn parse_npy(b: &[u8], origin: &str) -> Result<Array, Failure> {
+pub(super) fn parse_npy(b: &[u8], origin: &str) -> Result<Array, ImportError> {
     let err = |m: String| bad(format!("{origin}: not a .npy file this reads: {m}"));
     if b.len() < 10 || &b[..6] != b"\x93NUMPY" {
         return Err(err("no \\x93NUMPY magic".into()));
@@ -162,9 +161,9 @@ fn transpose(values: &[f64], cols: usize, rows: usize) -> Vec<f64> {
 pub(super) fn channels_of(
     a: &Array,
     name: &str,
-    args: &ImportArgs,
+    args: &Request,
     origin: &str,
-) -> Result<Vec<(String, Vec<f64>)>, Failure> {
+) -> Result<Vec<(String, Vec<f64>)>, ImportError> {
     match a.shape[..] {
         [n] => Ok(vec![(name.to_string(), a.values[..n].to_vec())]),
         [rows, cols] => {
@@ -202,10 +201,10 @@ pub(super) fn signal(
     channels: Vec<(String, Vec<f64>)>,
     digits: Vec<Digits>,
     meta: Vec<(String, toml::Value)>,
-    args: &ImportArgs,
+    args: &Request,
     origin: &str,
     what: &str,
-) -> Result<Imported, Failure> {
+) -> Result<Imported, ImportError> {
     let rate = args.rate.ok_or_else(|| {
         bad(format!(
             "{origin}: {what} carries no sample rate: give --rate HZ"
@@ -248,7 +247,7 @@ pub(super) fn signal(
 }
 
 /// A `.npy` file's recording.
-pub fn parse_npy_file(bytes: &[u8], origin: &str, args: &ImportArgs) -> Result<Imported, Failure> {
+pub fn parse_npy_file(bytes: &[u8], origin: &str, args: &Request) -> Result<Imported, ImportError> {
     let a = parse_npy(bytes, origin)?;
     let chans = channels_of(&a, "ch", args, origin)?;
     let names: Vec<(String, Vec<f64>)> = if chans.len() == 1 {
@@ -267,7 +266,7 @@ pub fn parse_npy_file(bytes: &[u8], origin: &str, args: &ImportArgs) -> Result<I
 }
 
 /// A `.npz` file's recording: its arrays by name (see the module's note).
-pub fn parse_npz_file(bytes: &[u8], origin: &str, args: &ImportArgs) -> Result<Imported, Failure> {
+pub fn parse_npz_file(bytes: &[u8], origin: &str, args: &Request) -> Result<Imported, ImportError> {
     let entries = unzip(bytes, origin)?;
     let mut channels = Vec::new();
     let mut digits = Vec::new();
@@ -312,7 +311,7 @@ pub(super) fn scalar_key(k: &str) -> bool {
 
 /// The entries of a zip archive (name, bytes), stored or deflated, in the
 /// central directory's order.
-fn unzip(b: &[u8], origin: &str) -> Result<Vec<(String, Vec<u8>)>, Failure> {
+fn unzip(b: &[u8], origin: &str) -> Result<Vec<(String, Vec<u8>)>, ImportError> {
     let err = |m: &str| bad(format!("{origin}: not an .npz (zip) file this reads: {m}"));
     let u16_at = |i: usize| {
         b.get(i..i + 2)

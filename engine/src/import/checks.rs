@@ -4,14 +4,13 @@
 
 use std::path::PathBuf;
 
-use super::{ImportArgs, Imported, bad};
-use crate::support::Failure;
+use super::{ImportError, Imported, Request, bad};
 
 /// The flags that mean something for a CSV only, given for WAV inputs,
 /// which carry their own rate and channels: refused when every input is a
 /// WAV (nothing takes them), else a warning to print (they apply to the CSV
 /// files alone), so the user never believes they reached a WAV.
-pub(super) fn csv_only_flags_for_wav(args: &ImportArgs) -> Result<Option<String>, Failure> {
+pub(super) fn csv_only_flags_for_wav(args: &Request) -> Result<Option<String>, ImportError> {
     let is_wav = |f: &PathBuf| {
         f.extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("wav") || e.eq_ignore_ascii_case("wave"))
@@ -57,8 +56,8 @@ pub(super) fn check_written_names(
     imp: &Imported,
     extra: &[(String, toml::Value)],
     origin: &str,
-    args: &ImportArgs,
-) -> Result<(), Failure> {
+    args: &Request,
+) -> Result<(), ImportError> {
     let mut columns = vec!["t_s"];
     columns.extend(imp.names.iter().map(String::as_str));
     if let Err(e) = crate::recording::check_columns(&columns) {
