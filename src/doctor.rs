@@ -8,7 +8,7 @@
 //! module never changes the system: the only writes are the dataset probe's
 //! temporary file (removed again) and the real-time trial on a scratch thread.
 
-mod dataset;
+mod folder;
 pub mod facts;
 mod falcon;
 mod realtime;
@@ -25,7 +25,7 @@ use crate::recorder::COLUMNS;
 use crate::recording::decimals_for;
 use crate::support::{Failure, ProfileArg, bad, load_profile};
 
-pub use dataset::dataset_checks;
+pub use folder::folder_checks;
 pub use facts::{DatasetFacts, DirState, Facts, Limit, SystemFacts, TerminalFacts};
 pub use falcon::{firmware_check, udev_group_check, usb_check};
 pub use realtime::{MEMLOCK_ENOUGH_BYTES, realtime_checks};
@@ -162,7 +162,7 @@ pub fn checks(needs: &Needs, facts: &Facts) -> Vec<Check> {
     ];
     out.extend(realtime_checks(needs, &facts.system));
     out.extend(terminal_checks(&facts.terminal));
-    out.extend(dataset_checks(needs, &facts.dataset, facts.root));
+    out.extend(folder_checks(needs, &facts.dataset, facts.root));
     out
 }
 

@@ -583,11 +583,11 @@ fn a_dataset_path_under_a_file_or_unwritable_fails() {
         Err("recordings is a file".into()),
         Some(50 << 30),
     );
-    let c = dataset_checks(&thesis(), &blocked, false);
+    let c = folder_checks(&thesis(), &blocked, false);
     assert_eq!(c[0].status, Status::Fail, "{c:?}");
     assert!(c[0].finding.contains("recordings is a file"), "{c:?}");
     let denied = || Err("Permission denied (os error 13)".to_string());
-    let c = dataset_checks(
+    let c = folder_checks(
         &thesis(),
         &dataset(DirState::Exists, denied(), Some(50 << 30)),
         false,
@@ -600,7 +600,7 @@ fn a_dataset_path_under_a_file_or_unwritable_fails() {
     let missing = DirState::Missing {
         ancestor: "/srv".into(),
     };
-    let c = dataset_checks(
+    let c = folder_checks(
         &thesis(),
         &dataset(missing, denied(), Some(50 << 30)),
         false,
@@ -623,7 +623,7 @@ fn a_read_only_disk_is_named_as_such() {
             Some(50 << 30),
         )
     };
-    let c = dataset_checks(&thesis(), &ro, false);
+    let c = folder_checks(&thesis(), &ro, false);
     assert_eq!(c[0].status, Status::Fail, "{c:?}");
     assert!(c[0].finding.contains("mounted read-only"), "{c:?}");
     assert!(!fix(&c[0]).contains("chown"), "{c:?}");
@@ -631,14 +631,14 @@ fn a_read_only_disk_is_named_as_such() {
 
 #[test]
 fn a_writable_dataset_is_ok_and_root_is_warned_of_its_privilege() {
-    let c = dataset_checks(
+    let c = folder_checks(
         &thesis(),
         &dataset(DirState::Exists, Ok(()), Some(50 << 30)),
         false,
     );
     assert_eq!(c[0].status, Status::Ok, "{c:?}");
     assert!(!c[0].finding.contains("root"), "{c:?}");
-    let c = dataset_checks(
+    let c = folder_checks(
         &thesis(),
         &dataset(DirState::Exists, Ok(()), Some(50 << 30)),
         true,
@@ -647,7 +647,7 @@ fn a_writable_dataset_is_ok_and_root_is_warned_of_its_privilege() {
     let missing = DirState::Missing {
         ancestor: "recordings".into(),
     };
-    let c = dataset_checks(&thesis(), &dataset(missing, Ok(()), Some(50 << 30)), false);
+    let c = folder_checks(&thesis(), &dataset(missing, Ok(()), Some(50 << 30)), false);
     assert_eq!(c[0].status, Status::Ok, "{c:?}");
     assert!(c[0].finding.contains("can be created"), "{c:?}");
 }
@@ -657,7 +657,7 @@ fn free_space_counts_scans_and_warns_under_a_gibibyte() {
     let n = thesis();
     let scan = n.scan_bytes();
     let space =
-        |free| dataset_checks(&n, &dataset(DirState::Exists, Ok(()), free), false).remove(1);
+        |free| folder_checks(&n, &dataset(DirState::Exists, Ok(()), free), false).remove(1);
     let c = space(Some(100 * MIB));
     assert_eq!(c.status, Status::Warn, "{c:?}");
     assert!(

@@ -1,11 +1,11 @@
-//! The dataset checks: the folder (there or creatable, writable) and free space.
+//! The dataset folder's checks: there or creatable, writable, with free space.
 
 use super::{
     Check, DatasetFacts, DirState, LOW_SPACE_BYTES, Needs, Status, check, human_bytes, with_fix,
 };
 
 /// The dataset folder: there or creatable, writable, and with room.
-pub fn dataset_checks(needs: &Needs, d: &DatasetFacts, root: bool) -> Vec<Check> {
+pub fn folder_checks(needs: &Needs, d: &DatasetFacts, root: bool) -> Vec<Check> {
     let dir = d.dir.display();
     let quoted = shell_word(&d.dir);
     let root_note = if root {
