@@ -12,7 +12,7 @@ use std::time::Duration;
 use criterion::{Criterion, criterion_group, criterion_main};
 use hapticlab::classify::{Model, TrainingExample};
 use hapticlab::evaluate::cv::{cross_validate, make_folds};
-use hapticlab::evaluate::plan::Dataset;
+use hapticlab::evaluate::plan::Recordings;
 use hapticlab::profile::{Analysis, Classifier, SplitMethod};
 use hapticlab::recording::RecordingWriter;
 
@@ -62,7 +62,7 @@ fn evaluate_10_fold(c: &mut Criterion) {
         "10-fold CV, 2000 recordings x 10000 samples, parsing included",
         |b| {
             b.iter(|| {
-                let data = Dataset::load(
+                let data = Recordings::load(
                     &paths,
                     &analysis,
                     hapticlab::dataset::Keep::Features,

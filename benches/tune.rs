@@ -14,7 +14,7 @@ use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use hapticlab::dataset::{Keep, Options, Unusable};
-use hapticlab::evaluate::plan::Dataset;
+use hapticlab::evaluate::plan::Recordings;
 use hapticlab::profile::LoadedProfile;
 use hapticlab::recording::RecordingWriter;
 
@@ -81,7 +81,8 @@ fn tune_96(c: &mut Criterion) {
         "96 settings, 5 inner folds, 200 recordings x 13200 samples, parsing included",
         |b| {
             b.iter(|| {
-                let data = Dataset::load_files(&files, &profile.analysis, options, &|| {}).unwrap();
+                let data =
+                    Recordings::load_files(&files, &profile.analysis, options, &|| {}).unwrap();
                 let r = hapticlab::tune::tune("bench", &profile, &data.scans, &search, &|_, _| {})
                     .unwrap();
                 assert_eq!(r.configurations, 96);

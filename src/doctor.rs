@@ -8,9 +8,9 @@
 //! module never changes the system: the only writes are the dataset probe's
 //! temporary file (removed again) and the real-time trial on a scratch thread.
 
-mod folder;
 pub mod facts;
 mod falcon;
+mod folder;
 mod realtime;
 mod terminal;
 #[cfg(test)]
@@ -25,9 +25,9 @@ use crate::recorder::COLUMNS;
 use crate::recording::decimals_for;
 use crate::support::{Failure, ProfileArg, bad, load_profile};
 
-pub use folder::folder_checks;
 pub use facts::{DatasetFacts, DirState, Facts, Limit, SystemFacts, TerminalFacts};
 pub use falcon::{firmware_check, udev_group_check, usb_check};
+pub use folder::folder_checks;
 pub use realtime::{MEMLOCK_ENOUGH_BYTES, realtime_checks};
 pub use terminal::terminal_checks;
 

@@ -578,23 +578,11 @@ pub fn scan_live_stopping(
         on_note,
         triggers,
     } = hooks;
-    let LiveScans {
-        label,
-        texture,
-        count,
-        out,
-        seed,
-    } = req;
-    let (label, texture, count, out, seed) = (
-        label.as_str(),
-        texture.as_deref(),
-        *count,
-        out.as_path(),
-        *seed,
-    );
+    let label = req.label.as_str();
+    let texture = req.texture.as_deref().unwrap_or(label);
     check_label(label).map_err(AcquireError::BadInput)?;
     // Before the device moves: the recordings must have somewhere to go.
-    check_writable(&out.join(label))?;
+    check_writable(&req.out.join(label))?;
     let rig = lp.rig()?;
     if let Some(faults) = injected_faults(lp) {
         on_note(&format!(
@@ -602,163 +590,31 @@ pub fn scan_live_stopping(
             lp.origin
         ));
     }
-    let device = open_device(lp, Some(texture.unwrap_or(label)), seed, on_note)?;
+    let device = open_device(lp, Some(texture), req.seed, on_note)?;
     let kind = device.kind();
     let handle = crate::servo::spawn(rig, move || device)
         .map_err(|e| AcquireError::Runtime(format!("cannot start the servo thread: {e}")))?;
-    // Signals raise the loop's own stop flag too.
-    let servo_stop = handle.stop.clone();
     let mut reports = Vec::new();
-    let per_scan_limit = Duration::from_secs_f64(path_duration_s(rig.path) * 2.0 + 30.0);
-    let homed = match wait_for_homing(lp, &handle, &stop, on_note) {
-        Ok(h) => h,
-        Err(e) => {
-            let _ = handle.shutdown();
-            return Err(e);
-        }
+    let live = Live {
+        handle: &handle,
+        stop: &stop,
+        triggers: triggers.as_ref(),
+        per_scan_limit: Duration::from_secs_f64(path_duration_s(rig.path) * 2.0 + 30.0),
     };
-    'scans: for k in 0..count {
-        if !homed {
-            break;
-        }
-        if let Some(rx) = &triggers {
-            on_note(&format!(
-                "press start on the trigger to begin scan {} of {count} (abort ends the session)",
-                k + 1
-            ));
-            loop {
-                if stop.load(Ordering::Relaxed) || handle.is_finished() {
-                    servo_stop.store(true, Ordering::Relaxed);
-                    break 'scans;
-                }
-                let _ = handle.telemetry.try_iter().count();
-                match rx.recv_timeout(Duration::from_millis(50)) {
-                    Ok(TriggerEvent::Action { action, .. }) => match action {
-                        TriggerAction::Start => break,
-                        TriggerAction::Abort => {
-                            on_note("abort pressed: no more scans");
-                            break 'scans;
-                        }
-                        TriggerAction::Store => {
-                            on_note("store pressed: scans are stored as they finish")
-                        }
-                    },
-                    Ok(e) => {
-                        if let Some(m) = trigger_note(&e) {
-                            on_note(&m);
-                        }
-                    }
-                    Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
-                    Err(crossbeam_channel::RecvTimeoutError::Disconnected) => {
-                        on_note("the triggers stopped; scanning without them");
-                        break;
-                    }
-                }
-            }
-        }
-        let index = next_free_index(out, label);
-        let path = scan_file(out, label, index);
-        let meta = scan_metadata(
-            lp,
-            label,
-            kind,
-            &[
-                (
-                    "texture",
-                    toml::Value::String(texture.unwrap_or(label).into()),
-                ),
-                ("seed", toml::Value::String(seed.to_string())),
-                ("clock", toml::Value::String("real".into())),
-            ],
-        );
-        handle.send(Command::StartScan {
-            path: path.clone(),
-            meta,
-        });
-        let started = Instant::now();
-        let (stats, recorded, reason);
-        let mut stopping = false;
-        loop {
-            if stop.load(Ordering::Relaxed) && !stopping {
-                // The scan stops, kept with the reason; the loop halts after.
-                handle.send(Command::Stop(why()));
-                stopping = true;
-            }
-            // Nobody displays telemetry here: drain it so none counts as dropped.
-            let _ = handle.telemetry.try_iter().count();
-            if let Some(rx) = &triggers {
-                for e in rx.try_iter() {
-                    match e {
-                        TriggerEvent::Action {
-                            action: TriggerAction::Abort,
-                            ..
-                        } => handle.send(Command::Abort),
-                        TriggerEvent::Action { .. } => {}
-                        other => {
-                            if let Some(m) = trigger_note(&other) {
-                                on_note(&m);
-                            }
-                        }
-                    }
-                }
-            }
-            match handle.events.recv_timeout(Duration::from_millis(50)) {
-                Ok(ServoEvent::ScanEnded {
-                    stats: s,
-                    samples,
-                    aborted,
-                    ..
-                }) => {
-                    (stats, recorded, reason) = (s, samples > 0, aborted);
-                    break;
-                }
-                Ok(ServoEvent::Notice { message }) => on_note(&format!("note: {message}")),
-                Ok(_) => {}
-                Err(crossbeam_channel::RecvTimeoutError::Timeout) => {
-                    if started.elapsed() > per_scan_limit {
-                        handle.send(Command::Abort);
-                    }
-                    if handle.is_finished() {
-                        break 'scans;
-                    }
-                }
-                Err(crossbeam_channel::RecvTimeoutError::Disconnected) => break 'scans,
-            }
-        }
-        // The recorder finishes the file just after the motion ends; a scan
-        // stopped before its leg began has no file.
-        let saved = if recorded {
-            let waited = Instant::now();
-            loop {
-                if let Some(s) = handle.saved().pop() {
-                    break s;
-                }
-                if waited.elapsed() > Duration::from_secs(60) {
-                    return Err(AcquireError::Runtime(format!(
-                        "{}: the recorder did not finish the file within a minute",
-                        path.display()
-                    )));
-                }
-                std::thread::sleep(Duration::from_millis(5));
-            }
+    let scanned = wait_for_homing(lp, &handle, &stop, on_note).and_then(|homed| {
+        if homed {
+            live.scans(lp, req, kind, why, on_note, &mut |r| {
+                on_scan(&r);
+                reports.push(r);
+            })
         } else {
-            SavedScan {
-                path: path.clone(),
-                rows: 0,
-                complete: false,
-                aborted: reason,
-                error: None,
-            }
-        };
-        let aborted = saved.aborted.is_some() || saved.error.is_some();
-        let r = ScanReport { saved, stats };
-        on_scan(&r);
-        reports.push(r);
-        if aborted {
-            break;
+            Ok(())
         }
-    }
+    });
+    // Whatever happened, the loop is shut down (forces zero) before the
+    // error, if any, is told.
     let (result, saved) = handle.shutdown();
+    scanned?;
     for s in saved {
         let r = ScanReport {
             saved: s,
@@ -776,6 +632,209 @@ pub fn scan_live_stopping(
         Err(panic) => Err(AcquireError::Runtime(format!(
             "the servo thread failed: {panic}"
         ))),
+    }
+}
+
+/// A running servo loop making live scans, and what stops them.
+struct Live<'a> {
+    handle: &'a crate::servo::ServoHandle,
+    /// Raised by signals (or the caller): the running scan is kept with
+    /// the reason, and no other starts.
+    stop: &'a std::sync::atomic::AtomicBool,
+    triggers: Option<&'a crossbeam_channel::Receiver<TriggerEvent>>,
+    /// A scan running longer than this is aborted.
+    per_scan_limit: Duration,
+}
+
+/// How a scan's motion ended, as the servo loop reported it.
+struct Ended {
+    stats: LoopStats,
+    recorded: bool,
+    aborted: Option<String>,
+}
+
+impl Live<'_> {
+    /// `req.count` scans, each reported to `report` as it ends; stops after
+    /// an aborted one, when the loop ends, or at an abort press.
+    fn scans(
+        &self,
+        lp: &LoadedProfile,
+        req: &LiveScans,
+        kind: &str,
+        why: &dyn Fn() -> String,
+        on_note: &mut dyn FnMut(&str),
+        report: &mut dyn FnMut(ScanReport),
+    ) -> Result<(), AcquireError> {
+        let (label, out) = (req.label.as_str(), req.out.as_path());
+        for k in 0..req.count {
+            if self.triggers.is_some() && !self.wait_for_start(k, req.count, on_note) {
+                break;
+            }
+            let path = scan_file(out, label, next_free_index(out, label));
+            let meta = scan_metadata(
+                lp,
+                label,
+                kind,
+                &[
+                    (
+                        "texture",
+                        toml::Value::String(req.texture.as_deref().unwrap_or(label).into()),
+                    ),
+                    ("seed", toml::Value::String(req.seed.to_string())),
+                    ("clock", toml::Value::String("real".into())),
+                ],
+            );
+            self.handle.send(Command::StartScan {
+                path: path.clone(),
+                meta,
+            });
+            let Some(ended) = self.until_ended(why, on_note) else {
+                break;
+            };
+            let saved = self.saved_file(&path, ended.recorded, ended.aborted)?;
+            let aborted = saved.aborted.is_some() || saved.error.is_some();
+            report(ScanReport {
+                saved,
+                stats: ended.stats,
+            });
+            if aborted {
+                break;
+            }
+        }
+        Ok(())
+    }
+
+    /// Waits for a start press on the triggers; `false` when the session
+    /// ends instead (a signal, the loop gone, an abort press).
+    fn wait_for_start(&self, k: usize, count: usize, on_note: &mut dyn FnMut(&str)) -> bool {
+        let Some(rx) = self.triggers else {
+            return true;
+        };
+        on_note(&format!(
+            "press start on the trigger to begin scan {} of {count} (abort ends the session)",
+            k + 1
+        ));
+        loop {
+            if self.stop.load(Ordering::Relaxed) || self.handle.is_finished() {
+                self.handle.stop.store(true, Ordering::Relaxed);
+                return false;
+            }
+            let _ = self.handle.telemetry.try_iter().count();
+            match rx.recv_timeout(Duration::from_millis(50)) {
+                Ok(TriggerEvent::Action { action, .. }) => match action {
+                    TriggerAction::Start => return true,
+                    TriggerAction::Abort => {
+                        on_note("abort pressed: no more scans");
+                        return false;
+                    }
+                    TriggerAction::Store => {
+                        on_note("store pressed: scans are stored as they finish")
+                    }
+                },
+                Ok(e) => {
+                    if let Some(m) = trigger_note(&e) {
+                        on_note(&m);
+                    }
+                }
+                Err(crossbeam_channel::RecvTimeoutError::Timeout) => {}
+                Err(crossbeam_channel::RecvTimeoutError::Disconnected) => {
+                    on_note("the triggers stopped; scanning without them");
+                    return true;
+                }
+            }
+        }
+    }
+
+    /// Follows the running scan until the loop says it ended (`None`: the
+    /// loop itself ended first). A raised stop flag stops it with `why`;
+    /// an abort press or the time limit aborts it.
+    fn until_ended(
+        &self,
+        why: &dyn Fn() -> String,
+        on_note: &mut dyn FnMut(&str),
+    ) -> Option<Ended> {
+        let started = Instant::now();
+        let mut stopping = false;
+        loop {
+            if self.stop.load(Ordering::Relaxed) && !stopping {
+                // The scan stops, kept with the reason; the loop halts after.
+                self.handle.send(Command::Stop(why()));
+                stopping = true;
+            }
+            // Nobody displays telemetry here: drain it so none counts as dropped.
+            let _ = self.handle.telemetry.try_iter().count();
+            for e in self.triggers.into_iter().flat_map(|rx| rx.try_iter()) {
+                match e {
+                    TriggerEvent::Action {
+                        action: TriggerAction::Abort,
+                        ..
+                    } => self.handle.send(Command::Abort),
+                    TriggerEvent::Action { .. } => {}
+                    other => {
+                        if let Some(m) = trigger_note(&other) {
+                            on_note(&m);
+                        }
+                    }
+                }
+            }
+            match self.handle.events.recv_timeout(Duration::from_millis(50)) {
+                Ok(ServoEvent::ScanEnded {
+                    stats,
+                    samples,
+                    aborted,
+                    ..
+                }) => {
+                    return Some(Ended {
+                        stats,
+                        recorded: samples > 0,
+                        aborted,
+                    });
+                }
+                Ok(ServoEvent::Notice { message }) => on_note(&format!("note: {message}")),
+                Ok(_) => {}
+                Err(crossbeam_channel::RecvTimeoutError::Timeout) => {
+                    if started.elapsed() > self.per_scan_limit {
+                        self.handle.send(Command::Abort);
+                    }
+                    if self.handle.is_finished() {
+                        return None;
+                    }
+                }
+                Err(crossbeam_channel::RecvTimeoutError::Disconnected) => return None,
+            }
+        }
+    }
+
+    /// The file the recorder finished for the scan at `path`, just after
+    /// its motion ended; a scan stopped before its leg began has no file.
+    fn saved_file(
+        &self,
+        path: &Path,
+        recorded: bool,
+        aborted: Option<String>,
+    ) -> Result<SavedScan, AcquireError> {
+        if !recorded {
+            return Ok(SavedScan {
+                path: path.to_path_buf(),
+                rows: 0,
+                complete: false,
+                aborted,
+                error: None,
+            });
+        }
+        let waited = Instant::now();
+        loop {
+            if let Some(s) = self.handle.saved().pop() {
+                return Ok(s);
+            }
+            if waited.elapsed() > Duration::from_secs(60) {
+                return Err(AcquireError::Runtime(format!(
+                    "{}: the recorder did not finish the file within a minute",
+                    path.display()
+                )));
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
     }
 }
 

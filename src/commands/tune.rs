@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 
 use crate::dataset::{self, Keep, Options, Unusable};
-use crate::evaluate::plan::Dataset;
+use crate::evaluate::plan::Recordings;
 use crate::profile::{LoadedProfile, THESIS_PROFILE};
 use crate::support::{
     Failure, ProfileArg, bad, check_output, find_recordings, inputs_of, load_profile, progress_bar,
@@ -85,7 +85,7 @@ pub fn run(a: TuneArgs) -> Result<(), Failure> {
         unusable: Unusable::Fail,
         threads,
     };
-    let data = Dataset::load_files(&files, &loaded.profile.analysis, options, &|| pb.inc(1));
+    let data = Recordings::load_files(&files, &loaded.profile.analysis, options, &|| pb.inc(1));
     pb.finish_and_clear();
     let data = data?;
     warn_skipped(&data.skipped);

@@ -656,8 +656,7 @@ fn a_writable_dataset_is_ok_and_root_is_warned_of_its_privilege() {
 fn free_space_counts_scans_and_warns_under_a_gibibyte() {
     let n = thesis();
     let scan = n.scan_bytes();
-    let space =
-        |free| folder_checks(&n, &dataset(DirState::Exists, Ok(()), free), false).remove(1);
+    let space = |free| folder_checks(&n, &dataset(DirState::Exists, Ok(()), free), false).remove(1);
     let c = space(Some(100 * MIB));
     assert_eq!(c.status, Status::Warn, "{c:?}");
     assert!(

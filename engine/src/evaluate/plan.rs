@@ -1,5 +1,5 @@
 //! What one evaluation runs on and how: the recordings loaded once
-//! ([`Dataset`], through [`crate::dataset::load`] on every core), the
+//! ([`Recordings`], through [`crate::dataset::load`] on every core), the
 //! validation asked for ([`Plan`]: holdout, k-fold, leave-one-out, grouped
 //! folds; from the profile's `[evaluation]` and the command's
 //! [`Overrides`]), and [`validate`], which runs it into a [`CvReport`].
@@ -45,7 +45,7 @@ pub struct Overrides {
 /// for a sweep over an `[analysis]` key, the columns the analysis reads
 /// ([`Keep::Samples`]) so features are extracted again per value.
 #[derive(Debug, Clone)]
-pub struct Dataset {
+pub struct Recordings {
     pub scans: Vec<Entry>,
     /// Recordings left out (incomplete), in file-name order.
     pub skipped: Vec<Skipped>,
@@ -54,7 +54,7 @@ pub struct Dataset {
     keep: Keep,
 }
 
-impl Dataset {
+impl Recordings {
     /// Read every recording under `paths` on `threads` threads, keeping
     /// what `keep` says. Incomplete recordings are listed, not kept; a
     /// malformed one is an error.
@@ -63,7 +63,7 @@ impl Dataset {
         analysis: &Analysis,
         keep: Keep,
         threads: usize,
-    ) -> Result<Dataset, EvaluateError> {
+    ) -> Result<Recordings, EvaluateError> {
         let options = Options {
             keep,
             unusable: Unusable::Fail,
@@ -71,7 +71,7 @@ impl Dataset {
         };
         // Finding no recordings is the user's to fix, as in every command.
         let files = dataset::find(paths).map_err(bad)?;
-        Dataset::load_files(&files, analysis, options, &|| {})
+        Recordings::load_files(&files, analysis, options, &|| {})
     }
 
     /// The recordings in `files`, loaded as `options` say; `progress`
@@ -81,9 +81,9 @@ impl Dataset {
         analysis: &Analysis,
         options: Options,
         progress: &(dyn Fn() + Sync),
-    ) -> Result<Dataset, EvaluateError> {
+    ) -> Result<Recordings, EvaluateError> {
         let loaded = dataset::load(files, analysis, options, progress)?;
-        Ok(Dataset {
+        Ok(Recordings {
             scans: loaded.entries,
             skipped: loaded.skipped,
             analysis: analysis.clone(),
@@ -293,7 +293,7 @@ pub struct Validated {
 }
 
 /// Validate `profile`'s classifier on `examples` as `plan` says. With
-/// `[analysis] windows` the examples are sub-windows ([`Dataset::examples`])
+/// `[analysis] windows` the examples are sub-windows ([`Recordings::examples`])
 /// and `groups` holds one value per example or per recording: every split
 /// is made over recordings and each test recording is classified by its
 /// sub-windows' vote, as [`validate_with_votes`] does.

@@ -15,7 +15,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use serde::Serialize;
 
 use super::EvaluateError;
-use super::plan::{Dataset, Holdout, Overrides, Plan, Validated, holdout, validate_with_votes};
+use super::plan::{Holdout, Overrides, Plan, Recordings, Validated, holdout, validate_with_votes};
 use super::sweep::{
     MakeScratch, Scratch, SimPlan, Sweep, Swept, combinations, resolve_all, simulated_dataset,
     sweep_grid, sweep_grid_simulated,
@@ -406,7 +406,7 @@ fn load(
     sim: Option<SimPlan<'_>>,
     options: Options,
     progress: &dyn Progress,
-) -> Result<Dataset, EvaluateError> {
+) -> Result<Recordings, EvaluateError> {
     let an = &lp.profile.analysis;
     let data = match (source, sim) {
         (Source::Simulated { .. }, Some(sim)) => {
@@ -423,7 +423,7 @@ fn load(
             let files = crate::dataset::find(paths).map_err(bad)?;
             progress.begin("reading", files.len());
             let done = AtomicUsize::new(0);
-            Dataset::load_files(&files, an, options, &|| {
+            Recordings::load_files(&files, an, options, &|| {
                 progress.set(done.fetch_add(1, Ordering::Relaxed) + 1);
             })
         }

@@ -5,7 +5,7 @@
 //! key's values changing slowest).
 //!
 //! The recordings are read once ([`crate::dataset::load`], on every core)
-//! into a [`Dataset`] holding each one's feature vector and metadata, or,
+//! into a [`Recordings`] holding each one's feature vector and metadata, or,
 //! for a sweep over an `[analysis]` key, the columns the analysis reads, so
 //! features are extracted again per point without re-reading files. A
 //! sweep sets keys of the profile's `[analysis]`, `[classifier]` or
@@ -40,7 +40,7 @@ use serde::Serialize;
 
 use super::EvaluateError;
 use super::cv::CvReport;
-use super::plan::{Dataset, Plan, validate};
+use super::plan::{Plan, Recordings, validate};
 use crate::classify::TrainingExample;
 use crate::dataset::{self, Keep, Options, Skipped, Unusable, meta_text};
 use crate::profile::{Analysis, LoadedProfile, Profile};
@@ -308,7 +308,7 @@ pub fn simulated_dataset(
     analysis: &Analysis,
     options: Options,
     progress: &(dyn Fn(usize, usize) + Sync),
-) -> Result<Dataset, EvaluateError> {
+) -> Result<Recordings, EvaluateError> {
     // Removed on drop; the front end decides what Ctrl-C does meanwhile.
     let dir = (sim.scratch)().map_err(EvaluateError::Scratch)?;
     let opts = crate::acquire::SimulateOptions {
@@ -326,7 +326,7 @@ pub fn simulated_dataset(
         threads: sim.threads,
         ..options
     };
-    let mut data = Dataset::load_files(&files, analysis, options, &|| {})?;
+    let mut data = Recordings::load_files(&files, analysis, options, &|| {})?;
     dir.checkpoint();
     let relative = |f: &str| {
         std::path::Path::new(f)
@@ -368,7 +368,7 @@ fn texts(set: &[(&SweepKey, &toml::Value)]) -> Vec<String> {
     set.iter().map(|(_, v)| meta_text(v)).collect()
 }
 
-fn evaluated(values: Vec<String>, r: &CvReport, data: &Dataset) -> SweepPoint {
+fn evaluated(values: Vec<String>, r: &CvReport, data: &Recordings) -> SweepPoint {
     SweepPoint {
         value: values.join(", "),
         values,
@@ -416,7 +416,7 @@ fn not_evaluated(
 /// sweep (a grid meets the same one on every row).
 fn examples_for(
     analysis: &Analysis,
-    data: &Dataset,
+    data: &Recordings,
     cache: &mut Vec<(Analysis, Vec<TrainingExample>)>,
 ) -> Result<Vec<TrainingExample>, EvaluateError> {
     if let Some((_, e)) = cache.iter().find(|(a, _)| a == analysis) {
@@ -432,7 +432,7 @@ fn examples_for(
 /// swept `folds` or `method` takes effect (the command line's still win).
 fn validate_point(
     p: &Profile,
-    data: &Dataset,
+    data: &Recordings,
     cache: &mut Vec<(Analysis, Vec<TrainingExample>)>,
     plan: &Plan,
     replan: bool,
@@ -453,7 +453,7 @@ fn validate_point(
 /// Evaluate one key over its values (a one-key [`sweep_grid`]).
 pub fn sweep(
     profile: &Profile,
-    data: &Dataset,
+    data: &Recordings,
     key: &str,
     values: &[toml::Value],
     plan: &Plan,
@@ -475,7 +475,7 @@ pub fn sweep(
 /// points done.
 pub fn sweep_grid(
     profile: &Profile,
-    data: &Dataset,
+    data: &Recordings,
     swept: &[Swept],
     plan: &Plan,
     progress: &dyn Fn(usize),
@@ -573,7 +573,7 @@ pub fn sweep_grid_simulated(
         Keep::Features
     };
     let replan = keys.iter().any(|k| k.table == "evaluation");
-    let mut made: Option<(Vec<String>, Dataset)> = None;
+    let mut made: Option<(Vec<String>, Recordings)> = None;
     let combos = combinations(swept);
     // Evaluated grouped by the recording keys' values, so each of their
     // combinations is simulated once whatever the keys' order; reported

@@ -472,13 +472,13 @@ mod thesis_tests {
     /// features, and `validate` votes over them by recording.
     #[test]
     fn kept_samples_give_the_loaded_sub_windows_and_validate_votes_by_recording() {
-        use crate::evaluate::plan::{Dataset, Overrides, Plan, validate_with_votes};
+        use crate::evaluate::plan::{Overrides, Plan, Recordings, validate_with_votes};
         let (profile, recs) = thesis_windows();
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../recordings/thesis-sim");
         let a = &profile.analysis;
         let samples =
-            Dataset::load(std::slice::from_ref(&dir), a, dataset::Keep::Samples, 2).unwrap();
-        let features = Dataset::load(&[dir], a, dataset::Keep::Features, 2).unwrap();
+            Recordings::load(std::slice::from_ref(&dir), a, dataset::Keep::Samples, 2).unwrap();
+        let features = Recordings::load(&[dir], a, dataset::Keep::Features, 2).unwrap();
         assert_eq!(samples.counts(), (recs.len(), recs.len()));
         assert_eq!(features.counts(), (recs.len(), 3 * recs.len()));
         let from_samples = samples.examples(a).unwrap();
