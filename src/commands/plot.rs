@@ -415,7 +415,7 @@ impl Trace {
             (a.min(*v * ys), b.max(*v * ys))
         });
         let pad = (ymax - ymin).max(1e-12) * 0.05;
-        let mut c = ChartBuilder::on(&top)
+        let mut c = ChartBuilder::on(top)
             .margin(10)
             .x_label_area_size(45)
             .y_label_area_size(70)
@@ -489,7 +489,7 @@ impl Trace {
                 (a.min(*v), b.max(*v))
             });
         let smin = smin.min(0.0);
-        let mut c = ChartBuilder::on(&bottom)
+        let mut c = ChartBuilder::on(bottom)
             .margin(10)
             .x_label_area_size(45)
             .y_label_area_size(70)
