@@ -383,4 +383,46 @@ mod tests {
         let d = s.describe();
         assert_eq!(d.0[0], ("spectrum".to_string(), "log-welch".to_string()));
     }
+
+    /// Each value the option list declares reaches its option: a setting
+    /// with it says it (a word or number as written; relative values
+    /// resolved), so a newly searched option needs only its declaration.
+    #[test]
+    fn every_declared_value_sets_its_option() {
+        let (a, c) = fingertip();
+        let g = grid((&a, &c));
+        for (row, r) in space().iter().enumerate() {
+            for (i, v) in r.values.iter().enumerate() {
+                let s = g
+                    .iter()
+                    .find(|s| s.values[row] == i)
+                    .unwrap_or_else(|| panic!("{} = {v}: in no setting", r.option));
+                let said = &s.describe().0[row];
+                assert_eq!(said.0, r.option);
+                let relative = v.contains('/');
+                if relative {
+                    assert!(
+                        said.1.chars().next().is_some_and(|c| c.is_ascii_digit()),
+                        "{said:?}"
+                    );
+                } else {
+                    assert!(said.1.starts_with(v), "{} = {v} gave {said:?}", r.option);
+                }
+            }
+        }
+        // The rows are the options that declare values, in list order.
+        let declared: Vec<&str> = ANALYSIS_OPTIONS
+            .iter()
+            .filter(|o| !o.search.is_empty())
+            .map(|o| o.field())
+            .chain(
+                CLASSIFIER_OPTIONS
+                    .iter()
+                    .filter(|o| !o.search.is_empty())
+                    .map(|o| o.field()),
+            )
+            .collect();
+        let rows: Vec<&str> = space().iter().map(|r| r.option).collect();
+        assert_eq!(rows, declared);
+    }
 }
