@@ -224,7 +224,21 @@ struct Confusion {
 struct Features {
     classes: Vec<(String, Vec<Vec<f64>>)>,
     kind: String,
+    /// The first feature's number, and what the features are (from the
+    /// option that decides them: DFT bins, bands or cepstra).
     first_bin: usize,
+    what: &'static str,
+}
+
+/// Where the features' axis starts and what it counts, as the option list
+/// labels them.
+fn feature_axis(a: &crate::profile::Analysis) -> (usize, &'static str) {
+    use crate::profile::options::FeatureNames;
+    match FeatureNames::of(a) {
+        FeatureNames::Bins { .. } => (a.kept_bins()[0], "feature (DFT bin)"),
+        FeatureNames::Bands { .. } => (0, "feature (band)"),
+        FeatureNames::Cepstra { first } => (first, "feature (cepstral coefficient)"),
+    }
 }
 
 /// The style of axis descriptions and legends.
@@ -357,10 +371,12 @@ impl Data {
                     return Err(bad("no complete recordings to plot"));
                 }
                 classes.sort_by(|a, b| a.0.cmp(&b.0));
+                let (first_bin, what) = feature_axis(&lp.profile.analysis);
                 Ok(Data::Features(Features {
                     classes,
                     kind: format!("{:?}", lp.profile.analysis.spectrum).to_lowercase(),
-                    first_bin: lp.profile.analysis.kept_bins()[0],
+                    first_bin,
+                    what,
                 }))
             }
             Figure::Sweep { sweep } => Ok(Data::Sweep(SweepFigure::load(sweep)?)),
@@ -615,6 +631,7 @@ impl Features {
             classes,
             kind,
             first_bin,
+            what,
         } = self;
         let panels = root.split_evenly((classes.len().div_ceil(2), 2.min(classes.len())));
         let ymax = classes
@@ -643,7 +660,7 @@ impl Features {
                 .map_err(fail)?;
             c.configure_mesh()
                 .disable_mesh()
-                .x_desc("feature (DFT bin)")
+                .x_desc(*what)
                 .y_desc(format!("{kind} of the signal"))
                 .label_style(("sans-serif", 14))
                 .draw()
