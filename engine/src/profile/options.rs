@@ -485,6 +485,10 @@ impl ClassifierOption {
     pub fn text(&self, c: &Classifier) -> String {
         plain((self.value)(c))
     }
+    /// As [`AnalysisOption::written`].
+    pub fn written(&self, c: &Classifier) -> Option<String> {
+        Some((self.value)(c)).filter(|v| v != "null")
+    }
 }
 
 /// The `[classifier]` option named `name` (`k` or `classifier.k`).
@@ -557,6 +561,11 @@ impl AnalysisOption {
     /// `none` when left out).
     pub fn text(&self, a: &Analysis) -> String {
         plain((self.value)(a))
+    }
+    /// The value `a` gives it as a profile line writes it (`"mean"`,
+    /// `0.0003`, `[1,49]`); `None` when it is left out.
+    pub fn written(&self, a: &Analysis) -> Option<String> {
+        Some((self.value)(a)).filter(|v| v != "null")
     }
 }
 
