@@ -165,6 +165,23 @@ impl LoadedProfile {
         origin: &str,
         base_dir: &Path,
     ) -> Result<LoadedProfile, ProfileError> {
+        // A check that failed, placed at its key's line in the file.
+        let at_key = |v: Invalid| {
+            let (line, column) = locate_key(text, &v.key);
+            ProfileError {
+                origin: origin.to_string(),
+                line,
+                column,
+                key: Some(v.key),
+                reason: v.reason,
+            }
+        };
+        // A word an option does not take, said from the option's
+        // declaration (before serde's message, which names no key).
+        let doc: Option<toml::Table> = toml::from_str(text).ok();
+        if let Some(v) = doc.as_ref().and_then(options::check_written) {
+            return Err(at_key(v));
+        }
         let profile: Profile = toml::from_str(text).map_err(|e| {
             let (line, column) = match e.span() {
                 Some(span) => line_col(text, span.start),
@@ -178,18 +195,7 @@ impl LoadedProfile {
                 reason: e.message().trim().to_string(),
             }
         })?;
-        // A check that failed, placed at its key's line in the file.
-        let at_key = |v: Invalid| {
-            let (line, column) = locate_key(text, &v.key);
-            ProfileError {
-                origin: origin.to_string(),
-                line,
-                column,
-                key: Some(v.key),
-                reason: v.reason,
-            }
-        };
-        if let Some(v) = one_feature_choice(text) {
+        if let Some(v) = doc.as_ref().and_then(one_feature_choice) {
             return Err(at_key(v));
         }
         let mut profile = profile;
@@ -224,9 +230,8 @@ impl LoadedProfile {
 /// `bins`, `band` and `bands` each choose the features kept, and `bins` has
 /// a default, so only the text tells whether it was written beside one of
 /// the others (which would silently win): the first pair written, refused.
-fn one_feature_choice(text: &str) -> Option<Invalid> {
-    let table: toml::Table = toml::from_str(text).ok()?;
-    let analysis = table.get("analysis")?.as_table()?;
+fn one_feature_choice(doc: &toml::Table) -> Option<Invalid> {
+    let analysis = doc.get("analysis")?.as_table()?;
     let written: Vec<&str> = ["bins", "band", "bands"]
         .into_iter()
         .filter(|k| analysis.contains_key(*k))

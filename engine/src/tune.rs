@@ -4,7 +4,7 @@
 //! The outer split is the profile's `[evaluation]` (the plan `evaluate`
 //! makes): a holdout's test part, or each fold of k-fold and leave-one-out.
 //! Inside each outer training part, every setting of the search
-//! ([`space::SPACE`], sampled by [`Options::budget`]) is scored by 5-fold
+//! ([`space::space`], sampled by [`Options::budget`]) is scored by 5-fold
 //! cross-validation over that part only: recordings, never sub-windows,
 //! are dealt into the inner folds (stratified; whole groups with
 //! `group_by`), and the score is the mean of the folds' accuracies. The

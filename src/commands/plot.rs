@@ -190,33 +190,59 @@ pub fn run(args: &PlotArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// What a figure shows, loaded before any drawing.
+/// What a figure shows, loaded before any drawing: one type a figure.
 enum Data {
-    Trace {
-        title: String,
-        axis_name: String,
-        channel: String,
-        axis: Vec<f64>,
-        signal: Vec<f64>,
-        window: [f64; 2],
-        resampled: Vec<(f64, f64)>,
-        spectrum: Vec<(f64, f64)>,
-        kept: [usize; 2],
-        freq_unit: String,
-        kind: String,
-    },
-    Confusion {
-        labels: Vec<String>,
-        confusion: Vec<Vec<f64>>,
-        accuracy: f64,
-    },
-    Features {
-        classes: Vec<(String, Vec<Vec<f64>>)>,
-        kind: String,
-        first_bin: usize,
-    },
+    Trace(Trace),
+    Confusion(Confusion),
+    Features(Features),
     Sweep(SweepFigure),
 }
+
+/// A recording's signal with the analysis window, and its spectrum.
+struct Trace {
+    title: String,
+    axis_name: String,
+    channel: String,
+    axis: Vec<f64>,
+    signal: Vec<f64>,
+    window: [f64; 2],
+    resampled: Vec<(f64, f64)>,
+    spectrum: Vec<(f64, f64)>,
+    kept: [usize; 2],
+    freq_unit: String,
+    kind: String,
+}
+
+/// An evaluation's confusion matrix.
+struct Confusion {
+    labels: Vec<String>,
+    confusion: Vec<Vec<f64>>,
+    accuracy: f64,
+}
+
+/// A few recordings' features, class by class.
+struct Features {
+    classes: Vec<(String, Vec<Vec<f64>>)>,
+    kind: String,
+    /// The first feature's number, and what the features are (from the
+    /// option that decides them: DFT bins, bands or cepstra).
+    first_bin: usize,
+    what: &'static str,
+}
+
+/// Where the features' axis starts and what it counts, as the option list
+/// labels them.
+fn feature_axis(a: &crate::profile::Analysis) -> (usize, &'static str) {
+    use crate::profile::options::FeatureNames;
+    match FeatureNames::of(a) {
+        FeatureNames::Bins { .. } => (a.kept_bins()[0], "feature (DFT bin)"),
+        FeatureNames::Bands { .. } => (0, "feature (band)"),
+        FeatureNames::Cepstra { first } => (first, "feature (cepstral coefficient)"),
+    }
+}
+
+/// The style of axis descriptions and legends.
+const LABELS: (&str, u32) = ("sans-serif", 18);
 
 fn read_json(p: &Path) -> Result<serde_json::Value, Failure> {
     let bytes = crate::recording::files::read_input(p).map_err(|e| {
@@ -266,7 +292,7 @@ impl Data {
                     .enumerate()
                     .map(|(k, &v)| (fx.frequency(k), v))
                     .collect();
-                Ok(Data::Trace {
+                Ok(Data::Trace(Trace {
                     title: format!("{} ({})", file.display(), label_of(&rec, file)?),
                     axis_name: a.axis.clone(),
                     channel: a.channel.clone(),
@@ -278,7 +304,7 @@ impl Data {
                     kept: a.kept_bins(),
                     freq_unit: a.frequency_unit().to_string(),
                     kind: format!("{:?}", a.spectrum).to_lowercase(),
-                })
+                }))
             }
             Figure::Confusion { report } => {
                 let v = read_json(report)?;
@@ -300,11 +326,11 @@ impl Data {
                         n = labels.len()
                     )));
                 }
-                Ok(Data::Confusion {
+                Ok(Data::Confusion(Confusion {
                     labels,
                     confusion,
                     accuracy: v["accuracy"].as_f64().unwrap_or(f64::NAN),
-                })
+                }))
             }
             Figure::Features {
                 profile,
@@ -345,11 +371,13 @@ impl Data {
                     return Err(bad("no complete recordings to plot"));
                 }
                 classes.sort_by(|a, b| a.0.cmp(&b.0));
-                Ok(Data::Features {
+                let (first_bin, what) = feature_axis(&lp.profile.analysis);
+                Ok(Data::Features(Features {
                     classes,
                     kind: format!("{:?}", lp.profile.analysis.spectrum).to_lowercase(),
-                    first_bin: lp.profile.analysis.kept_bins()[0],
-                })
+                    first_bin,
+                    what,
+                }))
             }
             Figure::Sweep { sweep } => Ok(Data::Sweep(SweepFigure::load(sweep)?)),
         }
@@ -360,250 +388,296 @@ impl Data {
         DB::ErrorType: 'static,
     {
         root.fill(&WHITE).map_err(fail)?;
-        let font = ("sans-serif", 18);
         match self {
-            Data::Trace {
-                title,
-                axis_name,
-                channel,
-                axis,
-                signal,
-                window,
-                resampled,
-                spectrum,
-                kept,
-                freq_unit,
-                kind,
-            } => {
-                let root = root.titled(title, ("sans-serif", 20)).map_err(fail)?;
-                let (top, bottom) = root.split_vertically(root.dim_in_pixel().1 / 2);
-                let (xu, xs) = unit_of(axis_name);
-                let (yu, ys) = unit_of(channel);
-                let xmax = axis.iter().fold(f64::MIN, |m, v| m.max(*v)) * xs;
-                let (ymin, ymax) = signal.iter().fold((f64::MAX, f64::MIN), |(a, b), v| {
-                    (a.min(*v * ys), b.max(*v * ys))
-                });
-                let pad = (ymax - ymin).max(1e-12) * 0.05;
-                let mut c = ChartBuilder::on(&top)
-                    .margin(10)
-                    .x_label_area_size(45)
-                    .y_label_area_size(70)
-                    .build_cartesian_2d(0.0..xmax.max(window[1] * xs), (ymin - pad)..(ymax + pad))
-                    .map_err(fail)?;
-                c.configure_mesh()
-                    .disable_mesh()
-                    .x_desc(
-                        format!("distance along {axis_name} from the scan's start ({xu})")
-                            .replace(" ()", ""),
-                    )
-                    .y_desc(if yu.is_empty() {
-                        channel.clone()
-                    } else {
-                        format!("{channel} ({yu})")
-                    })
-                    .label_style(font)
-                    .draw()
-                    .map_err(fail)?;
-                c.draw_series(std::iter::once(Rectangle::new(
-                    [(window[0] * xs, ymin - pad), (window[1] * xs, ymax + pad)],
-                    RGBColor(225, 225, 225).filled(),
-                )))
-                .map_err(fail)?
-                .label("analysis window")
-                .legend(|(x, y)| {
-                    Rectangle::new(
-                        [(x, y - 6), (x + 20, y + 6)],
-                        RGBColor(225, 225, 225).filled(),
-                    )
-                });
-                c.draw_series(LineSeries::new(
-                    axis.iter().zip(signal).map(|(a, v)| (a * xs, v * ys)),
-                    GREYS[1].stroke_width(1),
-                ))
-                .map_err(fail)?
-                .label("recorded trace")
-                .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], GREYS[1]));
-                c.draw_series(LineSeries::new(
-                    resampled.iter().map(|(a, v)| (a * xs, v * ys)),
-                    BLACK.stroke_width(2),
-                ))
-                .map_err(fail)?
-                .label("resampled")
-                .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK.stroke_width(2)));
-                c.configure_series_labels()
-                    .background_style(WHITE.mix(0.9))
-                    .border_style(BLACK)
-                    .label_font(font)
-                    .draw()
-                    .map_err(fail)?;
+            Data::Trace(t) => t.draw(root),
+            Data::Confusion(c) => c.draw(root),
+            Data::Features(f) => f.draw(root),
+            Data::Sweep(sweep) => sweep.draw(root),
+        }
+    }
+}
 
-                let fmax = spectrum.last().map_or(1.0, |p| p.0).max(1e-12);
-                let (smin, smax) = spectrum
-                    .iter()
-                    .fold((f64::MAX, f64::MIN), |(a, b), (_, v)| {
-                        (a.min(*v), b.max(*v))
-                    });
-                let smin = smin.min(0.0);
-                let mut c = ChartBuilder::on(&bottom)
-                    .margin(10)
-                    .x_label_area_size(45)
-                    .y_label_area_size(70)
-                    .build_cartesian_2d(
-                        0.0..fmax,
-                        smin..(smax + (smax - smin).abs().max(1e-30) * 0.05),
-                    )
-                    .map_err(fail)?;
-                c.configure_mesh()
-                    .disable_mesh()
-                    .x_desc(format!("frequency ({freq_unit})"))
-                    .y_desc(format!("{kind} spectrum"))
-                    .label_style(font)
-                    .draw()
-                    .map_err(fail)?;
-                c.draw_series(spectrum.iter().enumerate().map(|(k, &(f, v))| {
-                    let inside = k >= kept[0] && k <= kept[1];
-                    let style = if inside {
-                        BLACK.filled()
-                    } else {
-                        GREYS[2].filled()
-                    };
-                    let w = fmax / spectrum.len() as f64 * 0.35;
-                    Rectangle::new([(f - w, smin), (f + w, v)], style)
-                }))
-                .map_err(fail)?
-                .label("bins kept as features")
-                .legend(|(x, y)| Rectangle::new([(x, y - 6), (x + 20, y + 6)], BLACK.filled()));
-                c.draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
-                    .map_err(fail)?
-                    .label("bins left out")
-                    .legend(|(x, y)| {
-                        Rectangle::new([(x, y - 6), (x + 20, y + 6)], GREYS[2].filled())
-                    });
-                c.configure_series_labels()
-                    .background_style(WHITE.mix(0.9))
-                    .border_style(BLACK)
-                    .label_font(font)
-                    .draw()
-                    .map_err(fail)?;
+impl Trace {
+    /// The signal over the analysis window above, its spectrum below (the
+    /// thesis's Figs 4.5–4.8).
+    fn draw<DB: DrawingBackend>(&self, root: &Area<DB>) -> Result<(), Failure>
+    where
+        DB::ErrorType: 'static,
+    {
+        let root = root.titled(&self.title, ("sans-serif", 20)).map_err(fail)?;
+        let (top, bottom) = root.split_vertically(root.dim_in_pixel().1 / 2);
+        self.draw_signal(&top)?;
+        self.draw_spectrum(&bottom)
+    }
+
+    /// The recorded and the resampled signal, the window shaded.
+    fn draw_signal<DB: DrawingBackend>(&self, top: &Area<DB>) -> Result<(), Failure>
+    where
+        DB::ErrorType: 'static,
+    {
+        let Trace {
+            axis_name,
+            channel,
+            axis,
+            signal,
+            window,
+            resampled,
+            ..
+        } = self;
+        let (xu, xs) = unit_of(axis_name);
+        let (yu, ys) = unit_of(channel);
+        let xmax = axis.iter().fold(f64::MIN, |m, v| m.max(*v)) * xs;
+        let (ymin, ymax) = signal.iter().fold((f64::MAX, f64::MIN), |(a, b), v| {
+            (a.min(*v * ys), b.max(*v * ys))
+        });
+        let pad = (ymax - ymin).max(1e-12) * 0.05;
+        let mut c = ChartBuilder::on(top)
+            .margin(10)
+            .x_label_area_size(45)
+            .y_label_area_size(70)
+            .build_cartesian_2d(0.0..xmax.max(window[1] * xs), (ymin - pad)..(ymax + pad))
+            .map_err(fail)?;
+        c.configure_mesh()
+            .disable_mesh()
+            .x_desc(
+                format!("distance along {axis_name} from the scan's start ({xu})")
+                    .replace(" ()", ""),
+            )
+            .y_desc(if yu.is_empty() {
+                channel.clone()
+            } else {
+                format!("{channel} ({yu})")
+            })
+            .label_style(LABELS)
+            .draw()
+            .map_err(fail)?;
+        c.draw_series(std::iter::once(Rectangle::new(
+            [(window[0] * xs, ymin - pad), (window[1] * xs, ymax + pad)],
+            RGBColor(225, 225, 225).filled(),
+        )))
+        .map_err(fail)?
+        .label("analysis window")
+        .legend(|(x, y)| {
+            Rectangle::new(
+                [(x, y - 6), (x + 20, y + 6)],
+                RGBColor(225, 225, 225).filled(),
+            )
+        });
+        c.draw_series(LineSeries::new(
+            axis.iter().zip(signal).map(|(a, v)| (a * xs, v * ys)),
+            GREYS[1].stroke_width(1),
+        ))
+        .map_err(fail)?
+        .label("recorded trace")
+        .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], GREYS[1]));
+        c.draw_series(LineSeries::new(
+            resampled.iter().map(|(a, v)| (a * xs, v * ys)),
+            BLACK.stroke_width(2),
+        ))
+        .map_err(fail)?
+        .label("resampled")
+        .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK.stroke_width(2)));
+        c.configure_series_labels()
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK)
+            .label_font(LABELS)
+            .draw()
+            .map_err(fail)?;
+        Ok(())
+    }
+
+    /// The spectrum, the bins kept black and the rest grey.
+    fn draw_spectrum<DB: DrawingBackend>(&self, bottom: &Area<DB>) -> Result<(), Failure>
+    where
+        DB::ErrorType: 'static,
+    {
+        let Trace {
+            spectrum,
+            kept,
+            freq_unit,
+            kind,
+            ..
+        } = self;
+        let fmax = spectrum.last().map_or(1.0, |p| p.0).max(1e-12);
+        let (smin, smax) = spectrum
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(a, b), (_, v)| {
+                (a.min(*v), b.max(*v))
+            });
+        let smin = smin.min(0.0);
+        let mut c = ChartBuilder::on(bottom)
+            .margin(10)
+            .x_label_area_size(45)
+            .y_label_area_size(70)
+            .build_cartesian_2d(
+                0.0..fmax,
+                smin..(smax + (smax - smin).abs().max(1e-30) * 0.05),
+            )
+            .map_err(fail)?;
+        c.configure_mesh()
+            .disable_mesh()
+            .x_desc(format!("frequency ({freq_unit})"))
+            .y_desc(format!("{kind} spectrum"))
+            .label_style(LABELS)
+            .draw()
+            .map_err(fail)?;
+        c.draw_series(spectrum.iter().enumerate().map(|(k, &(f, v))| {
+            let inside = k >= kept[0] && k <= kept[1];
+            let style = if inside {
+                BLACK.filled()
+            } else {
+                GREYS[2].filled()
+            };
+            let w = fmax / spectrum.len() as f64 * 0.35;
+            Rectangle::new([(f - w, smin), (f + w, v)], style)
+        }))
+        .map_err(fail)?
+        .label("bins kept as features")
+        .legend(|(x, y)| Rectangle::new([(x, y - 6), (x + 20, y + 6)], BLACK.filled()));
+        c.draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+            .map_err(fail)?
+            .label("bins left out")
+            .legend(|(x, y)| Rectangle::new([(x, y - 6), (x + 20, y + 6)], GREYS[2].filled()));
+        c.configure_series_labels()
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK)
+            .label_font(LABELS)
+            .draw()
+            .map_err(fail)?;
+        Ok(())
+    }
+}
+
+impl Confusion {
+    /// A grey heat map with the counts and shares written in.
+    fn draw<DB: DrawingBackend>(&self, root: &Area<DB>) -> Result<(), Failure>
+    where
+        DB::ErrorType: 'static,
+    {
+        let Confusion {
+            labels,
+            confusion,
+            accuracy,
+        } = self;
+        let n = labels.len();
+        let title = format!("Confusion matrix (accuracy {:.1} %)", 100.0 * accuracy);
+        let root = root.titled(&title, ("sans-serif", 22)).map_err(fail)?;
+        let mut c = ChartBuilder::on(&root)
+            .margin(20)
+            .x_label_area_size(50)
+            .y_label_area_size(80)
+            .build_cartesian_2d(
+                (0..n.saturating_sub(1)).into_segmented(),
+                (0..n.saturating_sub(1)).into_segmented(),
+            )
+            .map_err(fail)?;
+        let l2 = labels.clone();
+        let l3 = labels.clone();
+        c.configure_mesh()
+            .disable_mesh()
+            .x_labels(n + 1)
+            .y_labels(n + 1)
+            .x_label_formatter(&move |v| match v {
+                SegmentValue::CenterOf(i) => l2.get(*i).cloned().unwrap_or_default(),
+                _ => String::new(),
+            })
+            .y_label_formatter(&move |v| match v {
+                SegmentValue::CenterOf(i) if *i < n => l3[n - 1 - *i].clone(),
+                _ => String::new(),
+            })
+            .x_desc("classified as")
+            .y_desc("true class")
+            .label_style(LABELS)
+            .draw()
+            .map_err(fail)?;
+        for (i, row) in confusion.iter().enumerate() {
+            let total: f64 = row.iter().sum::<f64>().max(1.0);
+            for (j, &v) in row.iter().enumerate() {
+                let frac = v / total;
+                let g = (255.0 * (1.0 - 0.85 * frac)) as u8;
+                let y = n - 1 - i;
+                c.draw_series(std::iter::once(Rectangle::new(
+                    [
+                        (SegmentValue::Exact(j), SegmentValue::Exact(y)),
+                        (SegmentValue::Exact(j + 1), SegmentValue::Exact(y + 1)),
+                    ],
+                    RGBColor(g, g, g).filled(),
+                )))
+                .map_err(fail)?;
+                let text_colour = if frac > 0.5 { WHITE } else { BLACK };
+                let style = ("sans-serif", 20)
+                    .into_font()
+                    .color(&text_colour)
+                    .pos(Pos::new(HPos::Center, VPos::Center));
+                c.draw_series(std::iter::once(Text::new(
+                    format!("{v:.0} ({:.0} %)", 100.0 * frac),
+                    (SegmentValue::CenterOf(j), SegmentValue::CenterOf(y)),
+                    style,
+                )))
+                .map_err(fail)?;
             }
-            Data::Confusion {
-                labels,
-                confusion,
-                accuracy,
-            } => {
-                let n = labels.len();
-                let title = format!("Confusion matrix (accuracy {:.1} %)", 100.0 * accuracy);
-                let root = root.titled(&title, ("sans-serif", 22)).map_err(fail)?;
-                let mut c = ChartBuilder::on(&root)
-                    .margin(20)
-                    .x_label_area_size(50)
-                    .y_label_area_size(80)
-                    .build_cartesian_2d(
-                        (0..n.saturating_sub(1)).into_segmented(),
-                        (0..n.saturating_sub(1)).into_segmented(),
-                    )
-                    .map_err(fail)?;
-                let l2 = labels.clone();
-                let l3 = labels.clone();
-                c.configure_mesh()
-                    .disable_mesh()
-                    .x_labels(n + 1)
-                    .y_labels(n + 1)
-                    .x_label_formatter(&move |v| match v {
-                        SegmentValue::CenterOf(i) => l2.get(*i).cloned().unwrap_or_default(),
-                        _ => String::new(),
-                    })
-                    .y_label_formatter(&move |v| match v {
-                        SegmentValue::CenterOf(i) if *i < n => l3[n - 1 - *i].clone(),
-                        _ => String::new(),
-                    })
-                    .x_desc("classified as")
-                    .y_desc("true class")
-                    .label_style(font)
-                    .draw()
-                    .map_err(fail)?;
-                for (i, row) in confusion.iter().enumerate() {
-                    let total: f64 = row.iter().sum::<f64>().max(1.0);
-                    for (j, &v) in row.iter().enumerate() {
-                        let frac = v / total;
-                        let g = (255.0 * (1.0 - 0.85 * frac)) as u8;
-                        let y = n - 1 - i;
-                        c.draw_series(std::iter::once(Rectangle::new(
-                            [
-                                (SegmentValue::Exact(j), SegmentValue::Exact(y)),
-                                (SegmentValue::Exact(j + 1), SegmentValue::Exact(y + 1)),
-                            ],
-                            RGBColor(g, g, g).filled(),
-                        )))
-                        .map_err(fail)?;
-                        let text_colour = if frac > 0.5 { WHITE } else { BLACK };
-                        let style = ("sans-serif", 20)
-                            .into_font()
-                            .color(&text_colour)
-                            .pos(Pos::new(HPos::Center, VPos::Center));
-                        c.draw_series(std::iter::once(Text::new(
-                            format!("{v:.0} ({:.0} %)", 100.0 * frac),
-                            (SegmentValue::CenterOf(j), SegmentValue::CenterOf(y)),
-                            style,
-                        )))
-                        .map_err(fail)?;
-                    }
-                }
-            }
-            Data::Features {
-                classes,
-                kind,
-                first_bin,
-            } => {
-                let panels = root.split_evenly((classes.len().div_ceil(2), 2.min(classes.len())));
-                let ymax = classes
-                    .iter()
-                    .flat_map(|(_, v)| v.iter().flatten())
-                    .fold(f64::MIN, |m, v| m.max(*v));
-                let ymin = classes
-                    .iter()
-                    .flat_map(|(_, v)| v.iter().flatten())
-                    .fold(f64::MAX, |m, v| m.min(*v))
-                    .min(0.0);
-                for ((label, rows), panel) in classes.iter().zip(panels.iter()) {
-                    let d = rows.first().map_or(1, Vec::len);
-                    let mut c = ChartBuilder::on(panel)
-                        .caption(
-                            format!("{label}: {} recordings", rows.len()),
-                            ("sans-serif", 18),
-                        )
-                        .margin(8)
-                        .x_label_area_size(40)
-                        .y_label_area_size(70)
-                        .build_cartesian_2d(
-                            *first_bin as f64..(first_bin + d - 1).max(first_bin + 1) as f64,
-                            ymin..ymax * 1.05,
-                        )
-                        .map_err(fail)?;
-                    c.configure_mesh()
-                        .disable_mesh()
-                        .x_desc("feature (DFT bin)")
-                        .y_desc(format!("{kind} of the signal"))
-                        .label_style(("sans-serif", 14))
-                        .draw()
-                        .map_err(fail)?;
-                    for (i, r) in rows.iter().enumerate() {
-                        c.draw_series(LineSeries::new(
-                            r.iter()
-                                .enumerate()
-                                .map(|(k, v)| ((first_bin + k) as f64, *v)),
-                            GREYS[i % 3].stroke_width(1),
-                        ))
-                        .map_err(fail)?;
-                    }
-                }
-            }
-            Data::Sweep(sweep) => sweep.draw(root)?,
         }
         Ok(())
     }
 }
 
+impl Features {
+    /// One panel a class, a line a recording (Fig 4.3).
+    fn draw<DB: DrawingBackend>(&self, root: &Area<DB>) -> Result<(), Failure>
+    where
+        DB::ErrorType: 'static,
+    {
+        let Features {
+            classes,
+            kind,
+            first_bin,
+            what,
+        } = self;
+        let panels = root.split_evenly((classes.len().div_ceil(2), 2.min(classes.len())));
+        let ymax = classes
+            .iter()
+            .flat_map(|(_, v)| v.iter().flatten())
+            .fold(f64::MIN, |m, v| m.max(*v));
+        let ymin = classes
+            .iter()
+            .flat_map(|(_, v)| v.iter().flatten())
+            .fold(f64::MAX, |m, v| m.min(*v))
+            .min(0.0);
+        for ((label, rows), panel) in classes.iter().zip(panels.iter()) {
+            let d = rows.first().map_or(1, Vec::len);
+            let mut c = ChartBuilder::on(panel)
+                .caption(
+                    format!("{label}: {} recordings", rows.len()),
+                    ("sans-serif", 18),
+                )
+                .margin(8)
+                .x_label_area_size(40)
+                .y_label_area_size(70)
+                .build_cartesian_2d(
+                    *first_bin as f64..(first_bin + d - 1).max(first_bin + 1) as f64,
+                    ymin..ymax * 1.05,
+                )
+                .map_err(fail)?;
+            c.configure_mesh()
+                .disable_mesh()
+                .x_desc(*what)
+                .y_desc(format!("{kind} of the signal"))
+                .label_style(("sans-serif", 14))
+                .draw()
+                .map_err(fail)?;
+            for (i, r) in rows.iter().enumerate() {
+                c.draw_series(LineSeries::new(
+                    r.iter()
+                        .enumerate()
+                        .map(|(k, v)| ((first_bin + k) as f64, *v)),
+                    GREYS[i % 3].stroke_width(1),
+                ))
+                .map_err(fail)?;
+            }
+        }
+        Ok(())
+    }
+}
 /// A swept key as an axis label: the unit its name ends with spelled out,
 /// `controller.stiffness_n_per_m[1]` as `controller.stiffness_n_per_m[1] (N/m)`.
 pub fn with_unit(key: &str) -> String {

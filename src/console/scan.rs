@@ -10,7 +10,6 @@ use std::path::{Path, PathBuf};
 use crate::analysis::FeatureExtractor;
 use crate::classify::Model;
 use crate::predictor::{Answer, Features, Predictor, Query};
-use crate::profile::{Analysis, SpectrumKind};
 use crate::recording::Recording;
 
 /// Points kept of the trace for drawing (a scan has ~9000 samples).
@@ -57,50 +56,9 @@ pub struct ScanView {
     pub stored: Option<PathBuf>,
 }
 
-/// What a scan's features are, channel by channel (the Spectrum panel's
-/// labels).
-#[derive(Debug, Clone, PartialEq)]
-pub enum FeatureNames {
-    /// DFT bins from `first_bin` on; `value` says what a bin holds.
-    Bins { value: &'static str },
-    /// Band energies: band `i` from `edges[i]` to `edges[i + 1]`, in `unit`.
-    Bands {
-        edges: Vec<f64>,
-        unit: &'static str,
-        value: &'static str,
-    },
-    /// Cepstral coefficients `c<first>, …` of the log band energies
-    /// (`first` is 1 when the level term c0 is dropped).
-    Cepstra { first: usize },
-}
-
-impl FeatureNames {
-    /// The names of an analysis's features.
-    pub fn of(s: &Analysis) -> FeatureNames {
-        let log = s.spectrum.is_log();
-        match s.bands {
-            Some(_) if s.cepstra.is_some() => FeatureNames::Cepstra {
-                // Those kept are the last of the `cepstra` coefficients.
-                first: s
-                    .cepstra
-                    .unwrap_or(0)
-                    .saturating_sub(s.features_per_channel()),
-            },
-            Some(b) => FeatureNames::Bands {
-                edges: b.edges(),
-                unit: s.frequency_unit(),
-                value: if log { "log10 energy" } else { "energy" },
-            },
-            None => FeatureNames::Bins {
-                value: match s.spectrum {
-                    SpectrumKind::Magnitude => "|X|",
-                    SpectrumKind::Power | SpectrumKind::Welch => "power",
-                    SpectrumKind::LogPower | SpectrumKind::LogWelch => "log10 power",
-                },
-            },
-        }
-    }
-}
+/// What a scan's features are (the Spectrum panel's labels): declared
+/// with the analysis options that decide them.
+pub use crate::profile::options::FeatureNames;
 
 /// A prediction as the console holds it: the engine's [`Answer`].
 pub type PredictionView = Answer;

@@ -220,8 +220,9 @@ fn profile_new_on_the_thesis_recordings_reads_the_stroke_and_evaluates() {
     ]);
     assert_eq!(r.code, Some(0), "{r:?}");
     let text = fs::read_to_string(&out).unwrap();
-    assert!(text.contains("channel = \"y_m\"\n"), "{text}");
-    assert!(text.contains("axis = \"x_m\"\n"), "{text}");
+    // Each line followed by its option's advice.
+    assert!(text.contains("\nchannel = \"y_m\"   # "), "{text}");
+    assert!(text.contains("\naxis = \"x_m\"   # "), "{text}");
     assert!(text.contains("spacing = 0.0003"), "{text}");
     assert!(text.contains("#   S4: 30"), "{text}");
     let r = run(&["evaluate", "recordings/thesis-sim", "-p", p(&out)]);

@@ -7,6 +7,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::options::{option, words};
 use super::path::PathSpec;
 use super::{Invalid, bad, compact, dist, finite_pos, is_default};
 
@@ -436,6 +437,15 @@ impl Analysis {
     }
 }
 
+/// What an option allows, as its declaration says it (`0 <= overlap < 1`):
+/// a message cannot then disagree with the list.
+fn declared(field: &str) -> &'static str {
+    option(field)
+        .and_then(|o| o.allowed.first())
+        .copied()
+        .unwrap_or("")
+}
+
 /// Checks the options beyond the thesis's (spectrum kind, Welch segments,
 /// band): `Err((key, reason))`. Assumes the window and spacing are valid.
 pub fn check_options(s: &Analysis) -> Result<(), (String, String)> {
@@ -446,14 +456,14 @@ pub fn check_options(s: &Analysis) -> Result<(), (String, String)> {
         if m < 4 || m > n {
             return bad(
                 "welch_segment",
-                format!("must be 4 to {n} points (the window's), got {m}"),
+                format!("must be {} ({n}), got {m}", declared("welch_segment")),
             );
         }
         let o = s.overlap();
         if !(o.is_finite() && (0.0..1.0).contains(&o)) {
             return bad(
                 "welch_overlap",
-                format!("must be 0 <= overlap < 1, got {o}"),
+                format!("must be {}, got {o}", declared("welch_overlap")),
             );
         }
     } else if s.welch_segment.is_some() {
@@ -565,7 +575,7 @@ fn check_bands(s: &Analysis) -> Result<(), (String, String)> {
     {
         return bad(
             "cepstra",
-            format!("must be 1 to bands.count ({}), got {m}", b.count),
+            format!("must be {} ({}), got {m}", declared("cepstra"), b.count),
         );
     }
     match s.cepstra {
@@ -696,7 +706,10 @@ pub(super) fn validate(an: &Analysis, p: Option<&PathSpec>) -> Result<(), Invali
         other => {
             return bad(
                 "analysis.axis",
-                format!("must be one of x_m, y_m, z_m, t_s, got {other:?}"),
+                format!(
+                    "must be {}, got {other:?}",
+                    option("axis").map_or(String::new(), |o| words(o.allowed))
+                ),
             );
         }
     };

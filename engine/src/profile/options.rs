@@ -1,13 +1,19 @@
 //! The one list of analysis options: each `[analysis]` key declared once
 //! ([`ANALYSIS_OPTIONS`]) with its type, allowed values, unit, whether a
 //! sweep may vary it, whether it changes the features (and so which models
-//! fit a profile), its group and one line of advice for `profile new`, and
-//! a small default search range for a tuner. The model compatibility
-//! check ([`first_difference`]) and the sweep keys read it; adding an
-//! option means its analysis code, its line here, and its tests (the
-//! compiler and a test below refuse an `Analysis` field missing here).
+//! fit a profile), its group and one line of advice for `profile new`, the
+//! values `tune` searches, and how the features it decides are labelled;
+//! the `[classifier]` keys likewise ([`CLASSIFIER_OPTIONS`]). Derived from
+//! it: the model compatibility check ([`first_difference`]), the sweep
+//! keys, `tune`'s space, `profile new`'s groups and advice, `check`'s
+//! message for a word or flag an option does not take ([`check_written`])
+//! and the Spectrum panel's labels ([`FeatureNames::of`]). Adding an option
+//! means its analysis code, its line here, and its tests (the compiler and
+//! a test below refuse an `Analysis` field missing here).
 
-use super::analysis::Analysis;
+use super::Invalid;
+use super::analysis::{Analysis, SpectrumKind};
+use super::classifier::Classifier;
 
 /// A value's kind, as a profile writes it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -26,7 +32,7 @@ pub enum Kind {
     Table,
 }
 
-/// Where `profile new` puts an option.
+/// Where `profile new` puts an option, in this order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Group {
     /// Which signal, along which axis, over which stretch.
@@ -39,14 +45,71 @@ pub enum Group {
     Windows,
 }
 
+impl Group {
+    /// Every group, in the order `profile new` writes them.
+    pub const ALL: [Group; 4] = [
+        Group::Signal,
+        Group::Resampling,
+        Group::Spectrum,
+        Group::Windows,
+    ];
+    /// What the group decides, as `profile new` heads it.
+    pub fn title(self) -> &'static str {
+        match self {
+            Group::Signal => "The signal: which column, along which axis, over which stretch",
+            Group::Resampling => "Resampling: the step, and what is removed before the spectrum",
+            Group::Spectrum => "The spectrum, and which of its parts become features",
+            Group::Windows => "Sub-windows, each a vote",
+        }
+    }
+}
+
+/// What a scan's features are, channel by channel (the Spectrum panel's
+/// labels), as the option that decides them declares.
+#[derive(Debug, Clone, PartialEq)]
+pub enum FeatureNames {
+    /// DFT bins from the first kept on; `value` says what a bin holds.
+    Bins { value: &'static str },
+    /// Band energies: band `i` from `edges[i]` to `edges[i + 1]`, in `unit`.
+    Bands {
+        edges: Vec<f64>,
+        unit: &'static str,
+        value: &'static str,
+    },
+    /// Cepstral coefficients `c<first>, …` of the log band energies
+    /// (`first` is 1 when the level term c0 is dropped).
+    Cepstra { first: usize },
+}
+
+impl FeatureNames {
+    /// The names of an analysis's features: those of the one option that
+    /// decides them (`bins`, `band`, `bands` or `cepstra`).
+    pub fn of(a: &Analysis) -> FeatureNames {
+        ANALYSIS_OPTIONS
+            .iter()
+            .filter_map(|o| o.labels)
+            .find_map(|labels| labels(a))
+            .unwrap_or(FeatureNames::Bins { value: "value" })
+    }
+}
+
+/// What one DFT bin of `a`'s spectrum holds.
+fn bin_value(a: &Analysis) -> &'static str {
+    match a.spectrum {
+        SpectrumKind::Magnitude => "|X|",
+        SpectrumKind::Power | SpectrumKind::Welch => "power",
+        SpectrumKind::LogPower | SpectrumKind::LogWelch => "log10 power",
+    }
+}
+
 /// One `[analysis]` option.
 #[derive(Debug, Clone, Copy)]
 pub struct AnalysisOption {
     /// The key, with its table: `analysis.spacing`.
     pub name: &'static str,
     pub kind: Kind,
-    /// The words a [`Kind::Choice`] takes, or a short description of the
-    /// values allowed.
+    /// The words a [`Kind::Choice`] or [`Kind::Flag`] takes, or a short
+    /// description of the values allowed.
     pub allowed: &'static [&'static str],
     /// The unit ("" for none; "axis" for the analysis axis's unit).
     pub unit: &'static str,
@@ -58,13 +121,19 @@ pub struct AnalysisOption {
     pub group: Group,
     /// One line for `profile new` and `check`.
     pub advice: &'static str,
-    /// A small default search range for a tuner (`evaluate --sweep`
-    /// syntax), where one makes sense.
-    pub search: Option<&'static str>,
+    /// The values `tune` searches, simplest first (none: not searched):
+    /// each as a profile writes it (a word, a number, `true`), `none` for
+    /// the option left out, or relative to the data as `tune` resolves it
+    /// (`points/4`: a power of two, at most a quarter of the points;
+    /// `window/4`: a quarter of the window).
+    pub search: &'static [&'static str],
     /// The value as the model file writes it, and whether two analyses
     /// agree on it (some options only matter when another is set).
     value: fn(&Analysis) -> String,
     same: fn(&Analysis, &Analysis) -> bool,
+    /// How the features are labelled when this option decides them
+    /// (`None` from the function when another one does).
+    labels: Option<fn(&Analysis) -> Option<FeatureNames>>,
 }
 
 /// How an option is written and compared.
@@ -93,7 +162,6 @@ const fn opt(
     sweepable: bool,
     group: Group,
     advice: &'static str,
-    search: Option<&'static str>,
     (value, same): Compare,
 ) -> AnalysisOption {
     AnalysisOption {
@@ -105,13 +173,28 @@ const fn opt(
         changes_features: true,
         group,
         advice,
-        search,
+        search: &[],
         value,
         same,
+        labels: None,
     }
 }
 
-/// Every `[analysis]` option, in the order a profile lists them.
+impl AnalysisOption {
+    /// The option with the values `tune` searches.
+    const fn searched(mut self, values: &'static [&'static str]) -> Self {
+        self.search = values;
+        self
+    }
+    /// The option with how it labels the features it decides.
+    const fn labelled(mut self, labels: fn(&Analysis) -> Option<FeatureNames>) -> Self {
+        self.labels = Some(labels);
+        self
+    }
+}
+
+/// Every `[analysis]` option, in the order a profile lists them (and
+/// `profile new` writes them, group by group; `tune` searches them).
 pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
     opt(
         "analysis.channel",
@@ -121,18 +204,16 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
         false,
         Group::Signal,
         "the signal column the features come from (thesis: y_m, the probe's height)",
-        None,
         field!(channel),
     ),
     opt(
         "analysis.axis",
-        Kind::Text,
-        &["a position column (*_m) or t_s"],
+        Kind::Choice,
+        &["x_m", "y_m", "z_m", "t_s"],
         "",
         false,
         Group::Signal,
         "resample along position (a surface's texture) or time (vibration, sound)",
-        None,
         field!(axis),
     ),
     opt(
@@ -143,18 +224,16 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
         false,
         Group::Signal,
         "the stretch of each scan analysed; the same for every scan",
-        None,
         field!(window),
     ),
     opt(
         "analysis.spacing",
         Kind::Number,
-        &["> 0"],
+        &["a positive number"],
         "axis",
         true,
         Group::Resampling,
         "resampling step: smaller keeps finer texture, up to the sensor's resolution",
-        Some("0.0002,0.0003,0.0005"),
         field!(spacing),
     ),
     opt(
@@ -165,19 +244,7 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
         true,
         Group::Resampling,
         "remove the mean (or a line) so a tilt or offset is not taken for texture",
-        Some("mean,linear"),
         field!(detrend),
-    ),
-    opt(
-        "analysis.taper",
-        Kind::Choice,
-        &["none", "hann"],
-        "",
-        true,
-        Group::Resampling,
-        "a Hann taper reduces leakage between neighbouring bins",
-        Some("none,hann"),
-        field!(taper),
     ),
     opt(
         "analysis.spectrum",
@@ -187,9 +254,20 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
         true,
         Group::Spectrum,
         "magnitude as the thesis; Welch or log spectra for noisy or wide-range signals",
-        Some("magnitude,power,log-power"),
         field!(spectrum),
-    ),
+    )
+    .searched(&["log-welch", "welch"]),
+    opt(
+        "analysis.taper",
+        Kind::Choice,
+        &["none", "hann"],
+        "",
+        true,
+        Group::Spectrum,
+        "a Hann taper reduces leakage between neighbouring bins",
+        field!(taper),
+    )
+    .searched(&["none", "hann"]),
     opt(
         "analysis.bins",
         Kind::Pair,
@@ -198,12 +276,16 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
         true,
         Group::Spectrum,
         "which DFT bins become features (thesis: 1..49, DC dropped); ignored with band or bands",
-        Some("[1,24],[1,49]"),
         (
             |a| json(&a.bins),
             |a, b| a.bins == b.bins || a.band.is_some() || a.bands.is_some(),
         ),
-    ),
+    )
+    .labelled(|a| {
+        (a.band.is_none() && a.bands.is_none()).then(|| FeatureNames::Bins {
+            value: bin_value(a),
+        })
+    }),
     opt(
         "analysis.channels",
         Kind::List,
@@ -212,7 +294,6 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
         false,
         Group::Signal,
         "more signal columns, their features after channel's",
-        None,
         field!(channels),
     ),
     opt(
@@ -223,23 +304,29 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
         true,
         Group::Spectrum,
         "keep the frequencies of a band instead of bins (Hz on a time axis, cycles/mm on a position axis)",
-        None,
         field!(band),
-    ),
+    )
+    .labelled(|a| {
+        (a.band.is_some() && a.bands.is_none()).then(|| FeatureNames::Bins {
+            value: bin_value(a),
+        })
+    }),
+    // Searched as a share of the points (a power of two): one table serves
+    // any rate and window.
     opt(
         "analysis.welch_segment",
         Kind::Integer,
-        &[">= 2 points"],
+        &["4 to the window's points"],
         "points",
         true,
         Group::Spectrum,
         "Welch only: points per segment (default: a quarter of the window)",
-        None,
         (
             |a| json(&a.welch_segment),
             |a, b| a.dft_points() == b.dft_points(),
         ),
-    ),
+    )
+    .searched(&["points/4", "points/16"]),
     opt(
         "analysis.welch_overlap",
         Kind::Number,
@@ -248,7 +335,6 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
         true,
         Group::Spectrum,
         "Welch only: overlap of consecutive segments (default 0.5)",
-        Some("0.25,0.5,0.75"),
         (
             |a| json(&a.welch_overlap),
             |a, b| a.overlap() == b.overlap() || !a.spectrum.is_welch(),
@@ -257,25 +343,44 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
     opt(
         "analysis.bands",
         Kind::Table,
-        &["{ count, low, high, scale }"],
+        &["{ count, from, to, scale }"],
         "Hz or cycles/mm",
         true,
         Group::Spectrum,
         "band energies instead of bins: few robust features for sound and vibration",
-        None,
         field!(bands),
-    ),
+    )
+    .labelled(|a| {
+        let b = a.bands.filter(|_| a.cepstra.is_none())?;
+        Some(FeatureNames::Bands {
+            edges: b.edges(),
+            unit: a.frequency_unit(),
+            value: if a.spectrum.is_log() {
+                "log10 energy"
+            } else {
+                "energy"
+            },
+        })
+    }),
+    // Searched on: 13 of log bands `tune` fits to the spectrum.
     opt(
         "analysis.cepstra",
         Kind::Integer,
-        &[">= 1, <= the bands' count"],
+        &["1 to bands.count"],
         "",
         true,
         Group::Spectrum,
         "cepstral coefficients of the log band energies (as MFCCs)",
-        Some("8,13,20"),
         field!(cepstra),
-    ),
+    )
+    .searched(&["none", "13"])
+    .labelled(|a| {
+        let m = a.cepstra.filter(|_| a.bands.is_some())?;
+        // Those kept are the last of the `cepstra` coefficients.
+        Some(FeatureNames::Cepstra {
+            first: m.saturating_sub(a.features_per_channel()),
+        })
+    }),
     opt(
         "analysis.drop_level",
         Kind::Flag,
@@ -284,9 +389,10 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
         true,
         Group::Spectrum,
         "drop c0, the level term, so a drifting gain does not move the features",
-        Some("false,true"),
         field!(drop_level),
-    ),
+    )
+    .searched(&["false", "true"]),
+    // Searched as sub-windows a quarter of the window, every eighth.
     opt(
         "analysis.windows",
         Kind::Table,
@@ -295,15 +401,171 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
         true,
         Group::Windows,
         "cut the window into sub-windows and classify a scan by their vote",
-        None,
         field!(windows),
-    ),
+    )
+    .searched(&["none", "window/4"]),
 ];
+
+/// One `[classifier]` option: what `check` says of it and what `tune`
+/// searches (the classifier's values need no new features).
+#[derive(Debug, Clone, Copy)]
+pub struct ClassifierOption {
+    /// The key, with its table: `classifier.k`.
+    pub name: &'static str,
+    pub kind: Kind,
+    /// As [`AnalysisOption::allowed`].
+    pub allowed: &'static [&'static str],
+    pub advice: &'static str,
+    /// As [`AnalysisOption::search`].
+    pub search: &'static [&'static str],
+    /// The value as a report writes it.
+    value: fn(&Classifier) -> String,
+}
+
+/// Every `[classifier]` option, in the order a profile lists them.
+pub const CLASSIFIER_OPTIONS: &[ClassifierOption] = &[
+    ClassifierOption {
+        name: "classifier.k",
+        kind: Kind::Integer,
+        allowed: &["a whole number >= 1", "\"auto\""],
+        advice: "the neighbours that vote: 1 for few recordings per label, more to outvote a stray one",
+        search: &["1", "3", "5", "9"],
+        value: |c| c.k_text(),
+    },
+    ClassifierOption {
+        name: "classifier.metric",
+        kind: Kind::Choice,
+        allowed: &["euclidean", "manhattan", "cosine"],
+        advice: "the distance between feature vectors; cosine for recordings whose level differs",
+        search: &["euclidean", "manhattan", "cosine"],
+        value: |c| json(&c.metric),
+    },
+    ClassifierOption {
+        name: "classifier.weights",
+        kind: Kind::Choice,
+        allowed: &["uniform", "distance"],
+        advice: "one vote per neighbour (the thesis), or each by 1 / distance",
+        search: &["uniform", "distance"],
+        value: |c| json(&c.weights),
+    },
+    ClassifierOption {
+        name: "classifier.standardize",
+        kind: Kind::Flag,
+        allowed: &["true", "false"],
+        advice: "z-score every feature over the training set: features of very different sizes",
+        search: &["false", "true"],
+        value: |c| json(&c.standardize),
+    },
+    ClassifierOption {
+        name: "classifier.k_candidates",
+        kind: Kind::List,
+        allowed: &["whole numbers >= 1"],
+        advice: "the values k = \"auto\" tries (default 1, 3, 5, …, 15)",
+        search: &[],
+        value: |c| json(&c.k_candidates),
+    },
+];
+
+/// A JSON value as a report reads it: a word without its quotes, `none`
+/// for an option left out.
+fn plain(json: String) -> String {
+    match serde_json::from_str::<serde_json::Value>(&json) {
+        Ok(serde_json::Value::String(s)) => s,
+        Ok(serde_json::Value::Null) => "none".into(),
+        _ => json,
+    }
+}
+
+impl ClassifierOption {
+    /// The key within `[classifier]`: `k`.
+    pub fn field(&self) -> &'static str {
+        self.name.strip_prefix("classifier.").unwrap_or(self.name)
+    }
+    /// The value `c` gives it, as a report writes it (`euclidean`, `3`).
+    pub fn text(&self, c: &Classifier) -> String {
+        plain((self.value)(c))
+    }
+    /// As [`AnalysisOption::written`].
+    pub fn written(&self, c: &Classifier) -> Option<String> {
+        Some((self.value)(c)).filter(|v| v != "null")
+    }
+}
+
+/// The `[classifier]` option named `name` (`k` or `classifier.k`).
+pub fn classifier_option(name: &str) -> Option<&'static ClassifierOption> {
+    CLASSIFIER_OPTIONS
+        .iter()
+        .find(|o| o.name == name || o.field() == name)
+}
+
+/// The words of a choice as a message lists them: `"none", "mean" or
+/// "linear"`.
+pub fn words(allowed: &[&str]) -> String {
+    let quoted: Vec<String> = allowed.iter().map(|w| format!("{w:?}")).collect();
+    match quoted.split_last() {
+        Some((last, [])) => last.clone(),
+        Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+        None => String::new(),
+    }
+}
+
+/// Why `v` is not a value of a [`Kind::Choice`] or [`Kind::Flag`] option
+/// (`None` for another kind, or a value it takes): the words it takes and
+/// its advice, from its declaration.
+fn refused(kind: Kind, allowed: &[&str], advice: &str, v: &toml::Value) -> Option<String> {
+    let fits = match (kind, v) {
+        (Kind::Choice, toml::Value::String(s)) => allowed.contains(&s.as_str()),
+        (Kind::Flag, toml::Value::Boolean(_)) => true,
+        (Kind::Choice | Kind::Flag, _) => false,
+        _ => true,
+    };
+    let expected = match kind {
+        Kind::Flag => "true or false".to_string(),
+        _ => words(allowed),
+    };
+    (!fits).then(|| format!("must be {expected}, got {v}: {advice}"))
+}
+
+/// The first word or flag written in `[analysis]` or `[classifier]` that
+/// its option does not take, as `check` reports it: read from the text
+/// before the values are, so the message and the list cannot disagree.
+pub fn check_written(doc: &toml::Table) -> Option<Invalid> {
+    let table = |name: &str| doc.get(name).and_then(|t| t.as_table());
+    let analysis = table("analysis").into_iter().flat_map(|t| {
+        ANALYSIS_OPTIONS.iter().filter_map(move |o| {
+            let v = t.get(o.field())?;
+            Some((o.name, refused(o.kind, o.allowed, o.advice, v)?))
+        })
+    });
+    let classifier = table("classifier").into_iter().flat_map(|t| {
+        CLASSIFIER_OPTIONS.iter().filter_map(move |o| {
+            let v = t.get(o.field())?;
+            Some((o.name, refused(o.kind, o.allowed, o.advice, v)?))
+        })
+    });
+    analysis
+        .chain(classifier)
+        .next()
+        .map(|(key, reason)| Invalid {
+            key: key.to_string(),
+            reason,
+        })
+}
 
 impl AnalysisOption {
     /// The key within `[analysis]`: `spacing`.
     pub fn field(&self) -> &'static str {
         self.name.strip_prefix("analysis.").unwrap_or(self.name)
+    }
+    /// The value `a` gives it, as a report writes it (`log-welch`, `512`,
+    /// `none` when left out).
+    pub fn text(&self, a: &Analysis) -> String {
+        plain((self.value)(a))
+    }
+    /// The value `a` gives it as a profile line writes it (`"mean"`,
+    /// `0.0003`, `[1,49]`); `None` when it is left out.
+    pub fn written(&self, a: &Analysis) -> Option<String> {
+        Some((self.value)(a)).filter(|v| v != "null")
     }
 }
 
@@ -434,14 +696,154 @@ mod tests {
         assert!(first_difference(&a, &b).is_none());
     }
 
+    /// `analysis`'s text set to `toml`: the field set by a profile's words.
+    fn analysis_with(field: &str, value: &str) -> Result<Analysis, String> {
+        let mut t = toml::Table::try_from(Analysis::default()).unwrap();
+        let v: toml::Table = toml::from_str(&format!("v = {value}"))
+            .or_else(|_| toml::from_str(&format!("v = {value:?}")))
+            .map_err(|e| e.to_string())?;
+        t.insert(field.into(), v["v"].clone());
+        toml::Value::Table(t)
+            .try_into()
+            .map_err(|e: toml::de::Error| e.to_string())
+    }
+
     #[test]
-    fn every_search_range_parses_as_a_sweep() {
-        for o in ANALYSIS_OPTIONS {
-            if let Some(s) = o.search {
-                assert!(o.sweepable, "{}", o.name);
-                crate::evaluate::sweep::Swept::parse(&format!("{}={s}", o.field()))
-                    .unwrap_or_else(|e| panic!("{}: {e}", o.name));
+    fn every_searched_value_is_one_the_option_takes() {
+        for o in ANALYSIS_OPTIONS.iter().filter(|o| !o.search.is_empty()) {
+            assert!(o.sweepable, "{}", o.name);
+            for v in o.search {
+                let relative = v.starts_with("points/") || v.starts_with("window/");
+                let left_out = *v == "none" && o.kind != Kind::Choice;
+                if !(relative || left_out) {
+                    analysis_with(o.field(), v).unwrap_or_else(|e| panic!("{}: {v}: {e}", o.name));
+                }
             }
         }
+    }
+
+    /// An analysis-only profile with `line` added to `table`.
+    fn profile_with(table: &str, line: &str) -> Result<crate::profile::LoadedProfile, String> {
+        let mut analysis = "channel = \"acc\"\naxis = \"t_s\"\nwindow = [0.0, 0.999]\n\
+                            spacing = 0.001\nbins = [1, 8]\n"
+            .to_string();
+        let mut classifier = "k = 1\n".to_string();
+        let t = if table == "analysis" {
+            &mut analysis
+        } else {
+            &mut classifier
+        };
+        // A key is written once: the default line goes.
+        let key = line.split(" = ").next().unwrap();
+        *t = t
+            .lines()
+            .filter(|l| !l.starts_with(&format!("{key} = ")))
+            .map(|l| format!("{l}\n"))
+            .collect::<String>()
+            + line
+            + "\n";
+        let text = format!(
+            "name = \"t\"\n[analysis]\n{analysis}[classifier]\n{classifier}[evaluation]\n\
+             method = \"holdout\"\ntrain_per_class = 5\ntest_per_class = 5\n"
+        );
+        crate::profile::LoadedProfile::from_str(&text, "t.toml", std::path::Path::new("."))
+            .map_err(|e| e.to_string())
+    }
+
+    /// Every word of every choice is one the profile's parser takes, and a
+    /// word outside them is refused at its key with the declared words.
+    #[test]
+    fn every_choice_lists_the_words_the_parser_accepts() {
+        let choices = ANALYSIS_OPTIONS
+            .iter()
+            .map(|o| (o.name, o.kind, o.allowed))
+            .chain(
+                CLASSIFIER_OPTIONS
+                    .iter()
+                    .map(|o| (o.name, o.kind, o.allowed)),
+            )
+            .filter(|(_, k, _)| *k == Kind::Choice);
+        let mut checked = 0;
+        for (name, _, allowed) in choices {
+            let (table, field) = name.split_once('.').unwrap();
+            for w in allowed {
+                profile_with(table, &format!("{field} = {w:?}"))
+                    .unwrap_or_else(|e| panic!("{name} = {w:?} is listed but refused: {e}"));
+            }
+            let e = profile_with(table, &format!("{field} = \"wobbly\"")).unwrap_err();
+            assert!(
+                e.contains(&format!(
+                    "{name}: must be {}, got \"wobbly\"",
+                    words(allowed)
+                )),
+                "{e}"
+            );
+            // The parser's own list (serde's, for an enum) is the same.
+            let parsed = match table {
+                "analysis" => analysis_with(field, "wobbly").err(),
+                _ => {
+                    let text = format!("k = 1\n{field} = \"wobbly\"");
+                    toml::from_str::<Classifier>(&text)
+                        .err()
+                        .map(|e| e.to_string())
+                }
+            };
+            if let Some(e) = parsed.filter(|e| e.contains("expected one of")) {
+                let listed: Vec<&str> = e
+                    .split("expected one of ")
+                    .nth(1)
+                    .and_then(|l| l.lines().next())
+                    .unwrap()
+                    .split(", ")
+                    .map(|w| w.trim().trim_matches('`'))
+                    .collect();
+                assert_eq!(listed, allowed.to_vec(), "{name}: {e}");
+            }
+            checked += 1;
+        }
+        assert!(checked >= 6, "{checked} choices");
+        let e = profile_with("classifier", "standardize = \"yes\"").unwrap_err();
+        assert!(
+            e.contains("classifier.standardize: must be true or false"),
+            "{e}"
+        );
+    }
+
+    /// One option labels the features of any analysis.
+    #[test]
+    fn exactly_one_option_labels_the_features() {
+        let bands = crate::profile::Bands {
+            count: 8,
+            from: 1.0,
+            to: 100.0,
+            scale: crate::profile::BandScale::Log,
+        };
+        for (band, bands, cepstra, want) in [
+            (None, None, None, "bins"),
+            (Some([1.0, 2.0]), None, None, "band"),
+            (None, Some(bands), None, "bands"),
+            (None, Some(bands), Some(4), "cepstra"),
+            (None, None, Some(4), "bins"),
+        ] {
+            let a = Analysis {
+                band,
+                bands,
+                cepstra,
+                ..Analysis::default()
+            };
+            let labelling: Vec<&str> = ANALYSIS_OPTIONS
+                .iter()
+                .filter(|o| o.labels.is_some_and(|l| l(&a).is_some()))
+                .map(|o| o.field())
+                .collect();
+            assert_eq!(labelling, [want]);
+        }
+        let a = Analysis {
+            bands: Some(bands),
+            cepstra: Some(4),
+            drop_level: true,
+            ..Analysis::default()
+        };
+        assert_eq!(FeatureNames::of(&a), FeatureNames::Cepstra { first: 1 });
     }
 }

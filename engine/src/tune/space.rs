@@ -1,18 +1,24 @@
-//! The search space of `tune`: [`SPACE`], one table of the options searched
-//! and their values (simplest first), and how a choice of values becomes an
-//! analysis and a classifier over the profile's own ([`Setting`]).
+//! The search space of `tune`: [`space`], the options searched and their
+//! values (simplest first) as the one list of options declares them
+//! (`crate::profile::options`, each option's `search`), and how a choice
+//! of values becomes an analysis and a classifier over the profile's own
+//! ([`Setting`]).
 //!
-//! The values of the options that depend on the data are relative (a
-//! Welch segment is a fraction of the analysed window's points, a
-//! sub-window a fraction of the window) and resolved against the profile,
-//! so one table serves any rate and window.
+//! A value is set as a profile would write it, so a newly searched option
+//! needs only its declaration. The values that depend on the data are
+//! relative (a Welch segment `points/N`, a sub-window `window/N`) and
+//! resolved here against the profile, so one list serves any rate and
+//! window; cepstra get the log bands that fit the spectrum.
+
+use std::sync::LazyLock;
 
 use serde::Serialize;
 
 use crate::analysis::check_settings;
-use crate::profile::{
-    Analysis, BandScale, Bands, Classifier, Metric, SpectrumKind, Taper, Weights, Windows,
+use crate::profile::options::{
+    ANALYSIS_OPTIONS, CLASSIFIER_OPTIONS, Kind, classifier_option, option as option_named,
 };
+use crate::profile::{Analysis, BandScale, Bands, Classifier, Windows};
 
 /// One option searched: its name (the profile key) and its values as they
 /// are written in a profile or described, simplest first.
@@ -20,77 +26,41 @@ use crate::profile::{
 pub struct Searched {
     pub option: &'static str,
     pub values: &'static [&'static str],
+    pub kind: Kind,
     /// Whether it changes the feature vectors (else it is a classifier
     /// option, and one feature matrix serves all its values).
     pub features: bool,
 }
 
-/// Every option `tune` searches, with its values, simplest first. The
-/// order of the rows is the order ties are broken in: between settings of
-/// equal inner score, the one with the smaller sum of value positions wins,
-/// then the one whose values come first row by row.
-pub const SPACE: &[Searched] = &[
-    Searched {
-        option: "spectrum",
-        values: &["log-welch", "welch"],
-        features: true,
-    },
-    Searched {
-        option: "taper",
-        values: &["none", "hann"],
-        features: true,
-    },
-    // A power of two: the largest at most this share of the (sub-)window.
-    Searched {
-        option: "welch_segment",
-        values: &["points/4", "points/16"],
-        features: true,
-    },
-    // 13 cepstra of log bands fitted to the spectrum (with `drop_level`),
-    // or every bin of the spectrum but DC.
-    Searched {
-        option: "cepstra",
-        values: &["none", "13"],
-        features: true,
-    },
-    Searched {
-        option: "drop_level",
-        values: &["false", "true"],
-        features: true,
-    },
-    // Sub-windows a quarter of the window, every eighth.
-    Searched {
-        option: "windows",
-        values: &["none", "window/4"],
-        features: true,
-    },
-    Searched {
-        option: "k",
-        values: &["1", "3", "5", "9"],
-        features: false,
-    },
-    Searched {
-        option: "metric",
-        values: &["euclidean", "manhattan", "cosine"],
-        features: false,
-    },
-    Searched {
-        option: "weights",
-        values: &["uniform", "distance"],
-        features: false,
-    },
-    Searched {
-        option: "standardize",
-        values: &["false", "true"],
-        features: false,
-    },
-];
-
-/// The cepstra kept when `cepstra` is searched on, and the bands under them.
-const CEPSTRA: usize = 13;
+/// Every option `tune` searches, with its values, simplest first: the
+/// analysis options in list order, then the classifier's. The order of
+/// the rows is the order ties are broken in: between settings of equal
+/// inner score, the one with the smaller sum of value positions wins, then
+/// the one whose values come first row by row.
+pub fn space() -> &'static [Searched] {
+    static SPACE: LazyLock<Vec<Searched>> = LazyLock::new(|| {
+        let analysis = ANALYSIS_OPTIONS.iter().map(|o| Searched {
+            option: o.field(),
+            values: o.search,
+            kind: o.kind,
+            features: o.changes_features,
+        });
+        let classifier = CLASSIFIER_OPTIONS.iter().map(|o| Searched {
+            option: o.field(),
+            values: o.search,
+            kind: o.kind,
+            features: false,
+        });
+        analysis
+            .chain(classifier)
+            .filter(|s| !s.values.is_empty())
+            .collect()
+    });
+    &SPACE
+}
 
 /// One point of the grid: the position of its value in each row of
-/// [`SPACE`], and the analysis and classifier it gives.
+/// [`space`], and the analysis and classifier it gives.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Setting {
     pub values: Vec<usize>,
@@ -112,7 +82,7 @@ impl Setting {
 
     /// The feature-changing part of the values.
     pub fn feature_key(&self) -> Vec<usize> {
-        SPACE
+        space()
             .iter()
             .zip(&self.values)
             .filter(|(s, _)| s.features)
@@ -124,7 +94,7 @@ impl Setting {
     pub fn describe_features(&self) -> Described {
         let all = self.describe();
         Described(
-            SPACE
+            space()
                 .iter()
                 .zip(all.0)
                 .filter(|(s, _)| s.features)
@@ -133,34 +103,32 @@ impl Setting {
         )
     }
 
-    /// Each option with the value this setting gives it.
+    /// Each option with the value this setting gives it, as a report
+    /// writes it.
     pub fn describe(&self) -> Described {
         let a = &self.analysis;
-        let c = &self.classifier;
-        let windows = match a.windows {
-            Some(w) => format!("{} every {}", trim(w.length), trim(w.hop)),
-            None => "none".into(),
-        };
         let text = |option: &str| -> String {
             match option {
-                "spectrum" => kebab(&a.spectrum),
-                "taper" => kebab(&a.taper),
-                "welch_segment" => a.welch_segment.map_or("-".into(), |s| s.to_string()),
+                // What a reader needs beyond the value: the bands under
+                // the cepstra, the hop of the sub-windows.
                 "cepstra" => match (a.cepstra, a.bands) {
                     (Some(n), Some(b)) => format!("{n} of {} bands", b.count),
                     _ => "none".into(),
                 },
-                "drop_level" => a.drop_level.to_string(),
-                "windows" => windows.clone(),
-                "k" => c.k.to_string(),
-                "metric" => kebab(&c.metric),
-                "weights" => kebab(&c.weights),
-                "standardize" => c.standardize.to_string(),
-                _ => "?".into(),
+                "windows" => match a.windows {
+                    Some(w) => format!("{} every {}", trim(w.length), trim(w.hop)),
+                    None => "none".into(),
+                },
+                "welch_segment" if a.welch_segment.is_none() => "-".into(),
+                _ => match (option_named(option), classifier_option(option)) {
+                    (Some(o), _) => o.text(a),
+                    (None, Some(o)) => o.text(&self.classifier),
+                    (None, None) => "?".into(),
+                },
             }
         };
         Described(
-            SPACE
+            space()
                 .iter()
                 .map(|s| (s.option.to_string(), text(s.option)))
                 .collect(),
@@ -206,8 +174,8 @@ fn floor3(v: f64) -> f64 {
 }
 
 /// Log bands from a few bins up to Nyquist that each hold a bin: 32, or
-/// fewer when the spectrum is too coarse.
-fn fitting_bands(a: &Analysis) -> Option<Bands> {
+/// fewer when the spectrum is too coarse; `cepstra` of them kept.
+fn fitting_bands(a: &Analysis, cepstra: usize) -> Option<Bands> {
     let bw = a.bin_width();
     let nyquist = bw * (a.dft_points() / 2) as f64;
     for count in [32, 24, 16] {
@@ -220,7 +188,7 @@ fn fitting_bands(a: &Analysis) -> Option<Bands> {
             };
             let candidate = Analysis {
                 bands: Some(b),
-                cepstra: Some(CEPSTRA.min(count)),
+                cepstra: Some(cepstra.min(count)),
                 ..a.clone()
             };
             if b.to > b.from && check_settings(&candidate).is_ok() {
@@ -229,6 +197,34 @@ fn fitting_bands(a: &Analysis) -> Option<Bands> {
         }
     }
     None
+}
+
+/// A value relative to the data (`points/4`, `window/4`): its divisor.
+fn share(value: &str, of: &str) -> Option<usize> {
+    value.strip_prefix(of)?.strip_prefix('/')?.parse().ok()
+}
+
+/// `base` with each `(field, value, kind)` set as a profile writes it (a
+/// word, a number, `true`); `none` leaves an option that is not a choice
+/// out, at its default.
+fn written<T: Serialize + serde::de::DeserializeOwned>(
+    base: &T,
+    set: &[(&str, &str, Kind)],
+) -> Option<T> {
+    let mut t = toml::Table::try_from(base).ok()?;
+    for &(field, v, kind) in set {
+        if v == "none" && kind != Kind::Choice {
+            t.remove(field);
+            continue;
+        }
+        // A bare word (`log-welch`) is a string, as a sweep reads it.
+        let value = toml::from_str::<toml::Table>(&format!("v = {v}"))
+            .ok()
+            .and_then(|mut t| t.remove("v"))
+            .unwrap_or_else(|| toml::Value::String(v.to_string()));
+        t.insert(field.to_string(), value);
+    }
+    toml::Value::Table(t).try_into().ok()
 }
 
 /// The analysis and classifier of one point of the grid over the profile's
@@ -245,67 +241,62 @@ pub fn resolve(base: (&Analysis, &Classifier), values: &[usize]) -> Option<Setti
     a.cepstra = None;
     a.drop_level = false;
     a.welch_overlap = None;
-    c.k_candidates = None;
-    let value = |option: &str| {
-        let row = SPACE.iter().position(|s| s.option == option)?;
-        Some(SPACE[row].values[*values.get(row)?])
-    };
-    a.spectrum = match value("spectrum")? {
-        "welch" => SpectrumKind::Welch,
-        _ => SpectrumKind::LogWelch,
-    };
-    a.taper = match value("taper")? {
-        "hann" => Taper::Hann,
-        _ => Taper::None,
-    };
-    a.windows = match value("windows")? {
-        "window/4" => {
-            let span = a.window[1] - a.window[0];
-            let length = floor3(span / 4.0);
-            Some(Windows {
-                length,
-                hop: floor3(length / 2.0),
-            })
-        }
-        _ => None,
-    };
-    let share = match value("welch_segment")? {
-        "points/16" => 16,
-        _ => 4,
-    };
     a.welch_segment = None;
-    let segment = floor_pow2(a.points() / share);
-    if segment < 16 {
+    c.k_candidates = None;
+    let rows = space();
+    let mut chosen = Vec::with_capacity(rows.len());
+    for (row, &v) in rows.iter().zip(values) {
+        chosen.push((row, *row.values.get(v)?));
+    }
+    if chosen.len() != rows.len() {
         return None;
     }
-    a.welch_segment = Some(segment);
-    a.bins = [1, segment / 2];
-    let cepstra = value("cepstra")? != "none";
-    let drop_level = value("drop_level")? == "true";
-    if cepstra {
-        // Cepstra are of log band energies: the log spectrum's.
-        if !a.spectrum.is_log() {
+    // Every value as a profile writes it, at once; those relative to the
+    // data after.
+    let as_written = |features: bool| -> Vec<(&str, &str, Kind)> {
+        chosen
+            .iter()
+            .filter(|(row, v)| row.features == features && !v.contains('/'))
+            .map(|(row, v)| (row.option, *v, row.kind))
+            .collect()
+    };
+    let scan_leg = a.window_is_scan_leg;
+    a = written(&a, &as_written(true))?;
+    a.window_is_scan_leg = scan_leg;
+    c = written(&c, &as_written(false))?;
+    let value = |option: &str| chosen.iter().find(|(r, _)| r.option == option).map(|x| x.1);
+    if let Some(n) = value("windows").and_then(|v| share(v, "window")) {
+        let length = floor3((a.window[1] - a.window[0]) / n as f64);
+        a.windows = Some(Windows {
+            length,
+            hop: floor3(length / 2.0),
+        });
+    }
+    // A power of two, at most this share of the (sub-)window's points,
+    // and every bin of it but DC.
+    if let Some(n) = value("welch_segment").and_then(|v| share(v, "points")) {
+        let segment = floor_pow2(a.points() / n.max(1));
+        if segment < 16 {
             return None;
         }
-        let bands = fitting_bands(&a)?;
-        a.bands = Some(bands);
-        a.cepstra = Some(CEPSTRA.min(bands.count));
-        a.drop_level = drop_level;
-    } else if drop_level {
-        // Nothing to drop: the same setting as drop_level = false.
-        return None;
+        a.welch_segment = Some(segment);
+        a.bins = [1, segment / 2];
     }
-    c.k = value("k")?.parse().ok()?;
-    c.metric = match value("metric")? {
-        "manhattan" => Metric::Manhattan,
-        "cosine" => Metric::Cosine,
-        _ => Metric::Euclidean,
-    };
-    c.weights = match value("weights")? {
-        "distance" => Weights::Distance,
-        _ => Weights::Uniform,
-    };
-    c.standardize = value("standardize")? == "true";
+    match a.cepstra {
+        // Cepstra are of log band energies: the log spectrum's, in bands
+        // that fit it.
+        Some(n) => {
+            if !a.spectrum.is_log() {
+                return None;
+            }
+            let bands = fitting_bands(&a, n)?;
+            a.bands = Some(bands);
+            a.cepstra = Some(n.min(bands.count));
+        }
+        // Nothing to drop: the same setting as drop_level = false.
+        None if a.drop_level => return None,
+        None => {}
+    }
     check_settings(&a).ok()?;
     Some(Setting {
         values: values.to_vec(),
@@ -317,7 +308,7 @@ pub fn resolve(base: (&Analysis, &Classifier), values: &[usize]) -> Option<Setti
 /// Every point of the grid that resolves, in grid order (the last row
 /// varying fastest).
 pub fn grid(base: (&Analysis, &Classifier)) -> Vec<Setting> {
-    let sizes: Vec<usize> = SPACE.iter().map(|s| s.values.len()).collect();
+    let sizes: Vec<usize> = space().iter().map(|s| s.values.len()).collect();
     let total: usize = sizes.iter().product();
     let mut out = Vec::new();
     for mut i in 0..total {
@@ -352,7 +343,7 @@ mod tests {
     fn every_setting_resolves_to_valid_distinct_settings() {
         let (a, c) = fingertip();
         let g = grid((&a, &c));
-        let classifier_points: usize = SPACE
+        let classifier_points: usize = space()
             .iter()
             .filter(|s| !s.features)
             .map(|s| s.values.len())
@@ -378,8 +369,8 @@ mod tests {
     #[test]
     fn cepstra_get_bands_that_fit_and_windows_a_quarter() {
         let (a, c) = fingertip();
-        let row = |o: &str| SPACE.iter().position(|s| s.option == o).unwrap();
-        let mut v = vec![0; SPACE.len()];
+        let row = |o: &str| space().iter().position(|s| s.option == o).unwrap();
+        let mut v = vec![0; space().len()];
         v[row("cepstra")] = 1;
         v[row("drop_level")] = 1;
         v[row("windows")] = 1;
@@ -391,5 +382,47 @@ mod tests {
         assert_eq!(s.analysis.welch_segment, Some(512));
         let d = s.describe();
         assert_eq!(d.0[0], ("spectrum".to_string(), "log-welch".to_string()));
+    }
+
+    /// Each value the option list declares reaches its option: a setting
+    /// with it says it (a word or number as written; relative values
+    /// resolved), so a newly searched option needs only its declaration.
+    #[test]
+    fn every_declared_value_sets_its_option() {
+        let (a, c) = fingertip();
+        let g = grid((&a, &c));
+        for (row, r) in space().iter().enumerate() {
+            for (i, v) in r.values.iter().enumerate() {
+                let s = g
+                    .iter()
+                    .find(|s| s.values[row] == i)
+                    .unwrap_or_else(|| panic!("{} = {v}: in no setting", r.option));
+                let said = &s.describe().0[row];
+                assert_eq!(said.0, r.option);
+                let relative = v.contains('/');
+                if relative {
+                    assert!(
+                        said.1.chars().next().is_some_and(|c| c.is_ascii_digit()),
+                        "{said:?}"
+                    );
+                } else {
+                    assert!(said.1.starts_with(v), "{} = {v} gave {said:?}", r.option);
+                }
+            }
+        }
+        // The rows are the options that declare values, in list order.
+        let declared: Vec<&str> = ANALYSIS_OPTIONS
+            .iter()
+            .filter(|o| !o.search.is_empty())
+            .map(|o| o.field())
+            .chain(
+                CLASSIFIER_OPTIONS
+                    .iter()
+                    .filter(|o| !o.search.is_empty())
+                    .map(|o| o.field()),
+            )
+            .collect();
+        let rows: Vec<&str> = space().iter().map(|r| r.option).collect();
+        assert_eq!(rows, declared);
     }
 }

@@ -273,3 +273,25 @@ fn plans_that_cannot_test_are_refused() {
         "{e}"
     );
 }
+
+/// The tuned profile writes every option searched: one the option list
+/// declares values for is written without a line of its own here.
+#[test]
+fn the_tuned_profile_writes_every_searched_option() {
+    let p = profile(HOLDOUT);
+    let g = space::grid((&p.analysis, &p.classifier));
+    let decided = text::decided(&g[0]);
+    for row in space::space() {
+        let section = if row.features {
+            "analysis"
+        } else {
+            "classifier"
+        };
+        let lines = &decided.iter().find(|(s, _)| *s == section).unwrap().1;
+        assert!(
+            lines.iter().any(|(k, _)| *k == row.option),
+            "{section}.{} is searched but not written",
+            row.option
+        );
+    }
+}

@@ -7,17 +7,18 @@
 use std::fmt::Write as _;
 
 use super::TuneReport;
-use super::space::{Setting, kebab, trim};
+use super::space::{Setting, kebab, space, trim};
+use crate::profile::options::{classifier_option, option};
 
 /// A key and the value written for it (`None`: the key must not be set).
 type Line = (&'static str, Option<String>);
 
 /// The keys `tune` decides, per section, and what the chosen setting
 /// writes for each.
-fn decided(setting: &Setting) -> Vec<(&'static str, Vec<Line>)> {
+pub(super) fn decided(setting: &Setting) -> Vec<(&'static str, Vec<Line>)> {
     let a = &setting.analysis;
     let c = &setting.classifier;
-    let analysis = vec![
+    let mut analysis = vec![
         ("spectrum", Some(quoted(&a.spectrum))),
         ("taper", Some(quoted(&a.taper))),
         ("welch_segment", a.welch_segment.map(|s| s.to_string())),
@@ -49,13 +50,28 @@ fn decided(setting: &Setting) -> Vec<(&'static str, Vec<Line>)> {
                 .map(|w| format!("{{ length = {}, hop = {} }}", trim(w.length), trim(w.hop))),
         ),
     ];
-    let classifier = vec![
+    let mut classifier = vec![
         ("k", Some(c.k.to_string())),
         ("metric", Some(quoted(&c.metric))),
         ("weights", Some(quoted(&c.weights))),
         ("standardize", Some(c.standardize.to_string())),
         ("k_candidates", None),
     ];
+    // A searched option named by no line above (a newly declared one):
+    // its value as a profile writes it.
+    for row in space() {
+        let (lines, value) = if row.features {
+            (&mut analysis, option(row.option).map(|o| o.written(a)))
+        } else {
+            (
+                &mut classifier,
+                classifier_option(row.option).map(|o| o.written(c)),
+            )
+        };
+        if let Some(value) = value.filter(|_| lines.iter().all(|(k, _)| *k != row.option)) {
+            lines.push((row.option, value));
+        }
+    }
     vec![("analysis", analysis), ("classifier", classifier)]
 }
 

@@ -7,114 +7,15 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::survey::Survey;
-#[cfg(test)]
-use crate::profile::LoadedProfile;
+use crate::profile::options::Group;
 use crate::profile::{Analysis, Bands, SpectrumKind, Taper, check_options};
 
-/// Round down to three significant digits, as text TOML reads back exactly.
-fn floor3(x: f64) -> (f64, String) {
-    round3(x, f64::floor)
-}
+#[cfg(test)]
+mod tests;
+mod writer;
 
-fn ceil3(x: f64) -> (f64, String) {
-    round3(x, f64::ceil)
-}
-
-fn round3(x: f64, how: fn(f64) -> f64) -> (f64, String) {
-    let e = x.abs().log10().floor() as i32 - 2;
-    let decimals = (-e).max(0) as usize;
-    let v = how(x / 10f64.powi(e)) * 10f64.powi(e);
-    let text = format!("{v:.decimals$}");
-    let v: f64 = text.parse().unwrap_or(v);
-    (
-        v,
-        if text.contains('.') {
-            text
-        } else {
-            format!("{text}.0")
-        },
-    )
-}
-
-/// A float as TOML, read back to the same value.
-fn float(v: f64) -> String {
-    let t = format!("{v}");
-    if t.contains('.') || t.contains('e') {
-        t
-    } else {
-        format!("{t}.0")
-    }
-}
-
-/// One `key = value` line, with why it was chosen (a trailing comment).
-struct Line {
-    key: &'static str,
-    value: String,
-    why: String,
-}
-
-fn line(key: &'static str, value: impl Into<String>, why: impl Into<String>) -> Line {
-    Line {
-        key,
-        value: value.into(),
-        why: why.into(),
-    }
-}
-
-/// One commented option group: what it is for, and its `key = value` lines.
-struct Group {
-    when: String,
-    keys: Vec<(&'static str, String)>,
-}
-
-/// The keys a spectrum group replaces (the group sets the spectrum anew).
-pub const SPECTRUM_KEYS: [&str; 9] = [
-    "spectrum",
-    "taper",
-    "bins",
-    "band",
-    "bands",
-    "welch_segment",
-    "welch_overlap",
-    "cepstra",
-    "drop_level",
-];
-
-/// The TOML text being written: tables, commented lines, option groups.
-#[derive(Default)]
-struct Doc(String);
-
-impl Doc {
-    fn comment(&mut self, text: &str) {
-        for l in text.lines() {
-            let _ = writeln!(self.0, "# {l}");
-        }
-    }
-    fn blank(&mut self) {
-        self.0.push('\n');
-    }
-    fn table(&mut self, name: &str) {
-        let _ = writeln!(self.0, "[{name}]");
-    }
-    fn lines(&mut self, lines: &[Line]) {
-        for l in lines {
-            if l.why.is_empty() {
-                let _ = writeln!(self.0, "{} = {}", l.key, l.value);
-            } else {
-                let _ = writeln!(self.0, "{} = {}   # {}", l.key, l.value, l.why);
-            }
-        }
-    }
-    fn groups(&mut self, groups: &[Group]) {
-        for g in groups {
-            let _ = writeln!(self.0, "# -- {}", g.when);
-            for (k, v) in &g.keys {
-                let _ = writeln!(self.0, "# {k} = {v}");
-            }
-            self.blank();
-        }
-    }
-}
+use writer::{Alternatives, Doc, Line, OptionGroup, advised, ceil3, float, floor3, line};
+pub use writer::{apply_group, groups_of};
 
 /// What the survey decides before any text: the axis, rate, spacing,
 /// window and spectrum sizes every section derives from.
@@ -329,13 +230,39 @@ fn header(doc: &mut Doc, p: &Plan) {
     doc.blank();
 }
 
+/// `[analysis]`, written from the option list: the lines chosen, each
+/// with its reason (or its option's advice), and after the spectrum and
+/// sub-window groups their alternatives.
 fn analysis_table(doc: &mut Doc, p: &Plan) {
     let s = p.s;
     let choice = s.choice();
     let axis = p.analysis.axis.as_str();
-    doc.table("analysis");
-    doc.comment(&format!("{}.", choice.why));
-    let mut lines = vec![line("channel", format!("{:?}", p.signal), "")];
+    let others: Vec<&str> = s
+        .columns
+        .iter()
+        .filter(|c| *c != axis && *c != "t_s" && !choice.signals.contains(c))
+        .map(String::as_str)
+        .collect();
+    let mut channel = advised("channel", format!("{:?}", p.signal));
+    if !others.is_empty() {
+        channel = channel.below(format!(
+            "Other columns (name one as channel, or add it to channels = [...]): {}",
+            others.join(", ")
+        ));
+    }
+    let mut lines = vec![
+        channel,
+        advised("axis", format!("{axis:?}")),
+        advised("window", format!("[0.0, {}]", p.end_text)).below(format!(
+            "The whole of the shortest complete recording ({}: {} {} along {axis}), {} points.",
+            p.shortest_file,
+            float(p.extent),
+            p.unit,
+            p.n
+        )),
+        line("spacing", p.spacing_text.clone(), p.spacing_why.clone()),
+        advised("detrend", "\"mean\""),
+    ];
     if !p.more.is_empty() {
         let names: Vec<String> = p.more.iter().map(|c| format!("{c:?}")).collect();
         lines.push(line(
@@ -344,48 +271,26 @@ fn analysis_table(doc: &mut Doc, p: &Plan) {
             "analysed like `channel`, features concatenated",
         ));
     }
-    doc.lines(&lines);
-    let others: Vec<&str> = s
-        .columns
-        .iter()
-        .filter(|c| *c != axis && *c != "t_s" && !choice.signals.contains(c))
-        .map(String::as_str)
-        .collect();
-    if !others.is_empty() {
-        doc.comment(&format!(
-            "Other columns (name one as channel, or add it to channels = [...]): {}",
-            others.join(", ")
-        ));
-    }
-    doc.lines(&[line("axis", format!("{axis:?}"), "")]);
-    doc.comment(&format!(
-        "The whole of the shortest complete recording ({}: {} {} along {axis}), {} points.",
-        p.shortest_file,
-        float(p.extent),
-        p.unit,
-        p.n
-    ));
-    doc.lines(&[
-        line("window", format!("[0.0, {}]", p.end_text), ""),
-        line("spacing", p.spacing_text.clone(), p.spacing_why.clone()),
-        line(
-            "detrend",
-            "\"mean\"",
-            "the sensor's offset is no texture: the mean is removed",
+    lines.extend(first_spectrum(p));
+    let alternatives = vec![
+        (
+            Group::Spectrum,
+            Alternatives {
+                intro: Some(
+                    "Other spectra and features (one group replaces the spectrum lines above):",
+                ),
+                groups: Ok(spectrum_groups(p)),
+            },
         ),
-    ]);
-    doc.lines(&first_spectrum(p));
-    doc.blank();
-    doc.comment("Other spectra and features (one group replaces the spectrum lines above):");
-    doc.groups(&spectrum_groups(p));
-    doc.comment("Sub-windows that vote:");
-    match windows_group(p) {
-        Ok(g) => doc.groups(&[g]),
-        Err(why) => {
-            doc.comment(&format!("(none offered: {why})"));
-            doc.blank();
-        }
-    }
+        (
+            Group::Windows,
+            Alternatives {
+                intro: None,
+                groups: windows_group(p).map(|g| vec![g]),
+            },
+        ),
+    ];
+    doc.analysis(&format!("{}.", choice.why), lines, alternatives);
 }
 
 /// The spectrum lines of the first choice, each with its reason.
@@ -460,13 +365,13 @@ fn welch_keys(p: &Plan, kind: &str) -> Vec<(&'static str, String)> {
 }
 
 /// Every other spectrum that fits the window, with when to use it.
-fn spectrum_groups(p: &Plan) -> Vec<Group> {
+fn spectrum_groups(p: &Plan) -> Vec<OptionGroup> {
     let top = p.magnitude_bins as f64
         / (p.n as f64 * p.analysis.spacing)
         / if p.time { 1.0 } else { 1000.0 };
     let fu = p.analysis.frequency_unit();
     let mut groups = vec![
-        Group {
+        OptionGroup {
             when: format!(
                 "|DFT| of the whole window (the thesis), no taper: a few strong periodic peaks, a short window; bins 1–{} reach {} {fu}",
                 p.magnitude_bins,
@@ -474,11 +379,11 @@ fn spectrum_groups(p: &Plan) -> Vec<Group> {
             ),
             keys: magnitude_keys(p, "magnitude"),
         },
-        Group {
+        OptionGroup {
             when: "the power (|X|² / n) of each bin, Hann-tapered: as magnitude, with energy rather than amplitude".into(),
             keys: magnitude_keys(p, "power"),
         },
-        Group {
+        OptionGroup {
             when: "log10 of the power, Hann-tapered: textures that differ over a wide range of levels, or a gain that drifts between trials".into(),
             keys: magnitude_keys(p, "log-power"),
         },
@@ -486,14 +391,14 @@ fn spectrum_groups(p: &Plan) -> Vec<Group> {
     if p.segment < 16 {
         return groups;
     }
-    groups.push(Group {
+    groups.push(OptionGroup {
         when: format!(
             "Welch's average over {}-point Hann-tapered segments: noisy, broadband textures (vibration, sound); smoother than one DFT",
             p.segment
         ),
         keys: welch_keys(p, "welch"),
     });
-    groups.push(Group {
+    groups.push(OptionGroup {
         when: "log10 of the Welch spectrum: other rigs' signals whose level drifts between trials (accelerometers, microphones)".into(),
         keys: welch_keys(p, "log-welch"),
     });
@@ -502,7 +407,7 @@ fn spectrum_groups(p: &Plan) -> Vec<Group> {
 }
 
 /// Band energies and their cepstra, when log-spaced bands fit the spectrum.
-fn band_groups(p: &Plan) -> Vec<Group> {
+fn band_groups(p: &Plan) -> Vec<OptionGroup> {
     let Some(b) = fitting_bands(&p.analysis) else {
         return Vec::new();
     };
@@ -521,7 +426,7 @@ fn band_groups(p: &Plan) -> Vec<Group> {
     cepstra.push(("cepstra", c.to_string()));
     cepstra.push(("drop_level", "true".into()));
     vec![
-        Group {
+        OptionGroup {
             when: format!(
                 "{} log-spaced band energies ({}–{} {fu}) of the log-Welch spectrum: fewer, steadier features over a wide band (sound, vibration)",
                 b.count,
@@ -530,7 +435,7 @@ fn band_groups(p: &Plan) -> Vec<Group> {
             ),
             keys: k,
         },
-        Group {
+        OptionGroup {
             when: format!(
                 "{c} cepstra of those bands without c0 (as MFCCs, the tool-mediated texture literature's features): drop_level when the gain drifts between trials"
             ),
@@ -544,7 +449,7 @@ fn band_groups(p: &Plan) -> Vec<Group> {
 /// 98 % at 0.5 s and 93 % at 1.24 s), but at least two Welch segments (or
 /// 16 points of one DFT) so each still averages, and at most half the
 /// window so at least three fit. `Err`: why none fits.
-fn windows_group(p: &Plan) -> Result<Group, String> {
+fn windows_group(p: &Plan) -> Result<OptionGroup, String> {
     let least = if p.welch_active { 2 * p.segment } else { 16 };
     let points = (p.n / 10).max(least);
     if points > p.n / 2 {
@@ -585,7 +490,7 @@ fn windows_group(p: &Plan) -> Result<Group, String> {
     crate::profile::check_windows(&sub, w)?;
     check_options(&sub).map_err(|(k, why)| format!("{k} {why}"))?;
     let unit = p.unit;
-    Ok(Group {
+    Ok(OptionGroup {
         when: format!(
             "cut the window into {length_text} {unit} windows every {hop_text} {unit}: more examples from few recordings, each recording classified by its windows' vote"
         ),
@@ -606,18 +511,18 @@ fn classifier_table(doc: &mut Doc, p: &Plan) {
         line("metric", "\"euclidean\"", "the distance between spectra"),
     ]);
     doc.blank();
-    let mut groups = vec![Group {
+    let mut groups = vec![OptionGroup {
         when: "z-score every feature over the training set: features of very different sizes (several channels, log and linear)".into(),
         keys: vec![("standardize", "true".into())],
     }];
     if p.min_count >= 3 {
-        groups.push(Group {
+        groups.push(OptionGroup {
             when: "k chosen by cross-validation inside the training set: when unsure which k"
                 .into(),
             keys: vec![("k", "\"auto\"".into())],
         });
     }
-    groups.push(Group {
+    groups.push(OptionGroup {
         when: "the angle between spectra, not their size: recordings whose overall level differs"
             .into(),
         keys: vec![("metric", "\"cosine\"".into())],
@@ -631,18 +536,18 @@ fn evaluation_table(doc: &mut Doc, p: &Plan) {
     let min = p.min_count;
     let folds = min.clamp(2, 10);
     let (train, test) = time_split(p);
-    let loo = Group {
+    let loo = OptionGroup {
         when: "each recording tested against all the others: few recordings per label".into(),
         keys: vec![("method", "\"leave-one-out\"".into())],
     };
-    let kfold = Group {
+    let kfold = OptionGroup {
         when: format!("stratified {folds}-fold cross-validation: several recordings per label"),
         keys: vec![
             ("method", "\"k-fold\"".into()),
             ("folds", folds.to_string()),
         ],
     };
-    let holdout = Group {
+    let holdout = OptionGroup {
         when: format!(
             "a fixed split in time: per label the first {train} recordings (file-name order) train and the next {test} test; for recordings made in order, the later ones drifting"
         ),
@@ -714,7 +619,7 @@ fn time_split(p: &Plan) -> (usize, usize) {
 /// value: offered for a key that groups recordings (some share a value)
 /// and gives every label at least two groups (so each can be tested);
 /// the source file first (segments of one recording).
-fn group_by_group(p: &Plan) -> Option<Group> {
+fn group_by_group(p: &Plan) -> Option<OptionGroup> {
     // A segment's index or start is shared across recordings by position,
     // not by what makes them alike.
     let fits = |k: &&String| {
@@ -729,7 +634,7 @@ fn group_by_group(p: &Plan) -> Option<Group> {
             .iter()
             .filter(fits)
             .min_by_key(|k| k.as_str() != "source")?;
-    Some(Group {
+    Some(OptionGroup {
         when: format!(
             "recordings sharing a {key} stay on one side of every split: trials or sessions that resemble each other"
         ),
@@ -768,169 +673,4 @@ fn fitting_bands(a: &Analysis) -> Option<Bands> {
         }
     }
     None
-}
-
-/// The option groups of a drafted profile: (table, key lines).
-pub fn groups_of(text: &str) -> Vec<(String, Vec<(String, String)>)> {
-    let mut out = Vec::new();
-    let mut table = String::new();
-    let mut current: Option<Vec<(String, String)>> = None;
-    for line in text.lines() {
-        if let Some(t) = line.strip_prefix('[') {
-            table = t.trim_end_matches(']').to_string();
-        }
-        if line.starts_with("# -- ") {
-            if let Some(g) = current.take() {
-                out.push((table.clone(), g));
-            }
-            current = Some(Vec::new());
-            continue;
-        }
-        match (
-            line.strip_prefix("# ").and_then(|l| l.split_once(" = ")),
-            &mut current,
-        ) {
-            (Some((k, v)), Some(g)) if !k.contains(' ') => g.push((k.to_string(), v.to_string())),
-            (_, Some(_)) => {
-                if let Some(g) = current.take() {
-                    out.push((table.clone(), g));
-                }
-            }
-            _ => {}
-        }
-    }
-    if let Some(g) = current {
-        out.push((table, g));
-    }
-    out
-}
-
-/// The profile `text` with an option group in place: its keys set in
-/// `table`; a spectrum group first removes every spectrum key, an
-/// evaluation group with a `method` the whole `[evaluation]`.
-pub fn apply_group(text: &str, table: &str, keys: &[(String, String)]) -> Result<String, String> {
-    let mut doc: toml::Table = toml::from_str(text).map_err(|e| e.to_string())?;
-    let t = doc
-        .get_mut(table)
-        .and_then(|v| v.as_table_mut())
-        .ok_or_else(|| format!("no [{table}]"))?;
-    if keys.iter().any(|(k, _)| k == "spectrum") {
-        t.retain(|k, _| SPECTRUM_KEYS.iter().all(|s| *s != k));
-    }
-    if table == "evaluation" && keys.iter().any(|(k, _)| k == "method") {
-        t.clear();
-    }
-    for (k, v) in keys {
-        let parsed: toml::Table =
-            toml::from_str(&format!("v = {v}")).map_err(|e| format!("{k} = {v}: {e}"))?;
-        t.insert(k.clone(), parsed["v"].clone());
-    }
-    toml::to_string(&doc).map_err(|e| e.to_string())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn survey_of(columns: &[&str], labels: &[(&str, usize)], rate: f64, extent: f64) -> Survey {
-        let mut s = Survey {
-            complete: labels.iter().map(|l| l.1).sum(),
-            columns: columns.iter().map(|c| c.to_string()).collect(),
-            rate_hz: rate,
-            labels: labels.iter().map(|(l, n)| (l.to_string(), *n)).collect(),
-            varying_meta: vec!["trial".into()],
-            ..Survey::default()
-        };
-        for c in columns {
-            let moves = *c == "t_s" || *c == "x_m";
-            s.shortest.insert(
-                c.to_string(),
-                (if moves { extent } else { 0.0001 }, "a/a_001.csv".into()),
-            );
-            s.step
-                .insert(c.to_string(), if *c == "x_m" { 1e-5 } else { 1.0 / rate });
-            s.spread.insert(c.to_string(), 1.0);
-        }
-        s
-    }
-
-    /// Every option group, put in place, gives a profile that loads.
-    fn every_group_loads(text: &str) -> usize {
-        LoadedProfile::from_str(text, "drafted", Path::new(".")).unwrap();
-        let groups = groups_of(text);
-        for (table, keys) in &groups {
-            let t = apply_group(text, table, keys).unwrap();
-            if let Err(e) = LoadedProfile::from_str(&t, "drafted", Path::new(".")) {
-                panic!("[{table}] {keys:?}: {e}\n{t}");
-            }
-        }
-        groups.len()
-    }
-
-    #[test]
-    fn a_sound_set_gets_log_welch_leave_one_out_and_valid_options() {
-        let s = survey_of(&["t_s", "mic"], &[("glass", 4), ("wood", 4)], 44100.0, 4.9);
-        let text = draft(&s, "sound", Path::new("rec")).unwrap();
-        assert!(text.contains("spectrum = \"log-welch\""), "{text}");
-        assert!(text.contains("welch_segment = 4096   # 0.0928 s"), "{text}");
-        assert!(text.contains("taper = \"hann\"   # "), "{text}");
-        assert!(text.contains("window = [0.0, 4.90]"), "{text}");
-        assert!(text.contains("method = \"leave-one-out\""), "{text}");
-        assert!(text.contains("#   glass: 4"), "{text}");
-        assert!(text.contains("# cepstra = "), "{text}");
-        assert!(every_group_loads(&text) >= 10);
-    }
-
-    #[test]
-    fn a_stroke_gets_the_height_along_the_travel_and_valid_options() {
-        let cols = ["t_s", "x_m", "y_m", "z_m", "fx_n", "fy_n", "fz_n"];
-        let s = survey_of(&cols, &[("S1", 30), ("S2", 30)], 1000.0, 0.08975);
-        let c = s.choice();
-        assert_eq!(
-            (c.axis.as_str(), c.signals.clone()),
-            ("x_m", vec!["y_m".to_string()])
-        );
-        let text = draft(&s, "stroke", Path::new("rec")).unwrap();
-        assert!(text.contains("window = [0.0, 0.0897]"), "{text}");
-        assert!(text.contains("spacing = 0.0003"), "{text}");
-        assert!(text.contains("spectrum = \"magnitude\""), "{text}");
-        assert!(text.contains("folds = 10"), "{text}");
-        assert!(
-            text.contains("fy_n"),
-            "the other columns are listed: {text}"
-        );
-        assert!(every_group_loads(&text) >= 8);
-    }
-
-    #[test]
-    fn a_multichannel_vibration_set_analyses_each_varying_channel() {
-        let s = survey_of(
-            &["t_s", "ax", "ay", "az"],
-            &[("a", 10), ("b", 10)],
-            2200.0,
-            2.0,
-        );
-        let c = s.choice();
-        assert_eq!(c.axis, "t_s");
-        assert_eq!(c.signals, ["ax", "ay", "az"]);
-        let text = draft(&s, "vib", Path::new("rec")).unwrap();
-        assert!(text.contains("channels = [\"ay\", \"az\"]"), "{text}");
-        assert!(every_group_loads(&text) >= 8);
-    }
-
-    #[test]
-    fn a_recording_too_short_is_refused_naming_it() {
-        let s = survey_of(&["t_s", "mic"], &[("a", 2)], 1000.0, 0.003);
-        let e = draft(&s, "short", Path::new("rec")).unwrap_err();
-        assert!(e.contains("a/a_001.csv") && e.contains("too short"), "{e}");
-    }
-
-    #[test]
-    fn three_significant_digits_round_the_right_way() {
-        assert_eq!(floor3(0.08979).1, "0.0897");
-        assert_eq!(floor3(4.999).1, "4.99");
-        assert_eq!(floor3(123.9).1, "123.0");
-        assert_eq!(ceil3(0.000101).1, "0.000101");
-        assert_eq!(ceil3(0.0001011).1, "0.000102");
-    }
 }

@@ -311,9 +311,9 @@ pub fn profile_with(
 /// Optional keys a table may lack (because they are at their default).
 fn known_field(table: &str, field: &str) -> bool {
     match table {
-        // The one list of analysis options.
+        // The one list of options.
         "analysis" => crate::profile::options::option(field).is_some(),
-        "classifier" => ["metric", "weights", "standardize", "k_candidates"].contains(&field),
+        "classifier" => crate::profile::options::classifier_option(field).is_some(),
         "evaluation" => ["shuffle_seed", "method", "folds", "group_by"].contains(&field),
         "path" => ["transit_speed_m_per_s"].contains(&field),
         _ => false,

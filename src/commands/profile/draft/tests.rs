@@ -1,0 +1,106 @@
+//! Drafts of every kind load, and so does each of their option groups in place.
+
+use super::*;
+use crate::profile::LoadedProfile;
+
+fn survey_of(columns: &[&str], labels: &[(&str, usize)], rate: f64, extent: f64) -> Survey {
+    let mut s = Survey {
+        complete: labels.iter().map(|l| l.1).sum(),
+        columns: columns.iter().map(|c| c.to_string()).collect(),
+        rate_hz: rate,
+        labels: labels.iter().map(|(l, n)| (l.to_string(), *n)).collect(),
+        varying_meta: vec!["trial".into()],
+        ..Survey::default()
+    };
+    for c in columns {
+        let moves = *c == "t_s" || *c == "x_m";
+        s.shortest.insert(
+            c.to_string(),
+            (if moves { extent } else { 0.0001 }, "a/a_001.csv".into()),
+        );
+        s.step
+            .insert(c.to_string(), if *c == "x_m" { 1e-5 } else { 1.0 / rate });
+        s.spread.insert(c.to_string(), 1.0);
+    }
+    s
+}
+
+/// Every option group, put in place, gives a profile that loads.
+fn every_group_loads(text: &str) -> usize {
+    LoadedProfile::from_str(text, "drafted", Path::new(".")).unwrap();
+    let groups = groups_of(text);
+    for (table, keys) in &groups {
+        let t = apply_group(text, table, keys).unwrap();
+        if let Err(e) = LoadedProfile::from_str(&t, "drafted", Path::new(".")) {
+            panic!("[{table}] {keys:?}: {e}\n{t}");
+        }
+    }
+    groups.len()
+}
+
+#[test]
+fn a_sound_set_gets_log_welch_leave_one_out_and_valid_options() {
+    let s = survey_of(&["t_s", "mic"], &[("glass", 4), ("wood", 4)], 44100.0, 4.9);
+    let text = draft(&s, "sound", Path::new("rec")).unwrap();
+    assert!(text.contains("spectrum = \"log-welch\""), "{text}");
+    assert!(text.contains("welch_segment = 4096   # 0.0928 s"), "{text}");
+    assert!(text.contains("taper = \"hann\"   # "), "{text}");
+    assert!(text.contains("window = [0.0, 4.90]"), "{text}");
+    assert!(text.contains("method = \"leave-one-out\""), "{text}");
+    assert!(text.contains("#   glass: 4"), "{text}");
+    assert!(text.contains("# cepstra = "), "{text}");
+    assert!(every_group_loads(&text) >= 10);
+}
+
+#[test]
+fn a_stroke_gets_the_height_along_the_travel_and_valid_options() {
+    let cols = ["t_s", "x_m", "y_m", "z_m", "fx_n", "fy_n", "fz_n"];
+    let s = survey_of(&cols, &[("S1", 30), ("S2", 30)], 1000.0, 0.08975);
+    let c = s.choice();
+    assert_eq!(
+        (c.axis.as_str(), c.signals.clone()),
+        ("x_m", vec!["y_m".to_string()])
+    );
+    let text = draft(&s, "stroke", Path::new("rec")).unwrap();
+    assert!(text.contains("window = [0.0, 0.0897]"), "{text}");
+    assert!(text.contains("spacing = 0.0003"), "{text}");
+    assert!(text.contains("spectrum = \"magnitude\""), "{text}");
+    assert!(text.contains("folds = 10"), "{text}");
+    assert!(
+        text.contains("fy_n"),
+        "the other columns are listed: {text}"
+    );
+    assert!(every_group_loads(&text) >= 8);
+}
+
+#[test]
+fn a_multichannel_vibration_set_analyses_each_varying_channel() {
+    let s = survey_of(
+        &["t_s", "ax", "ay", "az"],
+        &[("a", 10), ("b", 10)],
+        2200.0,
+        2.0,
+    );
+    let c = s.choice();
+    assert_eq!(c.axis, "t_s");
+    assert_eq!(c.signals, ["ax", "ay", "az"]);
+    let text = draft(&s, "vib", Path::new("rec")).unwrap();
+    assert!(text.contains("channels = [\"ay\", \"az\"]"), "{text}");
+    assert!(every_group_loads(&text) >= 8);
+}
+
+#[test]
+fn a_recording_too_short_is_refused_naming_it() {
+    let s = survey_of(&["t_s", "mic"], &[("a", 2)], 1000.0, 0.003);
+    let e = draft(&s, "short", Path::new("rec")).unwrap_err();
+    assert!(e.contains("a/a_001.csv") && e.contains("too short"), "{e}");
+}
+
+#[test]
+fn three_significant_digits_round_the_right_way() {
+    assert_eq!(floor3(0.08979).1, "0.0897");
+    assert_eq!(floor3(4.999).1, "4.99");
+    assert_eq!(floor3(123.9).1, "123.0");
+    assert_eq!(ceil3(0.000101).1, "0.000101");
+    assert_eq!(ceil3(0.0001011).1, "0.000102");
+}
