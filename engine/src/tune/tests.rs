@@ -122,6 +122,7 @@ fn the_outer_score_is_reported_not_the_inner_best() {
             c.metric,
             c.standardize,
             &[(c.k, c.weights)],
+            None,
         );
         on_test.push(right[0] as f64 / part.test.len() as f64);
     }
@@ -234,6 +235,7 @@ fn sub_windows_stay_with_their_recording() {
             crate::profile::Metric::Euclidean,
             false,
             &[(1, crate::profile::Weights::Uniform)],
+            None,
         );
         assert_eq!(right, vec![0], "recording {r}");
     }
