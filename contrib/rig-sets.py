@@ -2,7 +2,14 @@
 """Test data of other rigs' character (issue 13), written deterministically:
 not committed, generated. Needs numpy and scipy.
 
-    contrib/rig-sets.py OUT_DIR [--seed S] [--only sound|fingertip|long]
+    contrib/rig-sets.py OUT_DIR [--seed S] [--only noise|sound|fingertip|long]
+
+OUT_DIR/noise/<label>/<label>-trialNN.csv
+    A stationary-noise set: 12 materials of one family x 8 trials, 2 s each
+    at 1 kHz, one column `acc` (an accelerometer on a probe dragged at a
+    steady speed): friction noise only, the material in small differences
+    of its spectral envelope, no texture period, no transients, no drift
+    (the contact force changes level and tilt a little per trial).
 
 OUT_DIR/sound/<label>/<label>-clipN.wav
     A stylus-sound set: 14 materials x 4 clips, 5 s each, 44.1 kHz, 16-bit
@@ -18,6 +25,7 @@ OUT_DIR/long/<label>/<label>.csv
 
 Import them with
 
+    hapticlab import OUT_DIR/noise/*/*.csv --rate 1000 --out rec/noise
     hapticlab import OUT_DIR/sound/*/*.wav --out rec/sound
     hapticlab import OUT_DIR/fingertip/*/*.csv --rate 2200 --out rec/fingertip
     hapticlab import OUT_DIR/long/*/*.csv --rate 100 --split 2 --out rec/long
@@ -152,6 +160,31 @@ def fingertip_set(out, seed):
             path.write_text("vib\n" + "\n".join(map(str, counts)) + "\n")
 
 
+def noise_set(out, seed):
+    rng = np.random.default_rng([seed, 4])
+    rate, seconds = 1000, 2.0
+    n = int(rate * seconds)
+    f = np.fft.rfftfreq(n, 1 / rate)
+    # Materials of one family: a shared envelope, each with its own small
+    # colouring and its resonances moved a little.
+    base = material(rng, 20.0, 400.0)
+    for i in range(12):
+        m = dict(base)
+        m["colour"] = [(rng.uniform(0.05, 0.25), rng.uniform(1.0, 3.0), rng.uniform(0, 6.3)) for _ in range(3)]
+        m["res_f"] = base["res_f"] * np.exp(rng.normal(0, 0.1, len(base["res_f"])))
+        label = f"N{i + 1:02d}"
+        (out / label).mkdir(parents=True, exist_ok=True)
+        for trial in range(8):
+            crng = np.random.default_rng([seed, 4, i, trial])
+            # The contact force changes a little per trial: level and tilt.
+            e = envelope(m, f, rate / 20, crng.normal(0, 0.15))
+            x = np.fft.irfft(np.fft.rfft(crng.standard_normal(n)) * e, n)
+            x *= 10 ** (crng.normal(0, 2) / 20) / x.std()
+            counts = np.rint((x + 0.01 * crng.standard_normal(n)) * 400).astype(np.int64)
+            path = out / label / f"{label}-trial{trial + 1:02d}.csv"
+            path.write_text("acc\n" + "\n".join(map(str, counts)) + "\n")
+
+
 def long_set(out, seed):
     rng = np.random.default_rng([seed, 3])
     rate, seconds = 100, 60.0
@@ -171,8 +204,10 @@ def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("out", type=Path)
     p.add_argument("--seed", type=int, default=13)
-    p.add_argument("--only", choices=["sound", "fingertip", "long"])
+    p.add_argument("--only", choices=["noise", "sound", "fingertip", "long"])
     args = p.parse_args()
+    if args.only in (None, "noise"):
+        noise_set(args.out / "noise", args.seed)
     if args.only in (None, "sound"):
         sound_set(args.out / "sound", args.seed)
     if args.only in (None, "fingertip"):

@@ -32,6 +32,12 @@ printed for reference, the figure is the time per setting.
 
 Only a holdout [evaluation] is supported here (the time split of the
 fingertip set); prints one line per side and the ratio.
+
+    contrib/tune_reference.py DIR -p P.toml --settings TUNE.json
+
+runs the scikit-learn side alone over the feature settings of a saved
+`hapticlab tune --json` (for timing the two sides as separate commands,
+run alternately by an outside timer) and prints its line.
 """
 import argparse
 import json
@@ -173,15 +179,19 @@ def main():
     p.add_argument("--budget", type=int, default=96)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--jobs", type=int, default=-1)
+    p.add_argument("--settings", type=Path, help="a saved `hapticlab tune --json`: run scikit-learn alone")
     a = p.parse_args()
 
-    with tempfile.TemporaryDirectory() as tmp:
-        start = time.perf_counter()
-        run = subprocess.run([a.hapticlab, "tune", str(a.dir), "-p", str(a.profile), "--out",
-                              str(Path(tmp) / "tuned.toml"), "--budget", str(a.budget),
-                              "--seed", str(a.seed), "--json"], capture_output=True, text=True, check=True)
-        ours = time.perf_counter() - start
-    report = json.loads(run.stdout)
+    if a.settings is not None:
+        report, ours = json.loads(a.settings.read_text()), None
+    else:
+        with tempfile.TemporaryDirectory() as tmp:
+            start = time.perf_counter()
+            run = subprocess.run([a.hapticlab, "tune", str(a.dir), "-p", str(a.profile), "--out",
+                                  str(Path(tmp) / "tuned.toml"), "--budget", str(a.budget),
+                                  "--seed", str(a.seed), "--json"], capture_output=True, text=True, check=True)
+            ours = time.perf_counter() - start
+        report = json.loads(run.stdout)
 
     profile = tomllib.loads(a.profile.read_text())
     an, ev = profile["analysis"], profile["evaluation"]
@@ -210,10 +220,12 @@ def main():
     theirs = time.perf_counter() - start
 
     n = report["configurations"]
-    print(f"hapticlab tune:   {n} settings in {ours:.2f} s ({ours / n * 1000:.1f} ms per setting), "
-          f"outer {report['outer_accuracy'] * 100:.1f} %, inner best {report['chosen']['inner_accuracy'] * 100:.1f} %")
     print(f"scikit-learn:     {settings} settings in {theirs:.2f} s ({theirs / settings * 1000:.1f} ms per setting), "
           f"outer {outer * 100:.1f} %, inner best {search.best_score_ * 100:.1f} %, chose {search.best_params_}")
+    if ours is None:
+        return
+    print(f"hapticlab tune:   {n} settings in {ours:.2f} s ({ours / n * 1000:.1f} ms per setting), "
+          f"outer {report['outer_accuracy'] * 100:.1f} %, inner best {report['chosen']['inner_accuracy'] * 100:.1f} %")
     print(f"ratio (time per setting, scikit-learn / hapticlab): {theirs / settings / (ours / n):.1f}x")
 
 

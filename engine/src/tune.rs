@@ -44,7 +44,7 @@ use crate::evaluate::cv::{Folds, make_folds};
 use crate::evaluate::plan::{Overrides, Plan};
 use crate::evaluate::{EvaluateError, PredictionRow, Report, count, split};
 use crate::profile::{Profile, SplitMethod};
-use score::{Fold, extract, fold_correct, par_map};
+use score::{Fold, Pairwise, extract, fold_correct, par_map};
 use space::{Described, Setting, grid};
 
 /// Inner folds (fewer when the training part has fewer recordings or groups).
@@ -433,6 +433,10 @@ pub fn tune(
     for (i, s) in settings.iter().enumerate() {
         by_features.entry(s.feature_key()).or_default().push(i);
     }
+    // Every recording an inner fold trains or tests on.
+    let mut searched: Vec<usize> = parts.iter().flat_map(|p| p.train.clone()).collect();
+    searched.sort_unstable();
+    searched.dedup();
     let mut done = 0;
     progress(0, settings.len());
     for members in by_features.values() {
@@ -447,6 +451,13 @@ pub fn tune(
             .collect();
         kinds.sort_by_key(|&(m, s)| (m as u8, s));
         kinds.dedup();
+        // One table of window pairs per metric scored unscaled.
+        let tables: Vec<(crate::profile::Metric, Option<Pairwise>)> = kinds
+            .iter()
+            .filter(|&&(_, standardize)| !standardize)
+            .map(|&(m, _)| (m, Pairwise::new(&features, &searched, m, options.threads)))
+            .collect();
+        let table_of = |m| tables.iter().find(|t| t.0 == m).and_then(|t| t.1.as_ref());
         let mut tasks = Vec::new();
         for (p, folds) in inner.iter().enumerate() {
             for f in 0..folds.len() {
@@ -480,6 +491,7 @@ pub fn tune(
                 metric,
                 standardize,
                 &kw,
+                table_of(metric),
             );
             let tested = inner[p][f].test.len().max(1) as f64;
             (p, voters, correct, tested)

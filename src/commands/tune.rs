@@ -127,9 +127,11 @@ pub fn run(a: TuneArgs) -> Result<(), Failure> {
     let base = a.out.parent().unwrap_or(Path::new("."));
     let written = LoadedProfile::from_str(&text, &a.out.display().to_string(), base)
         .map_err(|e| runtime(format!("the tuned profile is invalid (a bug): {e}")))?;
-    if written.profile.analysis != setting.analysis
-        || written.profile.classifier != setting.classifier
-    {
+    if !tune::text::reads_back_as(
+        setting,
+        &written.profile.analysis,
+        &written.profile.classifier,
+    ) {
         return Err(runtime(
             "the tuned profile does not read back as the setting chosen (a bug)",
         ));

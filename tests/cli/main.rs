@@ -28,5 +28,6 @@ mod rigless;
 mod safe_io;
 mod sweep_grid;
 mod sweep_simulated;
+mod tune;
 mod validation;
 mod windows;

@@ -58,7 +58,10 @@ impl Default for Evaluation {
 }
 
 /// Check `[evaluation]`, and the classifier's `k` against the training set
-/// it gives (`textures` classes of `train_per_class` each).
+/// it gives (`textures` classes of `train_per_class` each). A profile
+/// without `[[textures]]` (an analysis-only one) does not know its labels
+/// until the recordings are read: its `k` is checked against the training
+/// examples then (20 labels of 5 trials train 100, so k = 9 is fine).
 pub(super) fn validate(
     e: &Evaluation,
     classifier: &Classifier,
@@ -83,8 +86,9 @@ pub(super) fn validate(
         );
     }
     if e.train_per_class > 0
+        && textures > 0
         && !classifier.k_is_auto()
-        && classifier.k > e.train_per_class * textures.max(1)
+        && classifier.k > e.train_per_class * textures
     {
         return bad(
             "classifier.k",
@@ -115,5 +119,19 @@ mod tests {
         let err = format!("{:?}", check("test_per_class = 10").unwrap_err());
         assert!(err.contains("train_per_class"), "{err}");
         assert!(check("method = \"leave-one-out\"\nfolds = 3").is_err());
+    }
+
+    #[test]
+    fn k_is_checked_against_the_training_set_where_the_labels_are_known() {
+        let e: Evaluation = toml::from_str("train_per_class = 5\ntest_per_class = 5").unwrap();
+        let k = |k| Classifier {
+            k,
+            ..Classifier::default()
+        };
+        assert!(validate(&e, &k(20), 4).is_ok());
+        let err = format!("{:?}", validate(&e, &k(21), 4).unwrap_err());
+        assert!(err.contains("exceeds the training set"), "{err}");
+        // No [[textures]]: the labels come with the recordings.
+        assert!(validate(&e, &k(9), 0).is_ok());
     }
 }

@@ -72,6 +72,76 @@ pub fn extract(
     Ok(out)
 }
 
+/// The rank values between every two windows of some recordings under
+/// one metric, unscaled: made once per feature setting, they serve every
+/// outer and inner fold that does not standardise (leave-one-out would
+/// otherwise compute each pair again in every one of its searches). The
+/// values are bit for bit those a fold computes ([`rank_value`] is
+/// symmetric), so a fold counts the same with or without the table.
+pub struct Pairwise {
+    /// Each recording's first window in the table (`None`: not in it).
+    first: Vec<Option<usize>>,
+    n: usize,
+    values: Vec<f64>,
+}
+
+/// The most entries a [`Pairwise`] table holds (64 MiB of values); above
+/// that, folds compute their own distances.
+const PAIRWISE_MOST: usize = 8 << 20;
+
+impl Pairwise {
+    /// The table over `recordings`' windows, or `None` when it would hold
+    /// more than [`PAIRWISE_MOST`] entries.
+    pub fn new(
+        features: &Features,
+        recordings: &[usize],
+        metric: Metric,
+        threads: usize,
+    ) -> Option<Pairwise> {
+        let mut first = vec![None; features.len()];
+        let mut rows: Vec<&[f64]> = Vec::new();
+        for &r in recordings {
+            if first[r].is_none() {
+                first[r] = Some(rows.len());
+                rows.extend(features[r].iter().map(Vec::as_slice));
+            }
+        }
+        let n = rows.len();
+        if n.checked_mul(n)? > PAIRWISE_MOST {
+            return None;
+        }
+        let norms: Vec<f64> = rows
+            .iter()
+            .map(|r| {
+                if metric == Metric::Cosine {
+                    dot(r, r).sqrt()
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let index: Vec<usize> = (0..n).collect();
+        let lower = par_map(&index, threads, |&i| {
+            (0..=i)
+                .map(|j| rank_value(metric, rows[i], norms[i], rows[j], norms[j]))
+                .collect::<Vec<f64>>()
+        });
+        let mut values = vec![0.0; n * n];
+        for (i, row) in lower.into_iter().enumerate() {
+            for (j, v) in row.into_iter().enumerate() {
+                values[i * n + j] = v;
+                values[j * n + i] = v;
+            }
+        }
+        Some(Pairwise { first, n, values })
+    }
+
+    /// The table's index of recording `r`'s window `w`.
+    fn at(&self, r: usize, w: usize) -> Option<usize> {
+        self.first.get(r).copied().flatten().map(|f| f + w)
+    }
+}
+
 /// One fold to score: recordings (indices into the features) that train
 /// and that test.
 pub struct Fold<'a> {
@@ -83,6 +153,9 @@ pub struct Fold<'a> {
 /// k-NN with `metric` (on features standardised by the training windows'
 /// mean and deviation when `standardize`) trained on the fold's training
 /// recordings classifies right, each recording by its sub-windows' vote.
+/// `pairwise`, the metric's table over (at least) the fold's recordings,
+/// serves a fold that does not standardise.
+#[allow(clippy::too_many_arguments)]
 pub fn fold_correct(
     features: &Features,
     classes: &[usize],
@@ -91,18 +164,37 @@ pub fn fold_correct(
     metric: Metric,
     standardize: bool,
     voters: &[(usize, Weights)],
+    pairwise: Option<&Pairwise>,
 ) -> Vec<usize> {
     let mut rows: Vec<&[f64]> = Vec::new();
     let mut row_class: Vec<usize> = Vec::new();
+    // Each training window's index in the table, when the table serves.
+    let mut row_at: Vec<usize> = Vec::new();
+    let mut table = pairwise.filter(|_| !standardize);
     for &r in fold.train {
-        for w in &features[r] {
-            rows.push(w);
+        for (w, window) in features[r].iter().enumerate() {
+            rows.push(window);
             row_class.push(classes[r]);
+            if let Some(t) = table {
+                match t.at(r, w) {
+                    Some(i) => row_at.push(i),
+                    None => table = None,
+                }
+            }
         }
+    }
+    if fold
+        .test
+        .iter()
+        .any(|&t| table.is_some_and(|p| p.at(t, 0).is_none()))
+    {
+        table = None;
     }
     let d = rows.first().map_or(0, |r| r.len());
     let scaling = standardize.then(|| Scaling::fit(&rows));
-    let mut matrix = vec![0.0; rows.len() * d];
+    // The fold's own copy of its training windows, when no table serves.
+    let copies = if table.is_some() { 0 } else { rows.len() };
+    let mut matrix = vec![0.0; copies * d];
     for (out, row) in matrix.chunks_exact_mut(d.max(1)).zip(&rows) {
         match &scaling {
             Some(s) => s.apply(row, out),
@@ -133,24 +225,29 @@ pub fn fold_correct(
         for v in won.iter_mut().chain(votes.iter_mut()) {
             v.iter_mut().for_each(|x| *x = 0);
         }
-        for window in &features[t] {
-            match &scaling {
-                Some(s) => s.apply(window, &mut q),
-                None => q.copy_from_slice(window),
-            }
-            let q_norm = if metric == Metric::Cosine {
-                dot(&q, &q).sqrt()
-            } else {
-                0.0
-            };
+        for (w, window) in features[t].iter().enumerate() {
             ranked.clear();
-            ranked.extend(
-                matrix
-                    .chunks_exact(d.max(1))
-                    .zip(&norms)
-                    .enumerate()
-                    .map(|(i, (row, &n))| (rank_value(metric, &q, q_norm, row, n), i)),
-            );
+            if let Some((p, q_at)) = table.and_then(|p| Some((p, p.at(t, w)?))) {
+                let from = &p.values[q_at * p.n..(q_at + 1) * p.n];
+                ranked.extend(row_at.iter().enumerate().map(|(i, &at)| (from[at], i)));
+            } else {
+                match &scaling {
+                    Some(s) => s.apply(window, &mut q),
+                    None => q.copy_from_slice(window),
+                }
+                let q_norm = if metric == Metric::Cosine {
+                    dot(&q, &q).sqrt()
+                } else {
+                    0.0
+                };
+                ranked.extend(
+                    matrix
+                        .chunks_exact(d.max(1))
+                        .zip(&norms)
+                        .enumerate()
+                        .map(|(i, (row, &n))| (rank_value(metric, &q, q_norm, row, n), i)),
+                );
+            }
             // The k nearest, ties in training order, as the model's search.
             let by = |a: &(f64, usize), b: &(f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
             if k_most < ranked.len() {
@@ -241,7 +338,31 @@ mod tests {
                     train: &train,
                     test: &test,
                 };
-                let got = fold_correct(&features, &classes, 3, &fold, metric, standardize, &voters);
+                let got = fold_correct(
+                    &features,
+                    &classes,
+                    3,
+                    &fold,
+                    metric,
+                    standardize,
+                    &voters,
+                    None,
+                );
+                // A table of every pair (or of more recordings than the
+                // fold's) counts the same.
+                let all: Vec<usize> = (0..18).rev().collect();
+                let table = Pairwise::new(&features, &all, metric, 2).unwrap();
+                let tabled = fold_correct(
+                    &features,
+                    &classes,
+                    3,
+                    &fold,
+                    metric,
+                    standardize,
+                    &voters,
+                    Some(&table),
+                );
+                assert_eq!(got, tabled, "{metric:?} std {standardize}");
                 for (v, &(k, weights)) in voters.iter().enumerate() {
                     let c = Classifier {
                         k: k.min(examples.len()),

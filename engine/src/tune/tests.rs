@@ -122,6 +122,7 @@ fn the_outer_score_is_reported_not_the_inner_best() {
             c.metric,
             c.standardize,
             &[(c.k, c.weights)],
+            None,
         );
         on_test.push(right[0] as f64 / part.test.len() as f64);
     }
@@ -234,6 +235,7 @@ fn sub_windows_stay_with_their_recording() {
             crate::profile::Metric::Euclidean,
             false,
             &[(1, crate::profile::Weights::Uniform)],
+            None,
         );
         assert_eq!(right, vec![0], "recording {r}");
     }
@@ -292,6 +294,32 @@ fn the_tuned_profile_writes_every_searched_option() {
             lines.iter().any(|(k, _)| *k == row.option),
             "{section}.{} is searched but not written",
             row.option
+        );
+    }
+}
+
+/// Every setting of the grid, written into a profile, loads and reads
+/// back as itself (the cepstra settings' bins aside, which bands replace).
+#[test]
+fn every_setting_written_reads_back() {
+    let original = "name = \"t\"\n[analysis]\nchannel = \"x\"\naxis = \"t_s\"\nwindow = [0.0, 0.999]\n\
+         spacing = 0.001\nspectrum = \"log-welch\"\nbins = [1, 64]\n[classifier]\nk = 1\n[evaluation]\n\
+         method = \"holdout\"\ntrain_per_class = 5\ntest_per_class = 5\n";
+    let p = LoadedProfile::from_str(original, "t.toml", Path::new("."))
+        .unwrap()
+        .profile;
+    let report = run(&p, &drifting(), 48, 0);
+    let settings = grid((&p.analysis, &p.classifier));
+    assert!(settings.iter().any(|s| s.analysis.bands.is_some()));
+    for s in &settings {
+        let text = text::tuned_profile(original, s, &report, "test");
+        let back = LoadedProfile::from_str(&text, "tuned.toml", Path::new("."))
+            .unwrap_or_else(|e| panic!("{e}\n{text}"))
+            .profile;
+        assert!(
+            text::reads_back_as(s, &back.analysis, &back.classifier),
+            "{:?}\n{text}",
+            s.describe()
         );
     }
 }

@@ -9,6 +9,7 @@ use std::fmt::Write as _;
 use super::TuneReport;
 use super::space::{Setting, kebab, space, trim};
 use crate::profile::options::{classifier_option, option};
+use crate::profile::{Analysis, Classifier};
 
 /// A key and the value written for it (`None`: the key must not be set).
 type Line = (&'static str, Option<String>);
@@ -73,6 +74,18 @@ pub(super) fn decided(setting: &Setting) -> Vec<(&'static str, Vec<Line>)> {
         }
     }
     vec![("analysis", analysis), ("classifier", classifier)]
+}
+
+/// Whether a profile read back from [`tuned_profile`]'s text holds the
+/// setting: its analysis and classifier, but for `bins`, which bands
+/// replace (a profile may not set both, so the text leaves `bins` out and
+/// it reads back as its default).
+pub fn reads_back_as(setting: &Setting, analysis: &Analysis, classifier: &Classifier) -> bool {
+    let mut want = setting.analysis.clone();
+    if want.bands.is_some() {
+        want.bins = analysis.bins;
+    }
+    want == *analysis && setting.classifier == *classifier
 }
 
 /// An option's profile spelling, quoted: `"log-welch"`.
