@@ -369,3 +369,36 @@ fn help_has_an_example() {
         "{r:?}"
     );
 }
+
+/// `doctor --udev-rule` prints the rule a binary-only install needs, the
+/// very text of contrib/70-novint-falcon.rules: numbered 70 so that
+/// `uaccess` runs before systemd's 73-seat-late.rules, group `users` (which
+/// Debian, Fedora and Arch all have), the Falcon's ids; and checks nothing.
+#[test]
+fn udev_rule_prints_the_shipped_rule_and_checks_nothing() {
+    let r = doctor(&["--udev-rule"]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let shipped =
+        fs::read_to_string(Path::new(REPO).join("contrib/70-novint-falcon.rules")).unwrap();
+    assert_eq!(r.stdout.trim_end(), shipped.trim_end(), "{r:?}");
+    let rule = r
+        .stdout
+        .lines()
+        .find(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .expect("a rule line");
+    for part in [
+        r#"ATTRS{idVendor}=="0403""#,
+        r#"ATTRS{idProduct}=="cb48""#,
+        r#"TAG+="uaccess""#,
+        r#"GROUP="users""#,
+    ] {
+        assert!(rule.contains(part), "{part} missing: {rule}");
+    }
+    assert!(
+        !r.stdout.contains("ok ") && !r.stdout.contains("FAIL"),
+        "{r:?}"
+    );
+    // It prints, it does not report: --json makes no sense with it.
+    let r = doctor(&["--udev-rule", "--json"]);
+    assert_eq!(r.code, Some(2), "{r:?}");
+}

@@ -48,6 +48,28 @@ fn a_whole_scan_runs_through_the_emulated_falcon() {
     assert!((mean - -0.0043).abs() < 0.001, "mean height {mean}");
 }
 
+/// A link whose replies all come 1.5 ms late (`slow_link_ms`, a hub or a
+/// loaded host): the scan runs on, holding positions on missed ticks, and
+/// its link statistics say so (most replies missed), where a clean link
+/// misses none; the line `scan` prints carries the count.
+#[test]
+fn a_slow_link_is_reported_in_the_scan_statistics_not_hidden() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut lp = quick();
+    lp.profile.falcon.as_mut().unwrap().emulator.slow_link_ms = 1.5;
+    let path = dir.path().join("S2/S2_001.csv");
+    let (saved, stats) = simulate_one(&lp, "S2", 7, &path).unwrap();
+    let link = stats.link.expect("the Falcon reports its link");
+    let per_1000 = 1000.0 * link.missed_replies as f64 / stats.ticks as f64;
+    assert!(per_1000 > 300.0, "{per_1000:.1} missed per 1000: {link:?}");
+    let summary = stats.summary();
+    assert!(
+        summary.contains(&format!("{} missed replies", link.missed_replies)),
+        "{summary}"
+    );
+    assert!(saved.rows > 0, "{saved:?}");
+}
+
 /// The thesis scan through the timed link (`[falcon.emulator.timing]` in
 /// profiles/thesis-emulator.toml): the loop keeps 1 kHz; replies that come
 /// too late are counted as missed, never fatal. Prints the figure: missed

@@ -11,6 +11,7 @@ mod console_windows;
 mod doctor;
 mod evaluate_windows;
 mod falcon_emulator;
+mod falcon_exit;
 mod falcon_self_test;
 mod faults;
 mod first_session;

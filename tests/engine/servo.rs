@@ -412,3 +412,127 @@ fn a_stalled_telemetry_consumer_is_counted_not_waited_for() {
     assert_eq!(servo.stats().dropped_telemetry, 990);
     assert_eq!(servo.stats().ticks, 1000);
 }
+
+/// A starved CPU while the probe is driven (issue 23): from tick `from`,
+/// every second tick comes 8 ms late (the machine ran something else), the
+/// others at the loop's half-period catch-up: never a streak of missed
+/// deadlines, but intervals over the 3.8 ms the thesis's gains stand.
+/// (One tick in four 5 ms late, or one in three 7 ms late, leaves the
+/// thesis scan stable: no force at the limit, nothing stopped.)
+struct Starved {
+    inner: VirtualClock,
+    ticks: u64,
+    from: u64,
+}
+
+impl Clock for Starved {
+    fn wait_until(&mut self, d: f64) -> f64 {
+        self.ticks += 1;
+        if self.ticks > self.from && self.ticks % 2 == 0 {
+            self.inner.stall(0.008);
+        }
+        self.inner.wait_until(d)
+    }
+    fn now(&self) -> f64 {
+        self.inner.now()
+    }
+    fn is_virtual(&self) -> bool {
+        true
+    }
+    fn stall(&mut self, secs: f64) {
+        self.inner.stall(secs);
+    }
+}
+
+/// Counts the forces commanded at the limit on some axis, and after the
+/// motion stopped.
+struct AtLimit {
+    inner: SimDevice,
+    limit: f64,
+    at_limit: u64,
+    after_stop: Option<u64>,
+}
+
+impl HapticDevice for AtLimit {
+    fn kind(&self) -> &'static str {
+        "sim"
+    }
+    fn read(&mut self, t: f64) -> Result<Reading, DeviceError> {
+        self.inner.read(t)
+    }
+    fn command(&mut self, f: [f64; 3]) -> Result<(), DeviceError> {
+        if f.iter().any(|v| v.abs() >= self.limit - 1e-9) {
+            self.at_limit += 1;
+            if let Some(n) = self.after_stop.as_mut() {
+                *n += 1;
+            }
+        }
+        self.inner.command(f)
+    }
+    fn make_safe(&mut self) {
+        self.inner.make_safe();
+    }
+}
+
+/// Ticks 8 ms apart, never two late in a row: the tick-interval
+/// guard stops the motion, saying why, before the controller sits in a
+/// limit cycle at the force limit (at most the guard's 10 saturated ticks
+/// in its window of 100, none after the stop).
+#[test]
+fn scattered_late_ticks_stop_the_motion_instead_of_a_limit_cycle() {
+    let p = thesis();
+    let dir = tempfile::tempdir().unwrap();
+    let (recorder, sink) = hapticlab::recorder::start();
+    let limit = p.rig().unwrap().controller.force_limit_n;
+    let dev = AtLimit {
+        inner: SimDevice::new(&p, Path::new("."), Some("S2"), 5).unwrap(),
+        limit,
+        at_limit: 0,
+        after_stop: None,
+    };
+    let clock = Starved {
+        inner: virtual_clock(&p),
+        ticks: 0,
+        from: 5000,
+    };
+    let (ev_tx, ev_rx) = crossbeam_channel::bounded(64);
+    let links = Links {
+        events: Some(ev_tx),
+        ..Links::default()
+    };
+    let mut servo = ServoLoop::new(dev, clock, p.rig().unwrap(), sink, links);
+    servo.apply(Command::StartScan {
+        path: dir.path().join("scan.csv"),
+        meta: vec![],
+    });
+    let mut stopped = None;
+    for _ in 0..20_000 {
+        servo.tick().expect("no device fault");
+        if stopped.is_none() {
+            stopped = ev_rx.try_iter().find_map(|e| match e {
+                ServoEvent::MotionStopped { reason } => Some(reason),
+                _ => None,
+            });
+            if stopped.is_some() {
+                servo.device_mut().after_stop = Some(0);
+            }
+        }
+        if stopped.is_some() && !servo.scan_pending() {
+            break;
+        }
+    }
+    let stopped = stopped.expect("the motion stops");
+    assert!(
+        stopped.contains("too far apart for the controller's gains"),
+        "{stopped}"
+    );
+    let d = servo.device();
+    println!(
+        "{} ticks at the force limit before the stop: {stopped}",
+        d.at_limit
+    );
+    assert!(d.at_limit <= 20, "{} ticks at the force limit", d.at_limit);
+    assert_eq!(d.after_stop, Some(0));
+    drop(servo);
+    assert!(!recorder.join()[0].complete);
+}

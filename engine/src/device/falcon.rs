@@ -263,6 +263,8 @@ pub struct FalconDevice<T: FalconTransport> {
     /// When the packet awaiting its reply was written (the link's clock).
     sent_at: Instant,
     round_trips: RoundTrips,
+    /// The motor arms' angles (rad) from the last homed reply's counts.
+    arm_angles: Option<[f64; 3]>,
 }
 
 impl<T: FalconTransport> FalconDevice<T> {
@@ -311,6 +313,7 @@ impl<T: FalconTransport> FalconDevice<T> {
             },
             sent_at: Instant::now(),
             round_trips: RoundTrips::new(),
+            arm_angles: None,
         })
     }
 
@@ -340,6 +343,38 @@ impl<T: FalconTransport> FalconDevice<T> {
 
     pub fn is_homed(&self) -> bool {
         self.homed
+    }
+
+    /// The arm angle (degrees) the profile says encoder count 0 stands for
+    /// (`[falcon] encoder_offset_deg`).
+    pub fn encoder_offset_deg(&self) -> f64 {
+        self.config.encoder_offset_deg
+    }
+
+    /// The motor arms' angles (degrees) from the last reply, once homed.
+    pub fn arm_angles_deg(&self) -> Option<[f64; 3]> {
+        self.arm_angles.map(|a| a.map(f64::to_degrees))
+    }
+
+    /// Command joint torques (N·m, each motor's own) instead of a force:
+    /// for the self-test's calibration, which pushes each arm to its stop
+    /// whatever the position says (so neither the Jacobian nor the
+    /// workspace's edge, both taken from the encoders it is checking, come
+    /// in). Nothing until homed, like any force; the caller bounds them.
+    pub fn command_torques(&mut self, tau_nm: [f64; 3]) -> Result<(), DeviceError> {
+        if let Some(m) = &self.gone {
+            return Err(DeviceError::Disconnected(m.clone()));
+        }
+        self.motor = [0; 3];
+        if self.homed && tau_nm.iter().all(|t| t.is_finite()) {
+            let (motor, saturated) = kinematics::motor_commands_scaled(tau_nm);
+            self.motor = motor;
+            self.stats.saturated_ticks += u64::from(saturated);
+        }
+        if !self.awaiting {
+            self.send()?;
+        }
+        Ok(())
     }
 
     /// Show these LEDs (`packet::LED_*`) from the next packet on, or the
@@ -455,6 +490,8 @@ impl<T: FalconTransport> FalconDevice<T> {
         self.homed = homed;
         let off = self.config.encoder_offset_deg;
         let theta = r.encoder.map(|c| kinematics::angle_of_count(c, off));
+        // Before homing the counts are relative: no angle to speak of.
+        self.arm_angles = homed.then_some(theta);
         match self.solver.solve(theta) {
             Ok(s) => {
                 let n = (s.iterations as usize).min(self.stats.fk_iterations.len() - 1);

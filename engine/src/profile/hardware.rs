@@ -149,6 +149,11 @@ pub struct EmulatorSection {
     /// commands stop (otherwise it stops its motors after
     /// 100 ms without one: what Novint's firmware does is not known).
     pub keeps_last_force: bool,
+    /// The emulated encoders read this many degrees off: encoder count 0
+    /// stands for `[falcon] encoder_offset_deg` + this, so the driver's arm
+    /// angles are this much too low (what the self-test's calibration is
+    /// there to catch).
+    pub encoder_offset_error_deg: f64,
 }
 
 /// The emulated link's timing model (`[falcon.emulator.timing]`); the FTDI
@@ -202,6 +207,7 @@ impl Default for EmulatorSection {
             motor_power_lost_after_s: None,
             slow_link_ms: 0.0,
             keeps_last_force: false,
+            encoder_offset_error_deg: 0.0,
         }
     }
 }
@@ -553,6 +559,13 @@ fn validate_emulator(e: &EmulatorSection) -> Result<(), Invalid> {
                 "must be from 0 to 100 ms (extra delay of every reply), got {}",
                 e.slow_link_ms
             ),
+        );
+    }
+    let err = e.encoder_offset_error_deg;
+    if !(err.is_finite() && err.abs() <= 30.0) {
+        return bad(
+            "falcon.emulator.encoder_offset_error_deg",
+            format!("must be within ±30° (how far the emulated encoders read off), got {err}"),
         );
     }
     Ok(())

@@ -10,7 +10,10 @@
 //! counts from the true position through the inverse kinematics (relative
 //! counts until homed), motor commands become forces through the Jacobian,
 //! and the homing flags rise once the grip has been pulled fully out and
-//! pushed fully in — by a simulated hand when `auto_home` is on.
+//! pushed fully in — by a simulated hand when `auto_home` is on. The arms
+//! stop at the model's stops ([`stops`]), and the encoders may be set to
+//! read a few degrees off (`encoder_offset_error_deg`), for the self-test's
+//! calibration to find.
 //!
 //! Time on the link is [`timing::Link`]'s: with `[falcon.emulator.timing]`
 //! replies come as late as USB and the FTDI chip's latency timer make them,
@@ -39,6 +42,7 @@ use super::packet::{self, PacketReader, ReplyPacket};
 use super::{FalconTransport, TransportError, ftdi};
 use timing::Link;
 
+mod stops;
 pub mod timing;
 use crate::device::HapticDevice;
 use crate::device::sim::SimDevice;
@@ -217,6 +221,10 @@ pub struct EmulatedFalcon {
     power_lost: bool,
     /// Servo time of the last command applied.
     commanded_at: f64,
+    /// The force of the hand and the arms' reach this tick (N, profile frame).
+    outside_n: [f64; 3],
+    /// The arms' mechanical stops, radians.
+    stops_rad: (f64, f64),
     pub counters: EmulatorCounters,
 }
 
@@ -261,6 +269,8 @@ impl EmulatedFalcon {
             hand_task: None,
             power_lost: false,
             commanded_at: 0.0,
+            outside_n: [0.0; 3],
+            stops_rad: stops::limits_rad(),
             counters: EmulatorCounters::default(),
             cfg,
         }
@@ -287,6 +297,13 @@ impl EmulatedFalcon {
     /// what it is asked; `auto_home` no longer applies).
     pub fn ask_hand(&mut self, task: HandTask) {
         self.hand_task = Some((task, self.t));
+    }
+
+    /// Switch the wall power off now: the encoders keep working, the
+    /// motors do nothing (as `motor_power_lost_after_s` does at its time).
+    pub fn lose_motor_power(&mut self) {
+        self.power_lost = true;
+        self.sim.make_safe();
     }
 
     /// Pull the cable now.
@@ -464,9 +481,10 @@ impl EmulatedFalcon {
         let p = self.sim.true_position();
         let noisy = p.map(|v| v + self.noise.sample(&mut self.rng));
         if let Ok(a) = kinematics::inverse(self.cfg.frame.to_falcon(noisy)) {
-            self.last_counts = a
-                .theta1
-                .map(|t| kinematics::count_of_angle(t, self.cfg.encoder_offset_deg));
+            // Count 0 where this device's arm really is (the profile's
+            // offset plus the injected error).
+            let offset = self.cfg.encoder_offset_deg + self.cfg.device.encoder_offset_error_deg;
+            self.last_counts = a.theta1.map(|t| kinematics::count_of_angle(t, offset));
         }
         let mut encoder = self.last_counts;
         // Each arm's count is relative to where it powered up until that arm
@@ -546,7 +564,7 @@ impl EmulatedFalcon {
                     - REACH_DAMPING_N_S_PER_M * v[a];
             }
         }
-        self.sim.set_hand_force(hand);
+        self.outside_n = hand;
     }
 }
 
@@ -726,6 +744,7 @@ impl FalconTransport for EmulatedFalcon {
         if !(t_s.is_finite() && t_s > self.t) {
             return;
         }
+        let from = self.t;
         self.t = t_s;
         self.link.follow(t_s);
         self.link.clear_waited();
@@ -739,8 +758,7 @@ impl FalconTransport for EmulatedFalcon {
                 .motor_power_lost_after_s
                 .is_some_and(|p| t_s >= p)
         {
-            self.power_lost = true;
-            self.sim.make_safe();
+            self.lose_motor_power();
         }
         let silent = t_s - self.commanded_at > FIRMWARE_SILENCE_S;
         if !self.cfg.device.keeps_last_force && silent && self.motor != [0; 3] {
@@ -757,10 +775,10 @@ impl FalconTransport for EmulatedFalcon {
         if !self.unplugged {
             self.outside_forces();
         } else {
-            self.sim.set_hand_force([0.0; 3]);
+            self.outside_n = [0.0; 3];
         }
         // The physics runs whether or not anyone listens.
-        let _ = self.sim.read(t_s);
+        self.run_physics(from, t_s);
     }
 
     fn applied_motor(&self) -> Option<[i16; 3]> {

@@ -40,8 +40,8 @@
 
 pub use crate::profile::falcon_reach::{
     A, B, C, D, DEFAULT_ENCODER_OFFSET_DEG, DEFAULT_ORIGIN_M, E, F, FALCON_MAX_M, FALCON_MIN_M,
-    Frame, KinematicsError, LEG_ANGLES_DEG, LegAngles, R, S, Vec3, in_workspace, inverse, leg_trig,
-    to_leg, wrap,
+    Frame, KinematicsError, LEG_ANGLES_DEG, LegAngles, R, S, Vec3, in_workspace, inverse,
+    joint_limits_deg, leg_trig, to_leg, wrap,
 };
 
 /// Encoder: 320 slots × 4 edges per motor turn, through the 0.110/0.01425 capstan drive.

@@ -238,28 +238,30 @@ fn once_homed_the_hand_lets_go_in_the_middle_and_the_reading_follows() {
 }
 
 #[test]
-fn past_the_arms_reach_the_grip_is_held_back_and_still_read() {
+fn at_the_arms_stops_the_grip_is_held_back_and_still_read() {
     let e = emulator(EmulatorConfig::default());
     let mut dev = FalconDevice::open(e, FalconConfig::default(), &mut |_| {}).unwrap();
     let t = drive(&mut dev, 0.0, 3.0, |_| [0.0; 3]);
     assert!(dev.transport().is_homed());
-    // Push hard outwards (+z, away from the Falcon's body), towards the
-    // simulator's box wall, which lies beyond what the arms reach.
-    let t = drive(&mut dev, t, 2.0, |_| [0.0, 0.0, 6.0]);
+    // Push hard out, right and up: leg 2's arm reaches its stop (73.5°)
+    // well inside the workspace box, where the driver keeps the force on
+    // (and before the legs' reach ends).
+    let push = 6.0 / 3f64.sqrt();
+    let t = drive(&mut dev, t, 2.0, |_| [push, push, push]);
     let emu = dev.transport();
+    let p = emu.cfg.frame.to_falcon(emu.sim().true_position());
+    let a = kinematics::inverse(p).expect("within reach");
+    let top = a.theta1.iter().fold(f64::MIN, |m, t| m.max(t.to_degrees()));
+    let (_, stop) = kinematics::joint_limits_deg();
     assert!(
-        emu.counters.unreachable > 0,
-        "the grip never left the reach"
+        top > stop - 1.0 && top < stop + 0.5,
+        "the highest arm is at {top:.2}°, its stop at {stop:.2}° (grip at {p:?})"
     );
-    let p = emu.sim().true_position();
-    let overshoot = (0..3)
-        .map(|a| (p[a] - emu.reachable[a]).powi(2))
-        .sum::<f64>()
-        .sqrt();
     assert!(
-        overshoot < 5e-4,
-        "the grip went {overshoot} m past its reach"
+        (0..3).all(|i| p[i] < kinematics::FALCON_MAX_M[i]),
+        "{p:?}: held by the box, not the stop"
     );
+    assert_eq!(emu.counters.unreachable, 0);
     assert_reading_follows(&mut dev, t);
 }
 

@@ -1,7 +1,9 @@
 //! The self-test against the emulated Falcon in virtual time, its user
 //! scripted: a clean device passes every step; a motor wired backwards
-//! fails a pulse; declined pulses apply no force; a panic mid-pulse leaves
-//! the forces zero; an unhomed grip fails homing and skips the rest.
+//! fails a pulse; encoders that read a few degrees off fail the calibration,
+//! which suggests the offset that fixes them; declined forces apply none; a
+//! panic mid-pulse leaves the forces zero; an unhomed grip fails homing and
+//! skips the rest.
 
 use std::path::Path;
 use std::time::Duration;
@@ -111,7 +113,15 @@ fn a_clean_emulated_falcon_passes_every_step() {
     assert_eq!(
         names,
         [
-            "open", "leds", "link", "homing", "encoders", "pulse x", "pulse y", "pulse z"
+            "open",
+            "leds",
+            "link",
+            "homing",
+            "encoders",
+            "pulse x",
+            "pulse y",
+            "pulse z",
+            "calibration"
         ]
     );
     // The user was asked to home, move, hold, and finally let go; asked once before any force.
@@ -134,6 +144,29 @@ fn a_clean_emulated_falcon_passes_every_step() {
     assert_eq!(report.pulses.len(), 3);
     for p in &report.pulses {
         assert!(p.along_m > 0.002 && p.cosine > 0.9, "{p:?}\n{text}");
+        assert_eq!(p.force_n, 1.0);
+        assert!(
+            (p.along_mm_per_n - p.along_m * 1000.0).abs() < 1e-9,
+            "{p:?}"
+        );
+    }
+    assert!(text.contains("mm/N"), "{text}");
+    // The calibration found the arms at the model's stops, give and noise
+    // cancelling to well under the tolerance, and suggests the offset in use.
+    let c = report.calibration.as_ref().expect("calibrated");
+    assert!(c.passed, "{c:#?}");
+    assert_eq!(c.stops.len(), 2);
+    for stop in &c.stops {
+        assert!(stop.reached, "{stop:?}");
+        for d in stop.difference_deg {
+            assert!(d.abs() < 0.3, "{stop:?}");
+        }
+    }
+    assert!(c.offset_error_deg.abs() < 0.1, "{c:#?}");
+    assert!((c.suggested_offset_deg - 35.0).abs() < 0.1, "{c:#?}");
+    assert!(c.grip_force_n > 1.0 && c.grip_force_n < 5.0, "{c:#?}");
+    for t in c.travel_deg {
+        assert!((t - c.model_travel_deg).abs() < 0.3, "{c:#?}");
     }
     assert!(text.contains("result: PASS") && text.contains("firmware already running"));
     // Forces zero at the end, in the driver and at the device.
@@ -174,27 +207,93 @@ fn declined_pulses_are_skipped_and_no_force_is_applied() {
     let mut user = Script::answering(false);
     let (report, device) = run_on(&lp, &mut user);
     assert!(!report.passed);
-    for axis in ["pulse x", "pulse y", "pulse z"] {
+    for axis in ["pulse x", "pulse y", "pulse z", "calibration"] {
         assert_eq!(verdict(&report, axis), Verdict::Skipped);
     }
+    // Asked once, for the pulses and the push to the stops together.
+    assert_eq!(user.questions.len(), 1, "{:?}", user.questions);
+    assert!(user.questions[0].contains("stops"), "{:?}", user.questions);
+    assert!(report.calibration.is_none());
     assert_eq!(verdict(&report, "encoders"), Verdict::Pass);
     assert_eq!(device.transport().counters.max_motor, 0);
 }
 
+/// Encoders that read a few degrees off (the emulated Falcon's count 0 is
+/// not at the profile's `encoder_offset_deg`): the calibration measures the
+/// arms that far from the model's stops, fails, and suggests an offset
+/// within a few tenths of a degree of the true one.
 #[test]
-fn without_a_hand_homing_times_out_and_the_rest_is_skipped() {
-    let lp = thesis_emulator();
-    // A user who never does what is asked.
-    struct Absent;
-    impl Operator<EmulatedFalcon> for Absent {
-        fn request(&mut self, _: &Request, transport: &mut EmulatedFalcon) {
-            transport.ask_hand(HandTask::LetGo);
+fn encoders_off_by_a_few_degrees_fail_the_calibration_with_the_offset_to_set() {
+    for error_deg in [3.0, -4.0] {
+        let mut lp = thesis_emulator();
+        let falcon = lp.profile.falcon.as_mut().unwrap();
+        falcon.emulator.encoder_offset_error_deg = error_deg;
+        let (report, device) = run_on(&lp, &mut Script::answering(true));
+        let text = report.lines().join("\n");
+        println!("encoders {error_deg:+}° off:\n{text}");
+        assert!(!report.passed, "{text}");
+        assert_eq!(verdict(&report, "calibration"), Verdict::Fail, "{text}");
+        // Only the calibration sees it: directions and distances still hold.
+        let failed: Vec<&str> = report
+            .not_passed()
+            .iter()
+            .map(|s| s.name.as_str())
+            .collect();
+        assert_eq!(failed, ["calibration"], "{text}");
+        let c = report.calibration.as_ref().unwrap();
+        for stop in &c.stops {
+            assert!(stop.reached, "{stop:?}");
+            for d in stop.difference_deg {
+                assert!((d + error_deg).abs() < 0.3, "{stop:?}");
+            }
         }
-        fn confirm(&mut self, _: &str) -> bool {
-            true
-        }
-        fn note(&mut self, _: &str) {}
+        let truth = 35.0 + error_deg;
+        assert!(
+            (c.suggested_offset_deg - truth).abs() < 0.2,
+            "suggested {} for {truth}",
+            c.suggested_offset_deg
+        );
+        assert!(
+            text.contains(&format!("set `encoder_offset_deg = {truth:.1}`")),
+            "{text}"
+        );
+        assert_eq!(device.transport().motor(), [0; 3]);
+        // With the suggested offset the same Falcon passes.
+        let mut lp = thesis_emulator();
+        let falcon = lp.profile.falcon.as_mut().unwrap();
+        falcon.emulator.encoder_offset_error_deg = error_deg;
+        falcon.encoder_offset_deg = c.suggested_offset_deg;
+        // (The emulator's count 0 follows the profile's offset plus the
+        // error; the fixed profile's emulator keeps the old one.)
+        falcon.emulator.encoder_offset_error_deg = truth - c.suggested_offset_deg;
+        let (report, _) = run_on(&lp, &mut Script::answering(true));
+        let text = report.lines().join("\n");
+        assert!(report.passed, "{text}");
     }
+}
+
+/// Motors without power cannot push the arms to their stops: the
+/// calibration says they did not get there, never a wrong offset.
+#[test]
+fn arms_that_do_not_reach_their_stops_fail_without_an_offset() {
+    /// A user who does what is asked; the wall power goes as the push to
+    /// the stops begins.
+    struct PowerGoesAtStops(Script);
+    impl Operator<EmulatedFalcon> for PowerGoesAtStops {
+        fn request(&mut self, request: &Request, transport: &mut EmulatedFalcon) {
+            if matches!(request, Request::HandsOffForStops { .. }) {
+                transport.lose_motor_power();
+            }
+            self.0.request(request, transport);
+        }
+        fn confirm(&mut self, q: &str) -> bool {
+            Operator::<EmulatedFalcon>::confirm(&mut self.0, q)
+        }
+        fn note(&mut self, line: &str) {
+            Operator::<EmulatedFalcon>::note(&mut self.0, line)
+        }
+    }
+    let lp = thesis_emulator();
     let (report, _) = run(
         &lp.profile.name,
         |log| open_emulated(&lp, None, 7, log),
@@ -202,17 +301,22 @@ fn without_a_hand_homing_times_out_and_the_rest_is_skipped() {
             clock: &mut clock(),
             stop: &AtomicBool::new(false),
         },
-        &mut Absent,
-        &Options {
-            homing_timeout_s: 2.0,
-            ..options()
-        },
+        &mut PowerGoesAtStops(Script::answering(true)),
+        &options(),
     );
     let text = report.lines().join("\n");
-    assert_eq!(verdict(&report, "homing"), Verdict::Fail, "{text}");
-    assert!(text.contains("not homed within 2 s"), "{text}");
-    assert_eq!(verdict(&report, "encoders"), Verdict::Skipped);
-    assert_eq!(verdict(&report, "pulses"), Verdict::Skipped);
+    println!("{text}");
+    assert_eq!(verdict(&report, "pulse z"), Verdict::Pass, "{text}");
+    assert_eq!(verdict(&report, "calibration"), Verdict::Fail, "{text}");
+    assert!(
+        text.contains("the grip did not get to both stops")
+            && text.contains("check the Falcon's power supply"),
+        "{text}"
+    );
+    assert!(!text.contains("set `encoder_offset_deg"), "{text}");
+    let c = report.calibration.as_ref().unwrap();
+    assert!(!c.passed, "{c:#?}");
+    assert!(c.travel_deg.iter().all(|t| t.abs() < 10.0), "{c:#?}");
 }
 
 /// The emulator behind a transport that panics once, 20 packets into the
