@@ -118,10 +118,16 @@ fn sessions(app: &App, list: &[Session], area: Rect, buf: &mut Buffer) {
         )));
     }
     lines.push(Line::raw(""));
-    lines.push(Line::raw(format!(
-        "n  a new session: {}",
-        crate::console::session::today(&app.sessions_root(), now).display()
-    )));
+    // `n` opens today's folder: new, already there, or the one open.
+    let today = crate::console::session::today(&app.sessions_root(), now);
+    let what = if today == app.dataset.dir {
+        "today's session (open)"
+    } else if today.is_dir() {
+        "today's session"
+    } else {
+        "a new session"
+    };
+    lines.push(Line::raw(format!("n  {what}: {}", today.display())));
     Paragraph::new(fit_lines(lines, usize::from(r.width.saturating_sub(2))))
         .block(frame("Sessions"))
         .render(r, buf);
