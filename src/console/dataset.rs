@@ -461,9 +461,88 @@ pub fn load_saved_model(
     Ok(Some((model, file)))
 }
 
-/// Take up the model saved in `dir` by an earlier session, or say on the
-/// status line and in the Dataset panel why it is not used.
+/// The evaluation an earlier `e` kept in `dir` ([`REPORT_JSON`]), as its
+/// report and how it was split, when the file is there and readable.
+pub fn load_saved_report(dir: &Path) -> Option<(Report, String)> {
+    #[derive(serde::Deserialize)]
+    struct Kept {
+        labels: Vec<String>,
+        confusion: Vec<Vec<usize>>,
+        accuracy: f64,
+        per_class: Vec<Rate>,
+        #[serde(default)]
+        train: Vec<String>,
+        #[serde(default)]
+        test: Vec<String>,
+        #[serde(default)]
+        predictions: Vec<Row>,
+        method: String,
+    }
+    #[derive(serde::Deserialize)]
+    struct Rate {
+        label: String,
+        n: usize,
+        // A class with no test example has no rate: `null`.
+        success_rate: Option<f64>,
+        error_rate: Option<f64>,
+    }
+    #[derive(serde::Deserialize)]
+    struct Row {
+        file: String,
+        label: String,
+        predicted: String,
+        votes: Vec<(String, usize)>,
+    }
+    let text = std::fs::read_to_string(dir.join(REPORT_JSON)).ok()?;
+    let k: Kept = serde_json::from_str(&text).ok()?;
+    let report = Report {
+        labels: k.labels,
+        confusion: k.confusion,
+        accuracy: k.accuracy,
+        per_class: k
+            .per_class
+            .into_iter()
+            .map(|r| crate::evaluate::ClassRate {
+                label: r.label,
+                n: r.n,
+                success_rate: r.success_rate.unwrap_or(f64::NAN),
+                error_rate: r.error_rate.unwrap_or(f64::NAN),
+            })
+            .collect(),
+        train: k.train,
+        test: k.test,
+        predictions: k
+            .predictions
+            .into_iter()
+            .map(|r| crate::evaluate::PredictionRow {
+                file: r.file,
+                label: r.label,
+                predicted: r.predicted,
+                votes: r.votes,
+            })
+            .collect(),
+    };
+    Some((report, k.method))
+}
+
+/// Take up what an earlier session kept in `dir`: the last evaluation (the
+/// Dataset panel shows it, with its age), and the model, or say on the
+/// status line and in the Dataset panel why the model is not used.
 pub fn adopt_saved_model(app: &mut App, dir: &Path) {
+    if app.dataset.report.is_none()
+        && let Some((report, method)) = load_saved_report(dir)
+    {
+        let file = dir.join(REPORT_FILE);
+        let age = std::fs::metadata(dir.join(REPORT_JSON))
+            .and_then(|m| m.modified())
+            .map(|t| super::session::ago(t, std::time::SystemTime::now()));
+        app.dataset.report = Some(report);
+        app.dataset.report_method = Some(match age {
+            Ok(age) => format!("{method}, {age}"),
+            Err(_) => method,
+        });
+        app.dataset.report_file = Some(file);
+    }
     match load_saved_model(&app.profile, dir) {
         Ok(None) => {}
         Ok(Some((m, file))) => {

@@ -140,6 +140,23 @@ fn a_first_session_of_five_scans_per_texture_trains_and_evaluates_a_sound_model(
         "{}",
         dataset_panel(&app)
     );
+    // The next session opening the folder shows that evaluation again,
+    // read from evaluation.json, with its age.
+    let mut next = fixtures::app(120, 40);
+    next.dataset = DatasetView {
+        dir: d.path().to_path_buf(),
+        ..DatasetView::default()
+    };
+    adopt_saved_model(&mut next, d.path());
+    let kept = next.dataset.report.as_ref().expect("the kept evaluation");
+    assert_eq!(kept, app.dataset.report.as_ref().unwrap());
+    assert!(
+        dataset_panel(&next).contains(
+            "evaluation: 20/20 right (100.0 %) by 5-fold cross-validation, seed 0, just now, in evaluation.txt"
+        ),
+        "{}",
+        dataset_panel(&next)
+    );
 
     // T: k = 10 cannot be met by 5 per texture; the status line says so.
     jobs.train(&lp, d.path(), false);

@@ -57,12 +57,13 @@ pub fn render(app: &App, o: &Overlay, area: Rect, buf: &mut Buffer) {
     }
 }
 
-/// The message log: newest first, each in full, wrapped.
+/// The message log: newest first, each in full, wrapped; the header, the
+/// footer (the log's keys) and the status line stay in sight.
 fn messages(app: &App, scroll: usize, area: Rect, buf: &mut Buffer) {
     let r = centred(
         area,
         area.width.saturating_sub(4).max(20),
-        area.height.saturating_sub(2),
+        area.height.saturating_sub(4),
     );
     Clear.render(r, buf);
     let mut lines = Vec::new();
