@@ -169,7 +169,7 @@ fn every_example_in_every_help_runs_as_printed() {
             }
             let out = Command::new("sh")
                 .arg("-c")
-                .arg(&ex)
+                .arg(ex)
                 .current_dir(dir.path())
                 .env("PATH", &path)
                 .output()
