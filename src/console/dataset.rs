@@ -59,6 +59,10 @@ pub struct ModelInfo {
     pub skipped: usize,
     /// Why k is not the profile's ([`Model::k_notice`]).
     pub k_notice: Option<String>,
+    /// How the folder's recordings differ from those the model was
+    /// trained on, when it was saved by an earlier session ("1 added,
+    /// 2 gone since"): a curating change in that session, or by hand.
+    pub changed: Option<String>,
 }
 
 impl ModelInfo {
@@ -70,6 +74,7 @@ impl ModelInfo {
             file,
             skipped: 0,
             k_notice: model.k_notice(),
+            changed: None,
         }
     }
 }
@@ -88,6 +93,9 @@ impl DatasetView {
                 "trained before {} to the dataset",
                 crate::classify::plural(self.edits, "change", "changes")
             ));
+        }
+        if let Some(c) = &m.changed {
+            return Some(c.clone());
         }
         let usable = self.total().saturating_sub(m.skipped);
         (usable != m.examples).then(|| {
@@ -461,14 +469,95 @@ pub fn load_saved_model(
     Ok(Some((model, file)))
 }
 
-/// Take up the model saved in `dir` by an earlier session, or say on the
-/// status line and in the Dataset panel why it is not used.
+/// The evaluation an earlier `e` kept in `dir` ([`REPORT_JSON`]), as its
+/// report and how it was split, when the file is there and readable.
+pub fn load_saved_report(dir: &Path) -> Option<(Report, String)> {
+    #[derive(serde::Deserialize)]
+    struct Kept {
+        labels: Vec<String>,
+        confusion: Vec<Vec<usize>>,
+        accuracy: f64,
+        per_class: Vec<Rate>,
+        #[serde(default)]
+        train: Vec<String>,
+        #[serde(default)]
+        test: Vec<String>,
+        #[serde(default)]
+        predictions: Vec<Row>,
+        method: String,
+    }
+    #[derive(serde::Deserialize)]
+    struct Rate {
+        label: String,
+        n: usize,
+        // A class with no test example has no rate: `null`.
+        success_rate: Option<f64>,
+        error_rate: Option<f64>,
+    }
+    #[derive(serde::Deserialize)]
+    struct Row {
+        file: String,
+        label: String,
+        predicted: String,
+        votes: Vec<(String, usize)>,
+    }
+    let text = std::fs::read_to_string(dir.join(REPORT_JSON)).ok()?;
+    let k: Kept = serde_json::from_str(&text).ok()?;
+    let report = Report {
+        labels: k.labels,
+        confusion: k.confusion,
+        accuracy: k.accuracy,
+        per_class: k
+            .per_class
+            .into_iter()
+            .map(|r| crate::evaluate::ClassRate {
+                label: r.label,
+                n: r.n,
+                success_rate: r.success_rate.unwrap_or(f64::NAN),
+                error_rate: r.error_rate.unwrap_or(f64::NAN),
+            })
+            .collect(),
+        train: k.train,
+        test: k.test,
+        predictions: k
+            .predictions
+            .into_iter()
+            .map(|r| crate::evaluate::PredictionRow {
+                file: r.file,
+                label: r.label,
+                predicted: r.predicted,
+                votes: r.votes,
+            })
+            .collect(),
+    };
+    Some((report, k.method))
+}
+
+/// Take up what an earlier session kept in `dir`: the last evaluation (the
+/// Dataset panel shows it, with its age), and the model, or say on the
+/// status line and in the Dataset panel why the model is not used.
 pub fn adopt_saved_model(app: &mut App, dir: &Path) {
+    if app.dataset.report.is_none()
+        && let Some((report, method)) = load_saved_report(dir)
+    {
+        let file = dir.join(REPORT_FILE);
+        let age = std::fs::metadata(dir.join(REPORT_JSON))
+            .and_then(|m| m.modified())
+            .map(|t| super::session::ago(t, std::time::SystemTime::now()));
+        app.dataset.report = Some(report);
+        app.dataset.report_method = Some(match age {
+            Ok(age) => format!("{method}, {age}"),
+            Err(_) => method,
+        });
+        app.dataset.report_file = Some(file);
+    }
     match load_saved_model(&app.profile, dir) {
         Ok(None) => {}
         Ok(Some((m, file))) => {
             let mut info = ModelInfo::of(&m, Some(file));
-            info.skipped = incomplete_outside(&m, dir);
+            let (skipped, changed) = compare_files(&m, dir);
+            info.skipped = skipped;
+            info.changed = changed;
             app.dataset.model = Some(info);
             app.dataset.model_note = None;
             app.model = Some(m);
@@ -481,19 +570,54 @@ pub fn adopt_saved_model(app: &mut App, dir: &Path) {
     }
 }
 
-/// Recordings under `dir` that are not among the model's examples and are
-/// incomplete: the ones its training skipped (or would skip).
-fn incomplete_outside(model: &Model, dir: &Path) -> usize {
+/// A recording by its label folder and name (`S2/S2_003.csv`): the same
+/// file however the folder was spelt when the model was trained.
+fn tail(path: &Path) -> PathBuf {
+    let mut c: Vec<_> = path.components().rev().take(2).collect();
+    c.reverse();
+    c.iter().collect()
+}
+
+/// The folder's recordings against the model's examples: how many that are
+/// not among them are incomplete (training skipped them), and, when the
+/// rest differ, how ("2 recordings added, 1 gone since it was trained").
+fn compare_files(model: &Model, dir: &Path) -> (usize, Option<String>) {
     let Ok(files) = recording::collect_files(&[dir.to_path_buf()]) else {
-        return 0;
+        return (0, None);
     };
-    let known: std::collections::HashSet<&str> =
-        model.examples.iter().map(|e| e.file.as_str()).collect();
-    files
+    let known: std::collections::HashSet<PathBuf> = model
+        .examples
         .iter()
-        .filter(|f| !known.contains(f.display().to_string().as_str()))
-        .filter(|f| recording::read(f).is_ok_and(|r| !r.is_complete()))
-        .count()
+        .map(|e| tail(Path::new(&e.file)))
+        .collect();
+    let here: std::collections::HashSet<PathBuf> = files.iter().map(|f| tail(f)).collect();
+    let (mut skipped, mut added) = (0, 0);
+    for f in files.iter().filter(|f| !known.contains(&tail(f))) {
+        match recording::read(f) {
+            Ok(r) if !r.is_complete() => skipped += 1,
+            _ => added += 1,
+        }
+    }
+    let gone = known.iter().filter(|k| !here.contains(*k)).count();
+    let changed = (added + gone > 0).then(|| {
+        let mut parts = Vec::new();
+        if added > 0 {
+            parts.push(format!(
+                "{} added",
+                crate::classify::plural(added, "recording", "recordings")
+            ));
+        }
+        if gone > 0 && added > 0 {
+            parts.push(format!("{gone} gone"));
+        } else if gone > 0 {
+            parts.push(format!(
+                "{} gone",
+                crate::classify::plural(gone, "recording", "recordings")
+            ));
+        }
+        format!("{} since it was trained", parts.join(", "))
+    });
+    (skipped, changed)
 }
 
 #[cfg(test)]

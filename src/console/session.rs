@@ -33,16 +33,18 @@ pub struct Session {
 impl Session {
     /// "3 h ago", "2 days ago".
     pub fn age(&self, now: SystemTime) -> String {
-        let s = now
-            .duration_since(self.last_used)
-            .unwrap_or_default()
-            .as_secs();
-        match s {
-            0..120 => "just now".into(),
-            120..7200 => format!("{} min ago", s / 60),
-            7200..172_800 => format!("{} h ago", s / 3600),
-            _ => format!("{} days ago", s / 86_400),
-        }
+        ago(self.last_used, now)
+    }
+}
+
+/// How long before `now` `then` was: "just now", "3 h ago", "2 days ago".
+pub fn ago(then: SystemTime, now: SystemTime) -> String {
+    let s = now.duration_since(then).unwrap_or_default().as_secs();
+    match s {
+        0..120 => "just now".into(),
+        120..7200 => format!("{} min ago", s / 60),
+        7200..172_800 => format!("{} h ago", s / 3600),
+        _ => format!("{} days ago", s / 86_400),
     }
 }
 

@@ -303,3 +303,55 @@ fn profile_new_on_recordings_sharing_no_channel_names_two_that_differ() {
     );
     assert!(!out.exists());
 }
+
+/// A profile's `[console] keys` that puts two actions on one key is refused
+/// at load (exit 2, before any terminal or device), naming the key, both
+/// actions, the entry the user wrote and which binding is a default: a
+/// remapping written before the browser's keys (`d` delete, `x` exclude…)
+/// existed meets them here, not as a key that silently does something else.
+#[test]
+fn a_console_key_bound_to_two_actions_is_refused_at_load() {
+    let dir = tempfile::tempdir().unwrap();
+    let thesis =
+        std::fs::read_to_string(Path::new(crate::common::REPO).join("profiles/thesis.toml"))
+            .unwrap();
+    let ds = dir.path().join("ds");
+    for (keys, says) in [
+        (
+            r#"{ start = "d" }"#,
+            &[
+                "console.keys.start",
+                "key d is bound to both \"start\" (console.keys.start) and \"delete\" (delete's default key)",
+            ][..],
+        ),
+        (
+            r#"{ quit = "F5", start = "F5" }"#,
+            &[
+                "console.keys.start",
+                "key F5 is bound to both \"quit\" (console.keys.quit) and \"start\" (console.keys.start)",
+            ][..],
+        ),
+    ] {
+        let profile = dir.path().join("keys.toml");
+        std::fs::write(&profile, format!("{thesis}\n[console]\nkeys = {keys}\n")).unwrap();
+        for cmd in ["console", "replay"] {
+            let target = if cmd == "console" {
+                vec!["console", "--profile", p(&profile), "--dataset", p(&ds)]
+            } else {
+                vec!["replay", "recordings/thesis-sim", "--profile", p(&profile)]
+            };
+            let r = refused(&target, says);
+            assert!(r.stderr.contains("keys.toml:"), "the file named: {r:?}");
+        }
+        assert!(!ds.exists(), "nothing made before the refusal");
+    }
+    // The same remapping with delete moved away loads.
+    let profile = dir.path().join("moved.toml");
+    std::fs::write(
+        &profile,
+        format!("{thesis}\n[console]\nkeys = {{ start = \"d\", delete = \"D\" }}\n"),
+    )
+    .unwrap();
+    let r = run(&["check", p(&profile)]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+}

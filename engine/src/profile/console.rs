@@ -177,20 +177,42 @@ impl ConsoleSettings {
             }
         }
         let mut out: Vec<(&'static str, KeySpec)> = Vec::with_capacity(CONSOLE_ACTIONS.len());
+        // Where a binding was written: its own entry, or the defaults.
+        let entry = |action: &str| {
+            if self.keys.contains_key(action) {
+                format!("console.keys.{action}")
+            } else {
+                "console.keys".to_string()
+            }
+        };
         for (action, default) in CONSOLE_ACTIONS {
-            let (text, key) = match self.keys.get(*action) {
-                Some(t) => (t.as_str(), format!("console.keys.{action}")),
-                None => (*default, "console.keys".to_string()),
-            };
+            let text = self.keys.get(*action).map_or(*default, String::as_str);
             let spec = parse_key(text).map_err(|reason| Invalid {
-                key: key.clone(),
+                key: entry(action),
                 reason,
             })?;
             if let Some((other, _)) = out.iter().find(|(_, s)| *s == spec) {
+                // A remapped key may land on another action's default
+                // (the defaults grow): name the entry the user wrote, and
+                // say which binding is a default.
+                let how = |a: &str| {
+                    if self.keys.contains_key(a) {
+                        format!("console.keys.{a}")
+                    } else {
+                        format!("{a}'s default key")
+                    }
+                };
+                let written = if self.keys.contains_key(*action) {
+                    action
+                } else {
+                    other
+                };
                 return Err(Invalid {
-                    key,
+                    key: entry(written),
                     reason: format!(
-                        "key {spec} is bound to both {other:?} and {action:?}; give one of them another key"
+                        "key {spec} is bound to both {other:?} ({}) and {action:?} ({}); give one of them another key",
+                        how(other),
+                        how(action)
                     ),
                 });
             }

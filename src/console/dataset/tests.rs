@@ -140,6 +140,23 @@ fn a_first_session_of_five_scans_per_texture_trains_and_evaluates_a_sound_model(
         "{}",
         dataset_panel(&app)
     );
+    // The next session opening the folder shows that evaluation again,
+    // read from evaluation.json, with its age.
+    let mut next = fixtures::app(120, 40);
+    next.dataset = DatasetView {
+        dir: d.path().to_path_buf(),
+        ..DatasetView::default()
+    };
+    adopt_saved_model(&mut next, d.path());
+    let kept = next.dataset.report.as_ref().expect("the kept evaluation");
+    assert_eq!(kept, app.dataset.report.as_ref().unwrap());
+    assert!(
+        dataset_panel(&next).contains(
+            "evaluation: 20/20 right (100.0 %) by 5-fold cross-validation, seed 0, just now, in evaluation.txt"
+        ),
+        "{}",
+        dataset_panel(&next)
+    );
 
     // T: k = 10 cannot be met by 5 per texture; the status line says so.
     jobs.train(&lp, d.path(), false);
@@ -232,6 +249,38 @@ fn a_saved_model_with_other_classifier_settings_is_not_used_silently() {
     assert!(app.model.is_some());
     assert_eq!(app.dataset.model.as_ref().unwrap().examples, 12);
     assert_eq!(app.dataset.model_note, None);
+    app.dataset.counts = count(d.path()).0;
+    assert_eq!(app.dataset.stale_model(), None);
+
+    // Curated after it was saved (by an earlier session, or by hand), with
+    // the count unchanged: one excluded, one added. The next session says
+    // the model is stale, not "k-NN on 12 recordings".
+    let s1 = d.path().join("S1");
+    let excluded = d
+        .path()
+        .join(crate::console::curate::EXCLUDED_DIR)
+        .join("S1");
+    std::fs::create_dir_all(&excluded).unwrap();
+    std::fs::rename(s1.join("S1_001.csv"), excluded.join("S1_001.csv")).unwrap();
+    let mut app = fixtures::app(120, 40);
+    adopt_saved_model(&mut app, d.path());
+    app.dataset.counts = count(d.path()).0;
+    assert_eq!(
+        app.dataset.stale_model().as_deref(),
+        Some("1 recording gone since it was trained")
+    );
+    std::fs::copy(s1.join("S1_002.csv"), s1.join("S1_009.csv")).unwrap();
+    let mut app = fixtures::app(120, 40);
+    adopt_saved_model(&mut app, d.path());
+    app.dataset.counts = count(d.path()).0;
+    assert_eq!(app.dataset.counts[0], ("S1".into(), 3));
+    assert!(
+        dataset_panel(&app).contains(
+            "model stale: T trains again (k = 1, 1 recording added, 1 gone since it was trained)"
+        ),
+        "{}",
+        dataset_panel(&app)
+    );
 
     // Under a profile with k = 3 it is not, and both places say why.
     let mut app = fixtures::app(120, 40);

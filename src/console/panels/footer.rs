@@ -102,19 +102,30 @@ pub fn hints(app: &App) -> Vec<(String, &'static str)> {
         None => {}
     }
     if app.replay.is_some() {
-        let mut v = vec![
-            (k(Key::Help), "help"),
+        // Leaving first, then the list and the curating keys; the player's
+        // last (a narrow footer ends with "? more", and help has them all).
+        let mut v = vec![(k(Key::Help), "help")];
+        if app.source != crate::console::app::Source::ReplayOnly {
+            v.push((k(Key::Abort), "back"));
+        }
+        v.extend([
+            (k(Key::Quit), "quit"),
             (format!("{}{}", k(Key::Up), k(Key::Down)), "recording"),
+            (k(Key::Predict), "predict"),
+            (k(Key::Jump), "to label"),
+            (k(Key::NextWrong), "next wrong"),
+            (k(Key::Filter), "filter"),
+            (k(Key::Delete), "delete"),
+            (k(Key::Exclude), "exclude"),
+            (k(Key::Relabel), "relabel"),
+            (k(Key::Undo), "undo"),
+            (format!("{}/{}", k(Key::Away), k(Key::Toward)), "page"),
+            (format!("{}/{}", k(Key::First), k(Key::Last)), "ends"),
             (k(Key::Pause), "pause"),
             (format!("{}/{}", k(Key::Faster), k(Key::Slower)), "speed"),
             (k(Key::Step), "step"),
             (k(Key::Left), "restart"),
-            (k(Key::Predict), "predict"),
-        ];
-        if app.source != crate::console::app::Source::ReplayOnly {
-            v.push((k(Key::Abort), "back"));
-        }
-        v.push((k(Key::Quit), "quit"));
+        ]);
         return v;
     }
     if app.scan_busy() {

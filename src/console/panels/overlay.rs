@@ -57,12 +57,13 @@ pub fn render(app: &App, o: &Overlay, area: Rect, buf: &mut Buffer) {
     }
 }
 
-/// The message log: newest first, each in full, wrapped.
+/// The message log: newest first, each in full, wrapped; the header, the
+/// footer (the log's keys) and the status line stay in sight.
 fn messages(app: &App, scroll: usize, area: Rect, buf: &mut Buffer) {
     let r = centred(
         area,
         area.width.saturating_sub(4).max(20),
-        area.height.saturating_sub(2),
+        area.height.saturating_sub(4),
     );
     Clear.render(r, buf);
     let mut lines = Vec::new();
@@ -118,10 +119,16 @@ fn sessions(app: &App, list: &[Session], area: Rect, buf: &mut Buffer) {
         )));
     }
     lines.push(Line::raw(""));
-    lines.push(Line::raw(format!(
-        "n  a new session: {}",
-        crate::console::session::today(&app.sessions_root(), now).display()
-    )));
+    // `n` opens today's folder: new, already there, or the one open.
+    let today = crate::console::session::today(&app.sessions_root(), now);
+    let what = if today == app.dataset.dir {
+        "today's session (open)"
+    } else if today.is_dir() {
+        "today's session"
+    } else {
+        "a new session"
+    };
+    lines.push(Line::raw(format!("n  {what}: {}", today.display())));
     Paragraph::new(fit_lines(lines, usize::from(r.width.saturating_sub(2))))
         .block(frame("Sessions"))
         .render(r, buf);

@@ -482,3 +482,33 @@ fn with_sub_windows_the_spectrum_says_which_it_shows() {
     let s = panel(Panel::Spectrum, &app, 100, 8);
     assert!(s.contains("bins 1–24, sub-window 1 of 4"), "{s}");
 }
+
+/// The replay browser's footer shows its own keys (leaving, the list, the
+/// curating keys) and, where they do not all fit, ends with the sign that
+/// help lists the rest; leaving and help always show.
+#[test]
+fn the_browser_footer_shows_its_keys_and_says_when_more_exist() {
+    let mut app = fixtures::app(80, 24);
+    let files = vec!["ds/S1/S1_001.csv".into(), "ds/S2/S2_001.csv".into()];
+    app.replay = Some(crate::console::replay::Replay::new("ds".into(), files));
+    let hints = super::footer::hints(&app);
+    for want in [
+        "back",
+        "quit",
+        "to label",
+        "next wrong",
+        "filter",
+        "delete",
+        "undo",
+    ] {
+        assert!(hints.iter().any(|(_, w)| *w == want), "{want}: {hints:?}");
+    }
+    for (w, shows) in [(80, "j to label"), (120, "x exclude")] {
+        app.resize(w, 24);
+        let s = screen(&app, w, 24);
+        let footer = s.lines().nth(22).unwrap();
+        assert!(footer.starts_with("? help Esc back q quit"), "{footer}");
+        assert!(footer.contains(shows), "{footer}");
+        assert!(footer.contains("? more"), "{footer}");
+    }
+}
