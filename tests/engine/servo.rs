@@ -428,7 +428,7 @@ struct Starved {
 impl Clock for Starved {
     fn wait_until(&mut self, d: f64) -> f64 {
         self.ticks += 1;
-        if self.ticks > self.from && self.ticks % 2 == 0 {
+        if self.ticks > self.from && self.ticks.is_multiple_of(2) {
             self.inner.stall(0.008);
         }
         self.inner.wait_until(d)
