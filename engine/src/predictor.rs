@@ -294,17 +294,27 @@ impl<'m> Predictor<'m> {
     }
 }
 
-/// A test of "names the same recording as `file`": the same text, or the
-/// same file once both are canonical.
+/// A test of "names the same recording as `file`": the same text, the same
+/// file once both are canonical, or — when the name the model kept no
+/// longer exists, its session folder moved or renamed since training — the
+/// same label folder and file name (`S1/S1_003.csv`). Without the last, a
+/// training scan of a moved folder would be its own nearest neighbour.
 fn same_file(file: &Path) -> impl Fn(&str) -> bool {
     let name = file.display().to_string();
     let canonical = std::fs::canonicalize(file).ok();
+    let tail = label_and_name(file);
     move |f: &str| {
         f == name
             || canonical
                 .as_ref()
                 .is_some_and(|c| std::fs::canonicalize(f).ok().as_ref() == Some(c))
+            || (tail.is_some() && label_and_name(Path::new(f)) == tail && !Path::new(f).exists())
     }
+}
+
+/// A recording's label folder and file name.
+fn label_and_name(p: &Path) -> Option<(&std::ffi::OsStr, &std::ffi::OsStr)> {
+    Some((p.parent()?.file_name()?, p.file_name()?))
 }
 
 #[cfg(test)]

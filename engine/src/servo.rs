@@ -242,7 +242,11 @@ impl<D: HapticDevice, C: Clock> ServoLoop<D, C> {
             beat: 0,
             beat_at: 0.0,
             following: FollowingGuard::default(),
-            intervals: IntervalGuard::new(c.stiffness_n_per_m, c.damping_n_s_per_m),
+            intervals: IntervalGuard::new(
+                c.stiffness_n_per_m,
+                c.damping_n_s_per_m,
+                rig.device.late_tick_limit,
+            ),
             force_limit: c.force_limit_n,
         }
     }

@@ -176,3 +176,35 @@ fn a_query_over_the_comparison_limit_is_refused_before_any_is_made() {
     let a = Predictor::new(&m).answer(&whole(1.0, n), Path::new("d/S1/new.csv"));
     assert!(a.is_ok(), "{a:?}");
 }
+
+#[test]
+fn a_training_recording_of_a_moved_folder_is_still_left_out() {
+    let n = LoadedProfile::thesis().profile.analysis.feature_count();
+    let dir = tempfile::tempdir().unwrap();
+    // Trained as day1/S1/a.csv, since moved to day1-copy/S1/a.csv.
+    let moved = dir.path().join("day1-copy/S1/a.csv");
+    std::fs::create_dir_all(moved.parent().unwrap()).unwrap();
+    std::fs::write(&moved, "").unwrap();
+    let gone = dir.path().join("day1/S1/a.csv").display().to_string();
+    let m = model(vec![
+        example(&gone, "S1", 0.0, n),
+        example("d/S1/c.csv", "S1", 100.0, n),
+        example("d/S2/b.csv", "S2", 1.0, n),
+    ]);
+    let p = Predictor::new(&m);
+    let a = p.answer(&whole(0.0, n), &moved).unwrap();
+    assert!(a.left_out, "predicted by itself");
+    assert_eq!(a.prediction.label, "S2");
+    // A recording of the same name whose trained file still exists is
+    // another recording: not left out.
+    let kept = dir.path().join("kept/S1/a.csv");
+    std::fs::create_dir_all(kept.parent().unwrap()).unwrap();
+    std::fs::write(&kept, "").unwrap();
+    let m = model(vec![
+        example(&kept.display().to_string(), "S1", 0.0, n),
+        example("d/S1/c.csv", "S1", 100.0, n),
+        example("d/S2/b.csv", "S2", 1.0, n),
+    ]);
+    let a = Predictor::new(&m).answer(&whole(0.0, n), &moved).unwrap();
+    assert!(!a.left_out);
+}

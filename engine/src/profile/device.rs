@@ -48,6 +48,11 @@ pub struct Device {
     /// A tick counts as missed when it starts this late, as a fraction of the period.
     #[serde(default = "default_missed_fraction")]
     pub missed_deadline_fraction: f64,
+    /// Of the last 100 ticks while driving, this many too far apart for
+    /// the controller's gains, with the force at its limit as often, stop
+    /// the motion (the starved servo's limit cycle; 1–100).
+    #[serde(default = "default_late_tick_limit")]
+    pub late_tick_limit: u32,
     /// Ask the OS for real-time scheduling of the servo thread (opt-in).
     #[serde(default)]
     pub realtime: Option<Realtime>,
@@ -75,11 +80,20 @@ pub struct Realtime {
     pub cpu: Option<usize>,
 }
 
+/// The servo loop's tick-interval guard counts late ticks over this many
+/// ticks; by default this many of them stop the motion (see
+/// `servo::guards::IntervalGuard`).
+pub const LATE_TICK_WINDOW: usize = 100;
+pub const DEFAULT_LATE_TICK_LIMIT: u32 = 10;
+
 fn default_missed_streak() -> u32 {
     50
 }
 fn default_missed_fraction() -> f64 {
     0.5
+}
+fn default_late_tick_limit() -> u32 {
+    DEFAULT_LATE_TICK_LIMIT
 }
 
 /// Check `[device]`.
@@ -92,6 +106,16 @@ pub(super) fn validate(d: &Device) -> Result<(), Invalid> {
     }
     if d.missed_deadline_streak == 0 {
         return bad("device.missed_deadline_streak", "must be at least 1");
+    }
+    let window = LATE_TICK_WINDOW as u32;
+    if !(1..=window).contains(&d.late_tick_limit) {
+        return bad(
+            "device.late_tick_limit",
+            format!(
+                "must be from 1 to {window} (late ticks of the last {window}), got {}",
+                d.late_tick_limit
+            ),
+        );
     }
     if let Some(rt) = &d.realtime
         && !(1..=99).contains(&rt.priority)

@@ -30,11 +30,12 @@ pub const FOLLOW_TIME_S: f64 = 0.1;
 /// The Falcon's moving mass at the grip (the simulator's, after the thesis
 /// profile): what the stability bound of [`IntervalGuard`] assumes.
 pub const PROBE_MASS_KG: f64 = 0.06;
-/// Of the last `INTERVAL_WINDOW` tick intervals, this many longer than the
+/// Of the last `INTERVAL_WINDOW` tick intervals, `[device]
+/// late_tick_limit` (by default `INTERVAL_LATE_LIMIT`) longer than the
 /// stable bound stop the motion (one stall is ridden out; a starved CPU
 /// that keeps coming back late is not).
-pub const INTERVAL_WINDOW: usize = 100;
-pub const INTERVAL_LATE_LIMIT: u32 = 10;
+pub const INTERVAL_WINDOW: usize = crate::profile::device::LATE_TICK_WINDOW;
+pub const INTERVAL_LATE_LIMIT: u32 = crate::profile::device::DEFAULT_LATE_TICK_LIMIT;
 
 /// Whether Eq. 3.1 with stiffness `k` and damping `d`, sampled every `h`
 /// seconds on mass `m`, is stable (Jury's test on the cubic above).
@@ -76,11 +77,14 @@ pub struct IntervalGuard {
     next: usize,
     count: u32,
     count_saturated: u32,
+    /// Late (and saturated) ticks of the window that stop the motion.
+    limit: u32,
 }
 
 impl IntervalGuard {
-    pub fn new(stiffness: [f64; 3], damping: [f64; 3]) -> IntervalGuard {
+    pub fn new(stiffness: [f64; 3], damping: [f64; 3], limit: u32) -> IntervalGuard {
         IntervalGuard {
+            limit,
             bound_s: longest_stable_period(PROBE_MASS_KG, stiffness, damping),
             late: [false; INTERVAL_WINDOW],
             saturated: [false; INTERVAL_WINDOW],
@@ -115,7 +119,7 @@ impl IntervalGuard {
         self.late[i] = late;
         self.saturated[i] = saturated;
         self.next = (self.next + 1) % INTERVAL_WINDOW;
-        if self.count < INTERVAL_LATE_LIMIT || self.count_saturated < INTERVAL_LATE_LIMIT {
+        if self.count < self.limit || self.count_saturated < self.limit {
             return None;
         }
         let message = format!(
@@ -227,7 +231,11 @@ mod tests {
 
     #[test]
     fn scattered_late_ticks_trip_the_interval_guard_and_one_stall_does_not() {
-        let mut g = IntervalGuard::new([2400.0, 270.0, 2400.0], [7.2, 2.4, 7.2]);
+        let mut g = IntervalGuard::new(
+            [2400.0, 270.0, 2400.0],
+            [7.2, 2.4, 7.2],
+            INTERVAL_LATE_LIMIT,
+        );
         // One 20 ms stall, then half-period catch-up: fine.
         assert_eq!(g.check(0.020, true), None);
         for _ in 0..1000 {
@@ -236,7 +244,11 @@ mod tests {
         }
         // A starved CPU alone, the force well inside its limit: no trip
         // (a guard of its own, so no saturated tick from above is in its window).
-        let mut g = IntervalGuard::new([2400.0, 270.0, 2400.0], [7.2, 2.4, 7.2]);
+        let mut g = IntervalGuard::new(
+            [2400.0, 270.0, 2400.0],
+            [7.2, 2.4, 7.2],
+            INTERVAL_LATE_LIMIT,
+        );
         for k in 0..1000 {
             let dt = if k % 4 == 0 { 0.006 } else { 0.001 };
             assert_eq!(g.check(dt, false), None);
