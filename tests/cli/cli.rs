@@ -752,6 +752,10 @@ fn an_interrupted_scan_exits_1_and_keeps_its_samples() {
         std::thread::sleep(Duration::from_millis(20));
     }
     std::thread::sleep(Duration::from_millis(500));
+    // Ctrl-C twice, as an impatient user does: the second only raises the
+    // same stop again (it must not end the process before the scan is
+    // stopped, saved and the forces zeroed).
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGINT) }, 0);
     assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGINT) }, 0);
     let give_up = Instant::now() + Duration::from_secs(30);
     while child.try_wait().unwrap().is_none() {
@@ -772,6 +776,7 @@ fn an_interrupted_scan_exits_1_and_keeps_its_samples() {
         .and_then(|l| l.strip_prefix("hapticlab: error: "))
         .unwrap_or_else(|| panic!("no error line last: {r:?}"));
     assert!(msg.contains("interrupted"), "{msg}");
+    assert!(msg.contains("forces are off"), "{msg}");
     assert!(r.stdout.contains("interrupted"), "{r:?}");
 
     let rec = hapticlab::recording::read(&file).unwrap();
