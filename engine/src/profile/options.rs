@@ -403,7 +403,7 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
         "cut the window into sub-windows and classify a scan by their vote",
         field!(windows),
     )
-    .searched(&["none", "window/4"]),
+    .searched(&["none", "window/4", "window/2"]),
 ];
 
 /// One `[classifier]` option: what `check` says of it and what `tune`

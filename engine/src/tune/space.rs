@@ -178,7 +178,7 @@ fn floor3(v: f64) -> f64 {
 fn fitting_bands(a: &Analysis, cepstra: usize) -> Option<Bands> {
     let bw = a.bin_width();
     let nyquist = bw * (a.dft_points() / 2) as f64;
-    for count in [32, 24, 16] {
+    for count in [32, 24, 16, 12, 8] {
         for lowest in [2.0, 4.0, 8.0] {
             let b = Bands {
                 count,
@@ -197,6 +197,19 @@ fn fitting_bands(a: &Analysis, cepstra: usize) -> Option<Bands> {
         }
     }
     None
+}
+
+/// A hop that does not start sub-windows half a spacing off the grid of
+/// evenly sampled recordings (0.495 s over 100 Hz samples): there every
+/// sample sits on a bin's edge and rounding empties bins, so the hop is
+/// shortened by half a spacing to a whole number of them.
+fn off_the_edges(hop: f64, spacing: f64) -> f64 {
+    let steps = hop / spacing;
+    if (steps - steps.floor() - 0.5).abs() < 1e-6 {
+        floor3(steps.floor() * spacing)
+    } else {
+        hop
+    }
 }
 
 /// A value relative to the data (`points/4`, `window/4`): its divisor.
@@ -269,7 +282,7 @@ pub fn resolve(base: (&Analysis, &Classifier), values: &[usize]) -> Option<Setti
         let length = floor3((a.window[1] - a.window[0]) / n as f64);
         a.windows = Some(Windows {
             length,
-            hop: floor3(length / 2.0),
+            hop: off_the_edges(floor3(length / 2.0), a.spacing),
         });
     }
     // A power of two, at most this share of the (sub-)window's points,
@@ -349,9 +362,10 @@ mod tests {
             .map(|s| s.values.len())
             .product();
         assert_eq!(g.len() % classifier_points, 0);
-        // welch × taper × segment × (bins, cepstra with and without c0) ×
-        // windows, but cepstra only on the log spectrum.
-        assert_eq!(g.len() / classifier_points, 2 * 2 * 2 * (3 + 1));
+        // taper × segment × windows (none, a quarter, a half) × (welch's
+        // bins; log-welch's bins, cepstra with and without c0): cepstra
+        // only on the log spectrum.
+        assert_eq!(g.len() / classifier_points, 2 * 2 * 3 * (1 + 3));
         for s in &g {
             assert!(check_settings(&s.analysis).is_ok());
         }
@@ -364,6 +378,34 @@ mod tests {
         assert_eq!(g[0].simplicity().0, 0);
         assert_eq!(g[0].analysis.welch_segment, Some(2048));
         assert_eq!(g[0].analysis.bins, [1, 1024]);
+    }
+
+    /// 200-point trials (2 s at 100 Hz, the long set cut into trials):
+    /// coarse spectra still get bands (8 of them) for cepstra, and no
+    /// sub-window starts half a sample period off the samples.
+    #[test]
+    fn short_trials_get_coarse_bands_and_hops_on_the_samples() {
+        let a = Analysis {
+            channel: "acc".into(),
+            axis: "t_s".into(),
+            window: [0.0, 1.98],
+            spacing: 0.01,
+            ..Analysis::default()
+        };
+        let c = Classifier::default();
+        let g = grid((&a, &c));
+        assert!(
+            g.iter()
+                .any(|s| s.analysis.bands.is_some_and(|b| b.count == 8)),
+            "no cepstra on 200-point trials"
+        );
+        for s in g.iter().filter_map(|s| s.analysis.windows) {
+            let steps = s.hop / a.spacing;
+            assert!((steps - steps.floor() - 0.5).abs() > 1e-6, "hop {}", s.hop);
+        }
+        assert!(g.iter().any(|s| s.analysis.windows.is_some()));
+        assert_eq!(off_the_edges(0.495, 0.01), 0.49);
+        assert_eq!(off_the_edges(0.745, 1.0 / 2200.0), 0.745);
     }
 
     #[test]
