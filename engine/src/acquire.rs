@@ -667,7 +667,7 @@ impl Live<'_> {
     ) -> Result<(), AcquireError> {
         let (label, out) = (req.label.as_str(), req.out.as_path());
         for k in 0..req.count {
-            if self.triggers.is_some() && !self.wait_for_start(k, req.count, on_note) {
+            if !self.wait_for_start(k, req.count, on_note) {
                 break;
             }
             let path = scan_file(out, label, next_free_index(out, label));
@@ -704,8 +704,9 @@ impl Live<'_> {
         Ok(())
     }
 
-    /// Waits for a start press on the triggers; `false` when the session
-    /// ends instead (a signal, the loop gone, an abort press).
+    /// Waits for a start press on the triggers (at once `true` without
+    /// them); `false` when the session ends instead (a signal, the loop
+    /// gone, an abort press).
     fn wait_for_start(&self, k: usize, count: usize, on_note: &mut dyn FnMut(&str)) -> bool {
         let Some(rx) = self.triggers else {
             return true;
