@@ -350,18 +350,29 @@ impl FeatureExtractor {
     }
 
     fn transform(&mut self, axis: &[f64], signal: &[f64]) -> Result<(), AnalysisError> {
+        self.resample_own(axis, signal)?;
+        self.transform_resampled();
+        Ok(())
+    }
+
+    /// Resample one signal into `self.resampled` (in order when the
+    /// sub-windows may each visit only their own samples).
+    fn resample_own(&mut self, axis: &[f64], signal: &[f64]) -> Result<(), AnalysisError> {
         if self.in_order {
             self.resampler
-                .run_in_order(&self.settings.axis, axis, signal, &mut self.resampled)?;
+                .run_in_order(&self.settings.axis, axis, signal, &mut self.resampled)
         } else {
             self.resampler
-                .run(&self.settings.axis, axis, signal, &mut self.resampled)?;
+                .run(&self.settings.axis, axis, signal, &mut self.resampled)
         }
+    }
+
+    /// Detrend, taper and transform `self.resampled`.
+    fn transform_resampled(&mut self) {
         self.detrended.copy_from_slice(&self.resampled);
         detrend(self.settings.detrend, &mut self.detrended);
         self.spectrum.compute(&self.detrended, &mut self.values);
         self.has_spectrum = true;
-        Ok(())
     }
 
     /// The features of every channel (`channel`, then `channels`, one
@@ -383,16 +394,22 @@ impl FeatureExtractor {
         }
         for (c, signal) in signals.iter().enumerate().rev() {
             self.transform(axis, signal)?;
-            if let Some(b) = &mut self.bands {
-                b.compute(&self.values, &mut self.band_values);
-            }
-            let own = match self.bands {
-                Some(_) => &self.band_values[..],
-                None => &self.values[self.kept[0]..=self.kept[1]],
-            };
-            self.features[c * per..(c + 1) * per].copy_from_slice(own);
+            self.keep_channel(c, per);
         }
         check_finite(&self.features)
+    }
+
+    /// Channel `c`'s features (`per` of them) of the spectrum last
+    /// transformed, into their place in `self.features`.
+    fn keep_channel(&mut self, c: usize, per: usize) {
+        if let Some(b) = &mut self.bands {
+            b.compute(&self.values, &mut self.band_values);
+        }
+        let own = match self.bands {
+            Some(_) => &self.band_values[..],
+            None => &self.values[self.kept[0]..=self.kept[1]],
+        };
+        self.features[c * per..(c + 1) * per].copy_from_slice(own);
     }
 
     /// The `[start, end]` of each sub-window along the axis, in order (the
@@ -437,6 +454,63 @@ impl FeatureExtractor {
             .collect();
         self.in_order = false;
         all
+    }
+
+    /// Every sub-window's channels (`channel`, then `channels`) resampled,
+    /// in order: the grid [`Self::all_window_features`] transforms. An
+    /// extractor whose settings differ only after the resampling (spectrum,
+    /// taper, segment, bins, bands, cepstra) gives from them, by
+    /// [`Self::features_of_resampled`], exactly the features
+    /// `all_window_features` would: `tune` resamples once for them all.
+    pub fn resample_windows(
+        &mut self,
+        axis: &[f64],
+        signals: &[&[f64]],
+    ) -> Result<Vec<Vec<Vec<f64>>>, AnalysisError> {
+        self.in_order = sub_windows_may_search(axis, signals) && self.sub_windows.len() > 1;
+        let mut all = Vec::with_capacity(self.sub_windows.len());
+        let mut done = Ok(());
+        for j in 0..self.sub_windows.len() {
+            self.resampler.set_start(self.sub_windows[j][0]);
+            let mut channels = Vec::with_capacity(signals.len());
+            for signal in signals {
+                if let Err(e) = self.resample_own(axis, signal) {
+                    done = Err(e);
+                    break;
+                }
+                channels.push(self.resampled.clone());
+            }
+            if done.is_err() {
+                break;
+            }
+            all.push(channels);
+        }
+        self.resampler.set_start(self.sub_windows[0][0]);
+        self.in_order = false;
+        done.map(|()| all)
+    }
+
+    /// The features of one sub-window from its resampled channels (one of
+    /// [`Self::resample_windows`]' entries, made under the same grid).
+    pub fn features_of_resampled(
+        &mut self,
+        channels: &[Vec<f64>],
+    ) -> Result<&[f64], AnalysisError> {
+        let per = self.settings.features_per_channel();
+        let want = 1 + self.settings.channels.len();
+        if channels.len() != want || channels.iter().any(|c| c.len() != self.resampled.len()) {
+            return Err(AnalysisError::Settings(format!(
+                "{want} channel(s) of {} points to transform but {} given",
+                self.resampled.len(),
+                channels.len()
+            )));
+        }
+        for (c, points) in channels.iter().enumerate().rev() {
+            self.resampled.copy_from_slice(points);
+            self.transform_resampled();
+            self.keep_channel(c, per);
+        }
+        check_finite(&self.features)
     }
 
     /// The last window resampled (by [`Self::resample`] or

@@ -16,9 +16,11 @@
 //! search over every recording (scikit-learn's refit): the outer estimate
 //! is of that procedure.
 //!
-//! Speed: the recordings are read once; feature vectors are made once per
-//! distinct feature setting and serve every outer and inner fold and every
-//! k, metric, vote weighting and standardisation ([`score`]). The budget
+//! Speed: the recordings are read once; each grid (window, spacing,
+//! sub-windows) two or more feature settings share is resampled once for
+//! them all; feature vectors are made once per distinct feature setting and
+//! serve every outer and inner fold and every k, metric, vote weighting and
+//! standardisation ([`score`]). The budget
 //! samples feature settings (seeded), each scored with every classifier
 //! setting, since those cost almost nothing once the features exist.
 //! Like the rest of the engine this never prints: progress goes to a
@@ -43,8 +45,12 @@ use crate::dataset::{DatasetError, Entry};
 use crate::evaluate::cv::{Folds, make_folds};
 use crate::evaluate::plan::{Overrides, Plan};
 use crate::evaluate::{EvaluateError, PredictionRow, Report, count, split};
-use crate::profile::{Profile, SplitMethod};
-use score::{Fold, Pairwise, extract, fold_correct, par_map};
+use crate::profile::options::same_grid;
+use crate::profile::{Analysis, Profile, SplitMethod};
+use score::{
+    Fold, Pairwise, RESAMPLED_MOST, Resampled, extract, extract_resampled, fold_correct, par_map,
+    resample, resampled_points,
+};
 use space::{Described, Setting, grid};
 
 /// Inner folds (fewer when the training part has fewer recordings or groups).
@@ -437,10 +443,41 @@ pub fn tune(
     let mut searched: Vec<usize> = parts.iter().flat_map(|p| p.train.clone()).collect();
     searched.sort_unstable();
     searched.dedup();
+    // Feature settings on one grid one after another: a grid two or more
+    // of them share is resampled once and kept while they are scored
+    // (unless it is over RESAMPLED_MOST points).
+    let mut grids: Vec<(&Analysis, usize)> = Vec::new();
+    let mut ordered: Vec<(usize, &Vec<usize>)> = by_features
+        .values()
+        .map(|members| {
+            let a = &settings[members[0]].analysis;
+            let g = match grids.iter().position(|(g, _)| same_grid(g, a)) {
+                Some(g) => g,
+                None => {
+                    grids.push((a, 0));
+                    grids.len() - 1
+                }
+            };
+            grids[g].1 += 1;
+            (g, members)
+        })
+        .collect();
+    ordered.sort_by_key(|&(g, _)| g);
+    let mut kept: (Option<usize>, Resampled) = (None, Vec::new());
     let mut done = 0;
     progress(0, settings.len());
-    for members in by_features.values() {
-        let features = extract(scans, &settings[members[0]].analysis, options.threads)?;
+    for (g, members) in ordered {
+        let analysis = &settings[members[0]].analysis;
+        let share = grids[g].1 > 1 && resampled_points(scans, analysis)? <= RESAMPLED_MOST;
+        let features = if share {
+            if kept.0 != Some(g) {
+                kept.1.clear(); // one grid's points in memory at a time
+                kept = (Some(g), resample(scans, analysis, options.threads)?);
+            }
+            extract_resampled(scans, &kept.1, analysis, options.threads)?
+        } else {
+            extract(scans, analysis, options.threads)?
+        };
         // One task per (outer part, inner fold, metric, standardize).
         let mut kinds: Vec<(crate::profile::Metric, bool)> = members
             .iter()

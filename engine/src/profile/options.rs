@@ -581,6 +581,18 @@ pub fn in_group(group: Group) -> impl Iterator<Item = &'static AnalysisOption> {
     ANALYSIS_OPTIONS.iter().filter(move |o| o.group == group)
 }
 
+/// Whether two analyses resample every recording onto the same grids:
+/// every option outside [`Group::Spectrum`] agrees (the spectrum's
+/// options act only on the resampled points), and so does whether the
+/// window is the scan leg.
+pub fn same_grid(a: &Analysis, b: &Analysis) -> bool {
+    a.window_is_scan_leg == b.window_is_scan_leg
+        && ANALYSIS_OPTIONS
+            .iter()
+            .filter(|o| o.group != Group::Spectrum)
+            .all(|o| (o.same)(a, b))
+}
+
 /// A difference that makes features incomparable: the first option (in
 /// list order) on which `model` and `profile` disagree, with both values
 /// as the model file writes them.

@@ -49,24 +49,101 @@ pub fn par_map<T: Sync, R: Send>(
         .collect()
 }
 
+/// Every recording's sub-windows resampled (per recording, per
+/// sub-window, per channel): one grid serves every feature setting that
+/// resamples onto it ([`crate::profile::options::same_grid`]).
+pub type Resampled = Vec<Vec<Vec<Vec<f64>>>>;
+
+/// Every scan (kept samples) resampled onto `analysis`'s grids, on
+/// `threads` threads.
+pub fn resample(
+    scans: &[Entry],
+    analysis: &Analysis,
+    threads: usize,
+) -> Result<Resampled, DatasetError> {
+    let fx = FeatureExtractor::try_new(analysis).map_err(DatasetError::Settings)?;
+    by_chunks(scans, threads, |part| {
+        let mut fx = fx.clone();
+        part.iter()
+            .map(|s| {
+                let signals: Vec<&[f64]> = s.signals.iter().map(Vec::as_slice).collect();
+                fx.resample_windows(&s.axis, &signals)
+                    .map_err(|source| DatasetError::Analysis {
+                        file: s.file.clone(),
+                        source,
+                    })
+            })
+            .collect()
+    })
+}
+
+/// The feature vectors of every scan under `analysis` from the scans
+/// resampled onto its grid, on `threads` threads: what
+/// [`Entry::window_features_with`] gives, without resampling again.
+pub fn extract_resampled(
+    scans: &[Entry],
+    resampled: &Resampled,
+    analysis: &Analysis,
+    threads: usize,
+) -> Result<Features, DatasetError> {
+    let fx = FeatureExtractor::try_new(analysis).map_err(DatasetError::Settings)?;
+    let pairs: Vec<(&Entry, &Vec<Vec<Vec<f64>>>)> = scans.iter().zip(resampled).collect();
+    by_chunks(&pairs, threads, |part| {
+        let mut fx = fx.clone();
+        part.iter()
+            .map(|(s, windows)| {
+                windows
+                    .iter()
+                    .map(|channels| fx.features_of_resampled(channels).map(<[f64]>::to_vec))
+                    .collect::<Result<Vec<_>, _>>()
+                    .map_err(|source| DatasetError::Analysis {
+                        file: s.file.clone(),
+                        source,
+                    })
+            })
+            .collect()
+    })
+}
+
 /// The feature vectors of every scan (kept samples) under `analysis`, on
-/// `threads` threads, each with its own extractor.
+/// `threads` threads, each scan resampled and transformed in turn (no
+/// grid kept).
 pub fn extract(
     scans: &[Entry],
     analysis: &Analysis,
     threads: usize,
 ) -> Result<Features, DatasetError> {
     let fx = FeatureExtractor::try_new(analysis).map_err(DatasetError::Settings)?;
-    let chunk = scans.len().div_ceil(threads.max(1)).max(1);
-    let chunks: Vec<&[Entry]> = scans.chunks(chunk).collect();
-    let parts = par_map(&chunks, threads, |part| {
+    by_chunks(scans, threads, |part| {
         let mut fx = fx.clone();
         part.iter()
             .map(|s| s.window_features_with(&mut fx))
-            .collect::<Result<Vec<_>, _>>()
-    });
-    let mut out = Vec::with_capacity(scans.len());
-    for p in parts {
+            .collect()
+    })
+}
+
+/// The most points a kept grid ([`Resampled`]) holds (64 MiB of values);
+/// above that, each feature setting resamples again ([`extract`]).
+pub const RESAMPLED_MOST: usize = 8 << 20;
+
+/// How many points resampling every scan onto `analysis`'s grids gives
+/// (sub-windows × points × channels per scan).
+pub fn resampled_points(scans: &[Entry], analysis: &Analysis) -> Result<usize, DatasetError> {
+    let fx = FeatureExtractor::try_new(analysis).map_err(DatasetError::Settings)?;
+    let channels = 1 + analysis.channels.len();
+    Ok(scans.len() * fx.sub_windows().len() * fx.points() * channels)
+}
+
+/// `f` over `items` in one chunk per thread, results in item order.
+fn by_chunks<T: Sync, R: Send>(
+    items: &[T],
+    threads: usize,
+    f: impl Fn(&[T]) -> Result<Vec<R>, DatasetError> + Sync,
+) -> Result<Vec<R>, DatasetError> {
+    let chunk = items.len().div_ceil(threads.max(1)).max(1);
+    let chunks: Vec<&[T]> = items.chunks(chunk).collect();
+    let mut out = Vec::with_capacity(items.len());
+    for p in par_map(&chunks, threads, |part| f(part)) {
         out.extend(p?);
     }
     Ok(out)

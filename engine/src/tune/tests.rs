@@ -323,3 +323,45 @@ fn every_setting_written_reads_back() {
         );
     }
 }
+
+/// A grid resampled once gives every feature setting on it the features
+/// that resampling for each would, bit for bit (one channel over the
+/// whole search, and two channels).
+#[test]
+fn a_shared_grid_gives_the_features_resampling_again_gives() {
+    use super::score::{extract_resampled, resample};
+    let p = profile(HOLDOUT);
+    let scans = drifting();
+    let settings = grid((&p.analysis, &p.classifier));
+    let mut shared = 0;
+    for s in &settings {
+        let first = settings
+            .iter()
+            .find(|o| same_grid(&o.analysis, &s.analysis))
+            .unwrap();
+        shared += usize::from(first.feature_key() != s.feature_key());
+        let kept = resample(&scans, &first.analysis, 2).unwrap();
+        assert_eq!(
+            extract_resampled(&scans, &kept, &s.analysis, 2).unwrap(),
+            extract(&scans, &s.analysis, 2).unwrap(),
+            "{:?}",
+            s.describe()
+        );
+    }
+    assert!(shared > 0, "no two feature settings share a grid");
+
+    let mut two = p.analysis.clone();
+    two.channels = vec!["y".into()];
+    two.spectrum = crate::profile::SpectrumKind::LogWelch;
+    let mut scans2 = scans.clone();
+    for (i, s) in scans2.iter_mut().enumerate() {
+        let y: Vec<f64> = s.signals[0].iter().map(|v| v * 0.5 + i as f64).collect();
+        s.signals.push(y);
+    }
+    let kept = resample(&scans2, &two, 1).unwrap();
+    assert_eq!(kept[0][0].len(), 2);
+    assert_eq!(
+        extract_resampled(&scans2, &kept, &two, 1).unwrap(),
+        extract(&scans2, &two, 1).unwrap()
+    );
+}
