@@ -513,16 +513,16 @@ pub fn execute(
             }
         }
         Action::Curate(change) => {
-            let from = match &change {
-                curate::Change::Delete(f) | curate::Change::Exclude(f) => f.clone(),
-                curate::Change::Store { file, .. } => file.clone(),
+            let (from, label) = match &change {
+                curate::Change::Delete(f) | curate::Change::Exclude(f) => (f.clone(), None),
+                curate::Change::Store { file, label } => (file.clone(), Some(label.clone())),
             };
             let r = curate::apply(&change, &dir).map(|done| {
                 let out = (done.now.clone(), done.what.clone());
                 app.curated.push(done);
                 out
             });
-            app.on_curated(&from, r);
+            app.on_curated(&from, label.as_deref(), r);
             refresh_dataset(app);
             return follow_selection(app);
         }
@@ -533,8 +533,13 @@ pub fn execute(
                     Ok(what) => {
                         let back = done.moves_back.last().map(|(_, to)| to.clone());
                         app.dataset.edits += 1;
+                        // The file put back carries its own label again.
+                        let label = back
+                            .as_deref()
+                            .and_then(|b| crate::recording::read_columns(b, &[]).ok())
+                            .and_then(|rec| rec.label().map(str::to_string));
                         if let Some(r) = app.replay.as_mut() {
-                            r.moved(done.now.as_deref(), back.as_deref());
+                            r.moved(done.now.as_deref(), back.as_deref(), label.as_deref());
                         }
                         app.info(what);
                     }

@@ -189,15 +189,19 @@ impl Replay {
     }
 
     /// A recording moved by curating: `from` is now `to` (none: deleted);
-    /// one put back (by an undo) is listed again.
-    pub fn moved(&mut self, from: Option<&Path>, to: Option<&Path>) {
+    /// one put back (by an undo) is listed again. `label`: the label it is
+    /// now stored under, when that changed (else it keeps its own).
+    pub fn moved(&mut self, from: Option<&Path>, to: Option<&Path>, label: Option<&str>) {
         let at = from.and_then(|f| self.entries.iter().position(|e| e.path == f));
         match (at, to) {
             (Some(i), Some(to)) => {
+                // The same samples: the model's prediction still holds; the
+                // label is the one stored under, or unchanged.
                 let e = &mut self.entries[i];
                 e.path = to.to_path_buf();
-                e.label = None;
-                e.predicted = None;
+                if let Some(label) = label {
+                    e.label = Some(label.to_string());
+                }
             }
             (Some(i), None) => {
                 self.entries.remove(i);
@@ -205,14 +209,15 @@ impl Replay {
             (None, Some(to)) => {
                 self.entries.push(ReplayEntry {
                     path: to.to_path_buf(),
-                    label: None,
+                    label: label.map(str::to_string),
                     predicted: None,
                     complete: None,
                 });
-                self.entries.sort_by(|a, b| a.path.cmp(&b.path));
             }
             (None, None) => {}
         }
+        // File-name order, as the list was built; the selection follows the file.
+        self.entries.sort_by(|a, b| a.path.cmp(&b.path));
         let last = self.entries.len().saturating_sub(1);
         if let Some(i) = to.and_then(|t| self.entries.iter().position(|e| e.path == t)) {
             self.selected = i;

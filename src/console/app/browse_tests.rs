@@ -163,6 +163,42 @@ fn curating_keys_ask_for_file_changes() {
     );
 }
 
+/// A relabelled recording shows its new label beside the prediction it
+/// had (the same samples), takes its place in file-name order, and stays
+/// selected; a deleted one leaves the list.
+#[test]
+fn a_relabelled_recording_shows_its_new_label_in_file_order() {
+    let mut a = browsing();
+    a.handle_key(code(KeyCode::Home));
+    let from = entry(&a).path.clone();
+    let to: std::path::PathBuf = "ds/S3/S3_031.csv".into();
+    a.on_curated(
+        &from,
+        Some("S3"),
+        Ok((Some(to.clone()), "relabelled".into())),
+    );
+    let r = a.replay.as_ref().unwrap();
+    assert_eq!(r.entries.len(), 120);
+    assert!(r.entries.windows(2).all(|w| w[0].path < w[1].path));
+    let e = entry(&a);
+    assert_eq!(e.path, to);
+    assert_eq!(e.label.as_deref(), Some("S3"));
+    assert_eq!(
+        e.predicted.as_deref(),
+        Some("S1"),
+        "the model's verdict on it"
+    );
+    assert_eq!(e.right(), Some(false));
+    assert_eq!(selected(&a), 89, "after S3_030, before S4_001");
+    // Excluding keeps the label; deleting removes the entry.
+    let to2: std::path::PathBuf = "ds/.excluded/S3/S3_031.csv".into();
+    a.on_curated(&to, None, Ok((Some(to2.clone()), "excluded".into())));
+    assert_eq!(entry(&a).path, to2);
+    assert_eq!(entry(&a).label.as_deref(), Some("S3"));
+    a.on_curated(&to2, None, Ok((None, "deleted".into())));
+    assert_eq!(a.replay.as_ref().unwrap().entries.len(), 119);
+}
+
 #[test]
 fn the_log_keeps_every_message_newest_last_and_the_status_line_the_newest() {
     let mut a = browsing();

@@ -250,18 +250,20 @@ impl App {
         }
     }
 
-    /// A curating change was made (or failed): the list follows the file,
-    /// and the model no longer matches the dataset.
+    /// A curating change was made (or failed): the list follows the file
+    /// (with `label`, the label it was stored under), and the model no
+    /// longer matches the dataset.
     pub fn on_curated(
         &mut self,
         from: &std::path::Path,
+        label: Option<&str>,
         result: Result<(Option<std::path::PathBuf>, String), String>,
     ) {
         match result {
             Ok((now, what)) => {
                 self.dataset.edits += 1;
                 if let Some(r) = self.replay.as_mut() {
-                    r.moved(Some(from), now.as_deref());
+                    r.moved(Some(from), now.as_deref(), label);
                 }
                 let undo = self.key_name(Key::Undo);
                 self.info(format!("{what}; {undo} undoes it"));
