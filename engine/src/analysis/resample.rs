@@ -73,7 +73,7 @@ impl Resampler {
         signal: &[f64],
         out: &mut [f64],
     ) -> Result<(), AnalysisError> {
-        self.run_on(axis_name, axis, signal, out, false)
+        self.run_on(axis_name, axis, signal, out, false, true)
     }
 
     /// [`Self::run`] for samples the caller has checked: every value finite
@@ -89,9 +89,11 @@ impl Resampler {
         signal: &[f64],
         out: &mut [f64],
     ) -> Result<(), AnalysisError> {
-        self.run_on(axis_name, axis, signal, out, true)
+        self.run_on(axis_name, axis, signal, out, true, true)
     }
 
+    /// The run; `edges_up` off leaves samples on edges where rounding puts
+    /// them even if bins are left empty (for tests to measure the rule).
     fn run_on(
         &mut self,
         axis_name: &str,
@@ -99,6 +101,7 @@ impl Resampler {
         signal: &[f64],
         out: &mut [f64],
         in_order: bool,
+        edges_up: bool,
     ) -> Result<(), AnalysisError> {
         debug_assert_eq!(out.len(), self.n);
         if axis.len() != signal.len() {
@@ -122,7 +125,7 @@ impl Resampler {
             n: self.n,
         };
         let mut ends = self.centroids(&grid, axis, signal, in_order)?;
-        if self.centroid_u.len() < self.n {
+        if edges_up && self.centroid_u.len() < self.n {
             // Bins left empty: try the samples on edges one bin up (see
             // the module documentation), keep whichever fills more.
             let rounded = self.centroid_u.len();
@@ -439,7 +442,7 @@ mod tests {
                     let mut r = Resampler::new(n, start, 1.0 / rate);
                     let mut out = vec![0.0; n];
                     let at = format!("{rate} Hz, start {start}, in order {in_order}");
-                    r.run_on("t_s", &t, &y, &mut out, in_order)
+                    r.run_on("t_s", &t, &y, &mut out, in_order, true)
                         .unwrap_or_else(|e| panic!("{at}: {e}"));
                     assert_eq!(r.centroid_u.len(), n, "{at}: a bin is empty");
                     for (i, v) in out.iter().enumerate() {
@@ -449,5 +452,62 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The rule changes no resampled value of the thesis recordings, to
+    /// the bit, and accepts or refuses the same windows: their positions on
+    /// a µm grid sit on the 0.3 mm grid's edges, but rounding fills every
+    /// bin there. Over the thesis window, the sub-windows the CLI tests
+    /// use, the whole leg, and the leg along time at 1 and 2 ms.
+    #[test]
+    fn samples_on_edges_of_the_thesis_recordings_stay_where_rounding_puts_them() {
+        use crate::profile::{Analysis, LoadedProfile, Windows};
+        let thesis = LoadedProfile::thesis().profile.analysis;
+        let leg = |axis: &str, window_end: f64, spacing: f64| Analysis {
+            axis: axis.into(),
+            window: [0.0, window_end],
+            spacing,
+            ..thesis.clone()
+        };
+        let settings = [
+            thesis.clone(),
+            Analysis {
+                windows: Some(Windows {
+                    length: 0.0147,
+                    hop: 0.0075,
+                }),
+                ..thesis.clone()
+            },
+            leg("x_m", 0.0897, 0.0003),
+            leg("t_s", 9.27, 0.001),
+            leg("t_s", 9.27, 0.002),
+        ];
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../recordings/thesis-sim");
+        let files = crate::recording::collect_files(&[dir]).unwrap();
+        assert_eq!(files.len(), 120);
+        let (mut windows, mut refused) = (0, 0);
+        for f in &files {
+            let rec = crate::recording::read(f).unwrap();
+            for a in &settings {
+                let axis = rec.column(&a.axis).unwrap();
+                let y = rec.column("y_m").unwrap();
+                let n = a.points();
+                for [start, _] in a.sub_windows() {
+                    let mut got = Vec::new();
+                    for edges_up in [true, false] {
+                        let mut r = Resampler::new(n, start, a.spacing);
+                        let mut out = vec![0.0; n];
+                        let done = r.run_on(&a.axis, axis, y, &mut out, false, edges_up);
+                        let bits: Vec<u64> = out.iter().map(|v| v.to_bits()).collect();
+                        got.push((done, bits));
+                    }
+                    let at = format!("{} at {start} along {}", f.display(), a.axis);
+                    assert_eq!(got[0], got[1], "{at}");
+                    windows += 1;
+                    refused += usize::from(got[0].0.is_err());
+                }
+            }
+        }
+        assert_eq!((windows, refused), (120 * 7, 0));
     }
 }
