@@ -14,7 +14,9 @@ reads it with comment='#') in file-name order, skips incomplete ones (no
 Features, as `src/analysis.rs` documents them, for each window (the profile's
 `window`, or each sub-window of `windows = { length, hop }`):
 - resampling: the axis measured from the first sample in the direction of
-  travel; each sample to its nearest grid point; each non-empty grid point
+  travel; each sample to its nearest grid point (where that leaves grid
+  points empty, samples within TIE spacings of a bin's edge go to the bin
+  above if that fills more); each non-empty grid point
   replaced by its bin's centroid; the grid interpolated between centroids,
   extrapolated linearly beyond the first and last;
 - detrend none / mean / linear (scipy.signal.detrend) over the window;
@@ -71,6 +73,7 @@ from scipy import fft, signal
 from sklearn.model_selection import StratifiedKFold
 
 FLOOR = 1e-300
+TIE = 1e-6  # a millionth of a spacing: a sample this close to a bin's edge is on it
 
 
 def read(path):
@@ -89,13 +92,24 @@ def points(lo, hi, h):
     return int(np.floor((hi - lo) / h + 1e-6)) + 1
 
 
+def bins(u, n, half):
+    """Each grid coordinate's bin (or -1): [i - half, i + 1 - half) is bin i."""
+    i = np.floor(u + half).astype(np.int64)
+    return np.where((u >= -half) & (u < n - half) & (i < n), i, -1)
+
+
 def resample(d, s, lo, h, n):
     """The signal on the grid lo + i h, i < n (see src/analysis.rs)."""
     u = (d - lo) * (1.0 / h)  # as hapticlab rounds it: samples half-way between grid points go alike
-    keep = (u >= -0.5) & (u < n - 0.5)
-    u, s = u[keep], s[keep]
-    i = np.floor(u + 0.5).astype(np.int64)
-    u, s, i = u[i < n], s[i < n], i[i < n]
+    i = bins(u, n, 0.5)
+    # Where rounding leaves bins empty, samples within TIE spacings of an
+    # edge go to the bin above if that fills more (engine/src/analysis/resample.rs).
+    filled = np.unique(i[i >= 0]).size
+    if filled < n:
+        up = bins(u, n, 0.5 + TIE)
+        if np.unique(up[up >= 0]).size > filled:
+            i = up
+    u, s, i = u[i >= 0], s[i >= 0], i[i >= 0]
     count = np.bincount(i, minlength=n)
     full = count > 0
     if full.sum() < 2 or (n - full.sum()) * 4 > n:

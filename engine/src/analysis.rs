@@ -19,7 +19,11 @@
 //!
 //! 1. Each sample goes to its nearest grid point,
 //!    `i = round((d_j − window[0]) / spacing)`; samples outside `0 ≤ i < n`
-//!    are dropped.
+//!    are dropped. Where that leaves bins empty, the window is binned again
+//!    with every sample within [`resample::TIE`] spacings of a bin's edge
+//!    going to the bin above, kept if it fills more bins: evenly spaced
+//!    samples half a period off the grid sit on edges, and floating point
+//!    rounds some down and some up.
 //! 2. Each non-empty bin is replaced by its centroid (mean `d`, mean signal).
 //!    This averaging is the thesis's "filtering" (Fig. 3.12). Because samples
 //!    are binned by position, not ordered by time, a probe that moves back

@@ -100,3 +100,47 @@ fn evaluate_refuses_leave_one_out_with_one_recording_of_a_label() {
     );
     assert_eq!(r.stderr.trim().lines().count(), 1, "{r:?}");
 }
+
+/// The 2 s trials at 100 Hz cut into sub-windows every 0.495 s: the second
+/// starts half a sample period off the samples, so every sample sits on a
+/// bin's edge (issue 21's hand-written profile). Each bin still gets its
+/// sample and `evaluate` scores the trials as `contrib/reference.py` does
+/// (27/27 there, with features equal to 10 digits).
+#[test]
+fn sub_windows_half_a_sample_period_off_the_samples_evaluate() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = long_traces(&dir.path().join("in"));
+    let rec = dir.path().join("rec");
+    let mut args = vec!["import", "--rate", "100", "--split", "2", "--out", p(&rec)];
+    args.extend(files.iter().map(String::as_str));
+    assert_eq!(run(&args).code, Some(0));
+    let profile = dir.path().join("half.toml");
+    let r = run(&["profile", "new", "--from", p(&rec), "--out", p(&profile)]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let text = fs::read_to_string(&profile).unwrap();
+    for line in [
+        "window = [0.0, 1.98]",
+        "spacing = 0.01",
+        "welch_segment = 32",
+    ] {
+        assert!(text.contains(line), "{line:?} missing:\n{text}");
+    }
+    let text = text.replacen(
+        "\nwelch_segment = 32",
+        "\nwindows = { length = 0.99, hop = 0.495 }\nwelch_segment = 32",
+        1,
+    );
+    fs::write(&profile, text).unwrap();
+    let r = run(&["evaluate", p(&rec), "-p", p(&profile), "--json"]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let v: serde_json::Value = serde_json::from_str(&r.stdout).unwrap();
+    assert_eq!(v["accuracy"].as_f64(), Some(1.0), "{v}");
+    assert_eq!(v["test"].as_array().unwrap().len(), 27, "{v}");
+    let votes = v["windows"].as_array().expect("sub-window votes");
+    assert!(
+        votes
+            .iter()
+            .all(|w| w["windows"].as_array().unwrap().len() == 3),
+        "{v}"
+    );
+}

@@ -2,12 +2,21 @@
 //! each bin's centroid, interpolate linearly between centroids (the method is
 //! described in the parent module's documentation). Owns only its buffers;
 //! never allocates after construction.
+//! Samples on a bin's edge go to the bin above only where rounding would
+//! leave bins empty (the parent module's step 1), so where rounding fills
+//! every bin the result is what it always was, to the bit.
 
 use super::AnalysisError;
 
 /// Grid points at either end of the window that a scan stopping short may
 /// leave empty; they are extrapolated from the nearest two bins.
 pub const END_SLACK: usize = 2;
+
+/// How close to a bin's edge, in spacings, a sample counts as on it: far
+/// above the rounding of `(a − origin − start) / spacing` (about 2e-8
+/// spacings an hour into a recording at 44.1 kHz), far below any offset a
+/// profile means.
+pub const TIE: f64 = 1e-6;
 
 #[derive(Debug, Clone)]
 pub(crate) struct Resampler {
@@ -22,6 +31,9 @@ pub(crate) struct Resampler {
     /// The non-empty bins' centroids, in grid order (increasing position).
     centroid_u: Vec<f64>,
     centroid_v: Vec<f64>,
+    /// The other binning's centroids while the two are compared.
+    spare_u: Vec<f64>,
+    spare_v: Vec<f64>,
     has_run: bool,
 }
 
@@ -36,6 +48,8 @@ impl Resampler {
             sum_v: vec![0.0; n],
             centroid_u: Vec::with_capacity(n),
             centroid_v: Vec::with_capacity(n),
+            spare_u: Vec::with_capacity(n),
+            spare_v: Vec::with_capacity(n),
             has_run: false,
         }
     }
@@ -59,7 +73,7 @@ impl Resampler {
         signal: &[f64],
         out: &mut [f64],
     ) -> Result<(), AnalysisError> {
-        self.run_on(axis_name, axis, signal, out, false)
+        self.run_on(axis_name, axis, signal, out, false, true)
     }
 
     /// [`Self::run`] for samples the caller has checked: every value finite
@@ -75,9 +89,11 @@ impl Resampler {
         signal: &[f64],
         out: &mut [f64],
     ) -> Result<(), AnalysisError> {
-        self.run_on(axis_name, axis, signal, out, true)
+        self.run_on(axis_name, axis, signal, out, true, true)
     }
 
+    /// The run; `edges_up` off leaves samples on edges where rounding puts
+    /// them even if bins are left empty (for tests to measure the rule).
     fn run_on(
         &mut self,
         axis_name: &str,
@@ -85,6 +101,7 @@ impl Resampler {
         signal: &[f64],
         out: &mut [f64],
         in_order: bool,
+        edges_up: bool,
     ) -> Result<(), AnalysisError> {
         debug_assert_eq!(out.len(), self.n);
         if axis.len() != signal.len() {
@@ -103,16 +120,32 @@ impl Resampler {
             direction,
             start: self.start,
             inv_spacing: 1.0 / self.spacing,
+            half: 0.5,
             upper: self.n as f64 - 0.5,
             n: self.n,
         };
-        self.centroid_u.clear();
-        self.centroid_v.clear();
-        let (first, last_bin) = if in_order {
-            self.centroids_in_order(&grid, axis, signal)
-        } else {
-            self.centroids_any_order(&grid, axis, signal)?
-        };
+        let mut ends = self.centroids(&grid, axis, signal, in_order)?;
+        if edges_up && self.centroid_u.len() < self.n {
+            // Bins left empty: try the samples on edges one bin up (see
+            // the module documentation), keep whichever fills more.
+            let rounded = self.centroid_u.len();
+            std::mem::swap(&mut self.centroid_u, &mut self.spare_u);
+            std::mem::swap(&mut self.centroid_v, &mut self.spare_v);
+            let half = 0.5 + TIE;
+            let ties_up = Grid {
+                half,
+                upper: self.n as f64 - half,
+                ..grid
+            };
+            let tied = self.centroids(&ties_up, axis, signal, in_order)?;
+            if self.centroid_u.len() > rounded {
+                ends = tied;
+            } else {
+                std::mem::swap(&mut self.centroid_u, &mut self.spare_u);
+                std::mem::swap(&mut self.centroid_v, &mut self.spare_v);
+            }
+        }
+        let (first, last_bin) = ends;
         let first_gap = first != Some(0);
         let last_gap = last_bin != self.n - 1;
         // The extent costs a pass over the samples: only when it decides.
@@ -127,6 +160,24 @@ impl Resampler {
         self.interpolate(out);
         self.has_run = true;
         Ok(())
+    }
+
+    /// The bins' centroids on `grid`, in order or not (see
+    /// [`Self::run_in_order`]). The first and last bins filled.
+    fn centroids(
+        &mut self,
+        grid: &Grid,
+        axis: &[f64],
+        signal: &[f64],
+        in_order: bool,
+    ) -> Result<(Option<usize>, usize), AnalysisError> {
+        self.centroid_u.clear();
+        self.centroid_v.clear();
+        if in_order {
+            Ok(self.centroids_in_order(grid, axis, signal))
+        } else {
+            self.centroids_any_order(grid, axis, signal)
+        }
     }
 
     /// The bins' centroids of samples whose axis never decreases: only the
@@ -307,20 +358,23 @@ struct Grid {
     direction: f64,
     start: f64,
     inv_spacing: f64,
-    /// Exclusive upper end of a grid coordinate, n − ½.
+    /// Where a bin starts below its grid point: ½, or ½ + [`TIE`] for
+    /// samples on an edge to go up.
+    half: f64,
+    /// Exclusive upper end of a grid coordinate, n − `half`.
     upper: f64,
     n: usize,
 }
 
 impl Grid {
-    /// Nearest grid point: bin i holds u in [i − ½, i + ½). The cast
-    /// truncates, which is the floor here since u + ½ ≥ 0; `upper` is
-    /// exclusive, but rounding in `u + 0.5` can still reach n.
+    /// Nearest grid point: bin i holds u in [i − `half`, i + 1 − `half`).
+    /// The cast truncates, which is the floor here since u + `half` ≥ 0;
+    /// `upper` is exclusive, but rounding in `u + half` can still reach n.
     #[inline]
     fn bin(&self, a: f64) -> Option<(usize, f64)> {
         let u = (self.direction * (a - self.origin) - self.start) * self.inv_spacing;
-        let i = (u + 0.5) as usize;
-        ((-0.5..self.upper).contains(&u) && i < self.n).then_some((i, u))
+        let i = (u + self.half) as usize;
+        ((-self.half..self.upper).contains(&u) && i < self.n).then_some((i, u))
     }
 }
 
@@ -363,4 +417,97 @@ fn first_non_finite(axis: &[f64], signal: &[f64]) -> AnalysisError {
         }
     }
     unreachable!("called only when a sample is not finite")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A grid half a sample period off evenly spaced samples puts every
+    /// sample on a bin's edge, and rounding alone leaves bins empty: each
+    /// bin still gets one sample, and a straight line resamples exactly, in
+    /// order or not. Times as a CSV's decimals parse (k / rate, correctly
+    /// rounded); starts as a profile writes them and as sub-windows reach
+    /// them (the window's start plus a multiple of the hop).
+    #[test]
+    fn a_grid_half_a_period_off_even_samples_fills_every_bin() {
+        let n = 100;
+        for rate in [100.0, 2200.0, 44_100.0] {
+            let t: Vec<f64> = (0..3 * n).map(|k| k as f64 / rate).collect();
+            let y: Vec<f64> = t.iter().map(|t| 3.0 * t - 1.0).collect();
+            let hop = 49.5 / rate;
+            let starts = (0..n).map(|k| (k as f64 + 0.5) / rate);
+            for start in starts.chain((1..4).map(|j| j as f64 * hop)) {
+                for in_order in [false, true] {
+                    let mut r = Resampler::new(n, start, 1.0 / rate);
+                    let mut out = vec![0.0; n];
+                    let at = format!("{rate} Hz, start {start}, in order {in_order}");
+                    r.run_on("t_s", &t, &y, &mut out, in_order, true)
+                        .unwrap_or_else(|e| panic!("{at}: {e}"));
+                    assert_eq!(r.centroid_u.len(), n, "{at}: a bin is empty");
+                    for (i, v) in out.iter().enumerate() {
+                        let want = 3.0 * (start + i as f64 / rate) - 1.0;
+                        assert!((v - want).abs() < 1e-9, "{at}, point {i}: {v} vs {want}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// The rule changes no resampled value of the thesis recordings, to
+    /// the bit, and accepts or refuses the same windows: their positions on
+    /// a µm grid sit on the 0.3 mm grid's edges, but rounding fills every
+    /// bin there. Over the thesis window, the sub-windows the CLI tests
+    /// use, the whole leg, and the leg along time at 1 and 2 ms.
+    #[test]
+    fn samples_on_edges_of_the_thesis_recordings_stay_where_rounding_puts_them() {
+        use crate::profile::{Analysis, LoadedProfile, Windows};
+        let thesis = LoadedProfile::thesis().profile.analysis;
+        let leg = |axis: &str, window_end: f64, spacing: f64| Analysis {
+            axis: axis.into(),
+            window: [0.0, window_end],
+            spacing,
+            ..thesis.clone()
+        };
+        let settings = [
+            thesis.clone(),
+            Analysis {
+                windows: Some(Windows {
+                    length: 0.0147,
+                    hop: 0.0075,
+                }),
+                ..thesis.clone()
+            },
+            leg("x_m", 0.0897, 0.0003),
+            leg("t_s", 9.27, 0.001),
+            leg("t_s", 9.27, 0.002),
+        ];
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../recordings/thesis-sim");
+        let files = crate::recording::collect_files(&[dir]).unwrap();
+        assert_eq!(files.len(), 120);
+        let (mut windows, mut refused) = (0, 0);
+        for f in &files {
+            let rec = crate::recording::read(f).unwrap();
+            for a in &settings {
+                let axis = rec.column(&a.axis).unwrap();
+                let y = rec.column("y_m").unwrap();
+                let n = a.points();
+                for [start, _] in a.sub_windows() {
+                    let mut got = Vec::new();
+                    for edges_up in [true, false] {
+                        let mut r = Resampler::new(n, start, a.spacing);
+                        let mut out = vec![0.0; n];
+                        let done = r.run_on(&a.axis, axis, y, &mut out, false, edges_up);
+                        let bits: Vec<u64> = out.iter().map(|v| v.to_bits()).collect();
+                        got.push((done, bits));
+                    }
+                    let at = format!("{} at {start} along {}", f.display(), a.axis);
+                    assert_eq!(got[0], got[1], "{at}");
+                    windows += 1;
+                    refused += usize::from(got[0].0.is_err());
+                }
+            }
+        }
+        assert_eq!((windows, refused), (120 * 7, 0));
+    }
 }
