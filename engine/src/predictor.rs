@@ -209,16 +209,7 @@ impl<'m> Predictor<'m> {
     /// the model's analysis), `file` naming it for the leave-out.
     pub fn answer(&self, q: &Query, file: &Path) -> Result<Answer, PredictError> {
         self.check_work(q, file)?;
-        let reduced = self.leaving_out(file)?;
-        let model = reduced.as_ref().unwrap_or(self.model);
-        let mut a = match (&q.features, self.model.analysis.windows.is_some()) {
-            (Features::Windows(w), true) => Answer::of_windows(model.classify_windows(w)?),
-            (Features::Whole(f), false) => Answer {
-                prediction: model.classify(f)?,
-                windows: None,
-                left_out: false,
-                incomplete: None,
-            },
+        match (&q.features, self.model.analysis.windows.is_some()) {
             (Features::Whole(_), true) => return Err(PredictError::NoSubWindows),
             // A model of whole windows classifies the first sub-window's
             // features only if they were its own: they are not.
@@ -228,6 +219,18 @@ impl<'m> Predictor<'m> {
                 )
                 .into());
             }
+            _ => {}
+        }
+        let reduced = self.leaving_out(file, q)?;
+        let model = reduced.as_ref().unwrap_or(self.model);
+        let mut a = match &q.features {
+            Features::Windows(w) => Answer::of_windows(model.classify_windows(w)?),
+            Features::Whole(f) => Answer {
+                prediction: model.classify(f)?,
+                windows: None,
+                left_out: false,
+                incomplete: None,
+            },
         };
         a.left_out = reduced.is_some();
         a.incomplete.clone_from(&q.incomplete);
@@ -262,10 +265,13 @@ impl<'m> Predictor<'m> {
     }
 
     /// The model without `file`'s examples when it is one of its training
-    /// recordings (k as the profile asked, chosen again without it where it
+    /// recordings, by its name or, moved since, by its features
+    /// ([`Self::moved_here`]) (k as the profile asked, chosen again without it where it
     /// needed choosing: no leak of the test scan); `None` when it is not.
-    fn leaving_out(&self, file: &Path) -> Result<Option<Model>, PredictError> {
-        let same = same_file(file);
+    fn leaving_out(&self, file: &Path, q: &Query) -> Result<Option<Model>, PredictError> {
+        let named = same_file(file);
+        let moved = self.moved_here(q);
+        let same = |f: &str| named(f) || moved.as_deref() == Some(f);
         let Some(own) = self.model.examples.iter().find(|e| same(&e.file)) else {
             return Ok(None);
         };
@@ -291,6 +297,36 @@ impl<'m> Predictor<'m> {
             &m.asked_classifier(),
             rest,
         )?))
+    }
+
+    /// The training recording whose file is gone and whose feature vectors
+    /// are the query's, bit for bit: the same samples moved since training
+    /// (relabelled into another label folder, say), so the same recording.
+    /// Two recordings never give identical vectors; a copy that still
+    /// exists is left to [`same_file`].
+    fn moved_here(&self, q: &Query) -> Option<String> {
+        let wanted: Vec<&[f64]> = match &q.features {
+            Features::Whole(f) => vec![f.as_slice()],
+            Features::Windows(w) => w.iter().map(Vec::as_slice).collect(),
+        };
+        let examples = &self.model.examples;
+        let mut at = 0;
+        while at < examples.len() {
+            let file = &examples[at].file;
+            let n = examples[at..]
+                .iter()
+                .take_while(|e| &e.file == file)
+                .count();
+            let own = &examples[at..at + n];
+            if n == wanted.len()
+                && own.iter().zip(&wanted).all(|(e, w)| e.features == *w)
+                && !Path::new(file).exists()
+            {
+                return Some(file.clone());
+            }
+            at += n;
+        }
+        None
     }
 }
 

@@ -242,8 +242,13 @@ mod tests {
             e.contains("only training scan") && e.contains("left out"),
             "{e}"
         );
-        // Another scan is predicted by that one.
+        // Another scan (other samples: the same features would be this
+        // one moved, and left out) is predicted by that one.
         view.path = "session/S2/S2_001.csv".into();
+        view.query = Ok(Query {
+            features: crate::predictor::Features::Whole(vec![1.5; a.feature_count()]),
+            incomplete: None,
+        });
         let p = predict_view(&model, &view).unwrap().unwrap();
         assert_eq!(p.prediction.label, "S1");
     }

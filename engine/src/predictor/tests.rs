@@ -208,3 +208,28 @@ fn a_training_recording_of_a_moved_folder_is_still_left_out() {
     let a = Predictor::new(&m).answer(&whole(0.0, n), &moved).unwrap();
     assert!(!a.left_out);
 }
+
+/// A training recording relabelled since (moved into another label folder
+/// under another name) is found by its features, bit for bit, and left
+/// out; a recording that only resembles it is not.
+#[test]
+fn a_relabelled_training_recording_is_left_out_by_its_features() {
+    let n = LoadedProfile::thesis().profile.analysis.feature_count();
+    let dir = tempfile::tempdir().unwrap();
+    let now = dir.path().join("ds/S2/S2_031.csv");
+    std::fs::create_dir_all(now.parent().unwrap()).unwrap();
+    std::fs::write(&now, "").unwrap();
+    let gone = dir.path().join("ds/S1/S1_001.csv").display().to_string();
+    let m = model(vec![
+        example(&gone, "S1", 0.5, n),
+        example("d/S1/c.csv", "S1", 100.0, n),
+        example("d/S2/b.csv", "S2", 1.0, n),
+    ]);
+    let p = Predictor::new(&m);
+    let a = p.answer(&whole(0.5, n), &now).unwrap();
+    assert!(a.left_out, "predicted by itself");
+    assert_eq!(a.prediction.label, "S2");
+    let near = p.answer(&whole(0.5 + 1e-12, n), &now).unwrap();
+    assert!(!near.left_out, "a near copy is another recording");
+    assert_eq!(near.prediction.label, "S1");
+}
