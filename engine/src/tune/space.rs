@@ -15,10 +15,11 @@ use std::sync::LazyLock;
 use serde::Serialize;
 
 use crate::analysis::check_settings;
+use crate::profile::fitted::{fitting_bands, float, floor3};
 use crate::profile::options::{
     ANALYSIS_OPTIONS, CLASSIFIER_OPTIONS, Kind, classifier_option, option as option_named,
 };
-use crate::profile::{Analysis, BandScale, Bands, Classifier, Windows};
+use crate::profile::{Analysis, Classifier, Windows};
 
 /// One option searched: its name (the profile key) and its values as they
 /// are written in a profile or described, simplest first.
@@ -116,7 +117,7 @@ impl Setting {
                     _ => "none".into(),
                 },
                 "windows" => match a.windows {
-                    Some(w) => format!("{} every {}", trim(w.length), trim(w.hop)),
+                    Some(w) => format!("{} every {}", float(w.length), float(w.hop)),
                     None => "none".into(),
                 },
                 "welch_segment" if a.welch_segment.is_none() => "-".into(),
@@ -133,16 +134,6 @@ impl Setting {
                 .map(|s| (s.option.to_string(), text(s.option)))
                 .collect(),
         )
-    }
-}
-
-/// A number as TOML writes it, shortest (`0.25`, `3.0`).
-pub fn trim(v: f64) -> String {
-    let s = format!("{v}");
-    if s.contains('.') || s.contains('e') {
-        s
-    } else {
-        format!("{s}.0")
     }
 }
 
@@ -163,42 +154,6 @@ fn floor_pow2(n: usize) -> usize {
     }
 }
 
-/// A value rounded down to three significant digits, so a written band
-/// edge or sub-window reads cleanly and stays inside what it bounds.
-fn floor3(v: f64) -> f64 {
-    if v <= 0.0 || !v.is_finite() {
-        return v;
-    }
-    let scale = 10f64.powi(2 - v.log10().floor() as i32);
-    (v * scale).floor() / scale
-}
-
-/// Log bands from a few bins up to Nyquist that each hold a bin: 32, or
-/// fewer when the spectrum is too coarse; `cepstra` of them kept.
-fn fitting_bands(a: &Analysis, cepstra: usize) -> Option<Bands> {
-    let bw = a.bin_width();
-    let nyquist = bw * (a.dft_points() / 2) as f64;
-    for count in [32, 24, 16, 12, 8] {
-        for lowest in [2.0, 4.0, 8.0] {
-            let b = Bands {
-                count,
-                from: floor3(bw * lowest),
-                to: floor3(nyquist),
-                scale: BandScale::Log,
-            };
-            let candidate = Analysis {
-                bands: Some(b),
-                cepstra: Some(cepstra.min(count)),
-                ..a.clone()
-            };
-            if b.to > b.from && check_settings(&candidate).is_ok() {
-                return Some(b);
-            }
-        }
-    }
-    None
-}
-
 /// A hop that does not start sub-windows half a spacing off the grid of
 /// evenly sampled recordings (0.495 s over 100 Hz samples): there every
 /// sample sits on a bin's edge and rounding empties bins, so the hop is
@@ -206,7 +161,7 @@ fn fitting_bands(a: &Analysis, cepstra: usize) -> Option<Bands> {
 fn off_the_edges(hop: f64, spacing: f64) -> f64 {
     let steps = hop / spacing;
     if (steps - steps.floor() - 0.5).abs() < 1e-6 {
-        floor3(steps.floor() * spacing)
+        floor3(steps.floor() * spacing).0
     } else {
         hop
     }
@@ -279,10 +234,10 @@ pub fn resolve(base: (&Analysis, &Classifier), values: &[usize]) -> Option<Setti
     c = written(&c, &as_written(false))?;
     let value = |option: &str| chosen.iter().find(|(r, _)| r.option == option).map(|x| x.1);
     if let Some(n) = value("windows").and_then(|v| share(v, "window")) {
-        let length = floor3((a.window[1] - a.window[0]) / n as f64);
+        let length = floor3((a.window[1] - a.window[0]) / n as f64).0;
         a.windows = Some(Windows {
             length,
-            hop: off_the_edges(floor3(length / 2.0), a.spacing),
+            hop: off_the_edges(floor3(length / 2.0).0, a.spacing),
         });
     }
     // A power of two, at most this share of the (sub-)window's points,
@@ -302,7 +257,7 @@ pub fn resolve(base: (&Analysis, &Classifier), values: &[usize]) -> Option<Setti
             if !a.spectrum.is_log() {
                 return None;
             }
-            let bands = fitting_bands(&a, n)?;
+            let bands = fitting_bands(&a)?;
             a.bands = Some(bands);
             a.cepstra = Some(n.min(bands.count));
         }

@@ -7,7 +7,8 @@
 use std::fmt::Write as _;
 
 use super::TuneReport;
-use super::space::{Setting, kebab, space, trim};
+use super::space::{Setting, kebab, space};
+use crate::profile::fitted::float;
 use crate::profile::options::{classifier_option, option};
 use crate::profile::{Analysis, Classifier};
 
@@ -37,8 +38,8 @@ pub(super) fn decided(setting: &Setting) -> Vec<(&'static str, Vec<Line>)> {
                 format!(
                     "{{ count = {}, from = {}, to = {}, scale = {} }}",
                     b.count,
-                    trim(b.from),
-                    trim(b.to),
+                    float(b.from),
+                    float(b.to),
                     quoted(&b.scale)
                 )
             }),
@@ -48,7 +49,7 @@ pub(super) fn decided(setting: &Setting) -> Vec<(&'static str, Vec<Line>)> {
         (
             "windows",
             a.windows
-                .map(|w| format!("{{ length = {}, hop = {} }}", trim(w.length), trim(w.hop))),
+                .map(|w| format!("{{ length = {}, hop = {} }}", float(w.length), float(w.hop))),
         ),
     ];
     let mut classifier = vec![

@@ -7,42 +7,8 @@
 
 use std::fmt::Write as _;
 
+pub use crate::profile::fitted::{ceil3, float, floor3};
 use crate::profile::options::{ANALYSIS_OPTIONS, Group, in_group, option};
-
-/// Round down to three significant digits, as text TOML reads back exactly.
-pub fn floor3(x: f64) -> (f64, String) {
-    round3(x, f64::floor)
-}
-
-pub fn ceil3(x: f64) -> (f64, String) {
-    round3(x, f64::ceil)
-}
-
-fn round3(x: f64, how: fn(f64) -> f64) -> (f64, String) {
-    let e = x.abs().log10().floor() as i32 - 2;
-    let decimals = (-e).max(0) as usize;
-    let v = how(x / 10f64.powi(e)) * 10f64.powi(e);
-    let text = format!("{v:.decimals$}");
-    let v: f64 = text.parse().unwrap_or(v);
-    (
-        v,
-        if text.contains('.') {
-            text
-        } else {
-            format!("{text}.0")
-        },
-    )
-}
-
-/// A float as TOML, read back to the same value.
-pub fn float(v: f64) -> String {
-    let t = format!("{v}");
-    if t.contains('.') || t.contains('e') {
-        t
-    } else {
-        format!("{t}.0")
-    }
-}
 
 /// One `key = value` line, with why it was chosen (a trailing comment;
 /// `None`: an `[analysis]` option's advice) and a comment above it.
