@@ -9,7 +9,7 @@ use std::path::Path;
 use super::survey::Survey;
 use crate::profile::fitted::fitting_bands;
 use crate::profile::options::Group;
-use crate::profile::{Analysis, SpectrumKind, Taper, check_options};
+use crate::profile::{Analysis, Classifier, Metric, SpectrumKind, Taper, check_options};
 
 #[cfg(test)]
 mod tests;
@@ -500,18 +500,17 @@ fn windows_group(p: &Plan) -> Result<OptionGroup, String> {
 }
 
 fn classifier_table(doc: &mut Doc, p: &Plan) {
-    doc.table("classifier");
     let k = if p.min_count <= 10 { 1 } else { 5 };
     let why = if k == 1 {
         "the nearest recording decides: few recordings per label"
     } else {
         "five neighbours vote: enough recordings per label to outvote a stray one"
     };
-    doc.lines(&[
-        line("k", k.to_string(), why),
-        line("metric", "\"euclidean\"", "the distance between spectra"),
-    ]);
-    doc.blank();
+    let c = Classifier {
+        k,
+        metric: Metric::Euclidean,
+        ..Classifier::default()
+    };
     let mut groups = vec![OptionGroup {
         when: "z-score every feature over the training set: features of very different sizes (several channels, log and linear)".into(),
         keys: vec![("standardize", "true".into())],
@@ -528,7 +527,11 @@ fn classifier_table(doc: &mut Doc, p: &Plan) {
             .into(),
         keys: vec![("metric", "\"cosine\"".into())],
     });
-    doc.groups(&groups);
+    doc.classifier(
+        &c,
+        &[("k", why), ("metric", "the distance between spectra")],
+        groups,
+    );
 }
 
 /// The evaluation methods that can test every label, the first choice
