@@ -358,45 +358,65 @@ pub fn cross_validate(
     seed: u64,
     threads: usize,
 ) -> Result<CvReport, EvaluateError> {
-    let run = |test_idx: &Vec<usize>| -> FoldRun<Report> {
-        let mut is_test = vec![false; examples.len()];
-        for &i in test_idx {
-            is_test[i] = true;
-        }
-        let train: Vec<TrainingExample> = examples
-            .iter()
-            .zip(&is_test)
-            .filter(|(_, t)| !**t)
-            .map(|(e, _)| e.clone())
-            .collect();
-        let test: Vec<TrainingExample> = test_idx.iter().map(|&i| examples[i].clone()).collect();
-        let model = Model::train_adapting_k(profile_name, analysis, classifier, train)?;
-        Ok((
-            evaluate(&model, &test)?,
-            model.classifier.k,
-            model.k_fallback,
-        ))
-    };
-    let runs = run_folds(folds, threads, run)
-        .into_iter()
-        .collect::<Result<Vec<_>, _>>()?;
+    let runs = fold_runs(
+        examples,
+        folds,
+        (profile_name, analysis, classifier),
+        threads,
+        |train| train.into_iter().cloned().collect(),
+        evaluate,
+    )?;
     let labels: Vec<String> = examples.iter().map(|e| e.label.clone()).collect();
     let train = examples.iter().map(|e| e.file.clone()).collect();
     Ok(pool(labels, train, runs, method, seed))
 }
 
 /// One fold's outcome: its report, the k it used, and why k was lowered.
-pub(super) type FoldRun<R> = Result<(R, usize, Option<KFallback>), EvaluateError>;
+pub(super) type FoldRun<R> = (R, usize, Option<KFallback>);
+
+/// The fold loop of every cross-validation, over `items` (examples, or
+/// recordings with their sub-windows): for each fold, a model trained
+/// (k adapted to the training part) on the `examples` of the items outside
+/// it, then `test` of the fold's items. The folds run on up to `threads`
+/// threads; the results come in fold order whatever their number, and the
+/// first fold's error (in fold order) is the one returned.
+pub(super) fn fold_runs<T: Clone + Sync, R: Send>(
+    items: &[T],
+    folds: &Folds,
+    (profile_name, analysis, classifier): (&str, &Analysis, &Classifier),
+    threads: usize,
+    examples: impl Fn(Vec<&T>) -> Vec<TrainingExample> + Sync,
+    test: impl Fn(&Model, &[T]) -> Result<R, EvaluateError> + Sync,
+) -> Result<Vec<FoldRun<R>>, EvaluateError> {
+    let run = |test_idx: &Vec<usize>| -> Result<FoldRun<R>, EvaluateError> {
+        let mut is_test = vec![false; items.len()];
+        for &i in test_idx {
+            is_test[i] = true;
+        }
+        let train = examples(
+            items
+                .iter()
+                .zip(&is_test)
+                .filter(|(_, t)| !**t)
+                .map(|(item, _)| item)
+                .collect(),
+        );
+        let tested: Vec<T> = test_idx.iter().map(|&i| items[i].clone()).collect();
+        let model = Model::train_adapting_k(profile_name, analysis, classifier, train)?;
+        Ok((test(&model, &tested)?, model.classifier.k, model.k_fallback))
+    };
+    run_folds(folds, threads, run).into_iter().collect()
+}
 
 /// `run` on every fold, on up to `threads` threads; the results in fold
 /// order, whatever the number of threads.
-pub(super) fn run_folds<R: Send>(
+fn run_folds<R: Send>(
     folds: &Folds,
     threads: usize,
-    run: impl Fn(&Vec<usize>) -> FoldRun<R> + Sync,
-) -> Vec<FoldRun<R>> {
+    run: impl Fn(&Vec<usize>) -> R + Sync,
+) -> Vec<R> {
     let threads = threads.clamp(1, folds.len().max(1));
-    let mut results: Vec<Option<FoldRun<R>>> = (0..folds.len()).map(|_| None).collect();
+    let mut results: Vec<Option<R>> = (0..folds.len()).map(|_| None).collect();
     std::thread::scope(|s| {
         let chunks = results.chunks_mut(folds.len().div_ceil(threads).max(1));
         let mut start = 0;
@@ -423,7 +443,7 @@ pub(super) fn run_folds<R: Send>(
 pub(super) fn pool(
     mut labels: Vec<String>,
     train: Vec<String>,
-    runs: Vec<(Report, usize, Option<KFallback>)>,
+    runs: Vec<FoldRun<Report>>,
     method: &str,
     seed: u64,
 ) -> CvReport {

@@ -12,7 +12,7 @@
 
 use serde::Serialize;
 
-use super::cv::{CvReport, FoldRun, Folds, make_folds, pool, run_folds};
+use super::cv::{CvReport, Folds, fold_runs, make_folds, pool};
 use super::{EvaluateError, PredictionRow, Report, count};
 use crate::classify::{Model, RecordingPrediction, TrainingExample};
 use crate::dataset::Entry;
@@ -262,32 +262,22 @@ pub fn cross_validate_recordings(
     seed: u64,
     threads: usize,
 ) -> Result<WindowCvReport, EvaluateError> {
-    let run = |test_idx: &Vec<usize>| -> FoldRun<WindowReport> {
-        let mut is_test = vec![false; recs.len()];
-        for &i in test_idx {
-            is_test[i] = true;
-        }
-        let train = window_examples(
-            recs.iter()
-                .zip(&is_test)
-                .filter(|(_, t)| !**t)
-                .map(|(r, _)| r),
-        );
-        let test: Vec<WindowedRecording> = test_idx.iter().map(|&i| recs[i].clone()).collect();
-        let model = Model::train_adapting_k(profile_name, analysis, classifier, train)?;
-        Ok((
-            evaluate_recordings(&model, &test)?,
-            model.classifier.k,
-            model.k_fallback,
-        ))
-    };
+    let runs = fold_runs(
+        recs,
+        folds,
+        (profile_name, analysis, classifier),
+        threads,
+        |train| window_examples(train),
+        evaluate_recordings,
+    )?;
     let mut windows = Vec::new();
-    let mut runs = Vec::with_capacity(folds.len());
-    for r in run_folds(folds, threads, run) {
-        let (wr, k, k_fallback) = r?;
-        windows.extend(wr.windows);
-        runs.push((wr.report, k, k_fallback));
-    }
+    let runs = runs
+        .into_iter()
+        .map(|(wr, k, k_fallback)| {
+            windows.extend(wr.windows);
+            (wr.report, k, k_fallback)
+        })
+        .collect();
     let labels: Vec<String> = recs.iter().map(|r| r.label.clone()).collect();
     let train = recs.iter().map(|r| r.file.clone()).collect();
     Ok(WindowCvReport {

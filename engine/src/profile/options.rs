@@ -5,9 +5,10 @@
 //! values `tune` searches, and how the features it decides are labelled;
 //! the `[classifier]` keys likewise ([`CLASSIFIER_OPTIONS`]). Derived from
 //! it: the model compatibility check ([`first_difference`]), the sweep
-//! keys, `tune`'s space, `profile new`'s groups and advice, `check`'s
-//! message for a word or flag an option does not take ([`check_written`])
-//! and the Spectrum panel's labels ([`FeatureNames::of`]). Adding an option
+//! keys, `tune`'s space and the lines it writes, `profile new`'s groups
+//! and advice, `check`'s message for a word or flag an option does not
+//! take ([`check_written`]) and the Spectrum panel's labels
+//! ([`FeatureNames::of`]). Adding an option
 //! means its analysis code, its line here, and its tests (the compiler and
 //! a test refuse an `Analysis` field missing here).
 
@@ -131,16 +132,34 @@ pub struct AnalysisOption {
     /// agree on it (some options only matter when another is set).
     value: fn(&Analysis) -> String,
     same: fn(&Analysis, &Analysis) -> bool,
+    /// The value as a profile line writes it (`None`: the line is left out).
+    line: fn(&Analysis) -> Option<String>,
     /// How the features are labelled when this option decides them
     /// (`None` from the function when another one does).
     labels: Option<fn(&Analysis) -> Option<FeatureNames>>,
 }
 
-/// How an option is written and compared.
-type Compare = (fn(&Analysis) -> String, fn(&Analysis, &Analysis) -> bool);
+/// How an option is written in a model file, compared, and written in a
+/// profile.
+type Compare = (
+    fn(&Analysis) -> String,
+    fn(&Analysis, &Analysis) -> bool,
+    fn(&Analysis) -> Option<String>,
+);
 
 fn json<T: serde::Serialize>(value: &T) -> String {
     serde_json::to_string(value).unwrap_or_else(|e| format!("<{e}>"))
+}
+
+/// A value as a profile line writes it (`"mean"`, `[1, 49]`, `{ length =
+/// 1.49, hop = 0.745 }`, fields in declared order); `None` for an option
+/// left out.
+fn toml_value<T: serde::Serialize>(value: &T) -> Option<String> {
+    let mut text = String::new();
+    value
+        .serialize(toml::ser::ValueSerializer::new(&mut text))
+        .ok()?;
+    Some(text)
 }
 
 macro_rules! field {
@@ -148,6 +167,7 @@ macro_rules! field {
         (
             |a: &Analysis| json(&a.$f),
             |a: &Analysis, b: &Analysis| a.$f == b.$f,
+            |a: &Analysis| toml_value(&a.$f),
         )
     };
 }
@@ -162,7 +182,7 @@ const fn opt(
     sweepable: bool,
     group: Group,
     advice: &'static str,
-    (value, same): Compare,
+    (value, same, line): Compare,
 ) -> AnalysisOption {
     AnalysisOption {
         name,
@@ -176,6 +196,7 @@ const fn opt(
         search: &[],
         value,
         same,
+        line,
         labels: None,
     }
 }
@@ -279,6 +300,12 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
         (
             |a| json(&a.bins),
             |a, b| a.bins == b.bins || a.band.is_some() || a.bands.is_some(),
+            // Left out where band or bands replace it.
+            |a| {
+                (a.band.is_none() && a.bands.is_none())
+                    .then(|| toml_value(&a.bins))
+                    .flatten()
+            },
         ),
     )
     .labelled(|a| {
@@ -324,6 +351,7 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
         (
             |a| json(&a.welch_segment),
             |a, b| a.dft_points() == b.dft_points(),
+            |a| toml_value(&a.welch_segment),
         ),
     )
     .searched(&["points/4", "points/16"]),
@@ -338,6 +366,7 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
         (
             |a| json(&a.welch_overlap),
             |a, b| a.overlap() == b.overlap() || !a.spectrum.is_welch(),
+            |a| toml_value(&a.welch_overlap),
         ),
     ),
     opt(
@@ -389,7 +418,12 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
         true,
         Group::Spectrum,
         "drop c0, the level term, so a drifting gain does not move the features",
-        field!(drop_level),
+        (
+            |a| json(&a.drop_level),
+            |a, b| a.drop_level == b.drop_level,
+            // Written when set, as `profile new` offers it.
+            |a| a.drop_level.then(|| "true".into()),
+        ),
     )
     .searched(&["false", "true"]),
     // Searched as sub-windows a quarter of the window, every eighth.
@@ -420,6 +454,8 @@ pub struct ClassifierOption {
     pub search: &'static [&'static str],
     /// The value as a report writes it.
     value: fn(&Classifier) -> String,
+    /// As [`AnalysisOption`]'s `line`.
+    line: fn(&Classifier) -> Option<String>,
 }
 
 /// Every `[classifier]` option, in the order a profile lists them.
@@ -431,6 +467,13 @@ pub const CLASSIFIER_OPTIONS: &[ClassifierOption] = &[
         advice: "the neighbours that vote: 1 for few recordings per label, more to outvote a stray one",
         search: &["1", "3", "5", "9"],
         value: |c| c.k_text(),
+        line: |c| {
+            if c.k_is_auto() {
+                Some("\"auto\"".into())
+            } else {
+                toml_value(&c.k)
+            }
+        },
     },
     ClassifierOption {
         name: "classifier.metric",
@@ -439,6 +482,7 @@ pub const CLASSIFIER_OPTIONS: &[ClassifierOption] = &[
         advice: "the distance between feature vectors; cosine for recordings whose level differs",
         search: &["euclidean", "manhattan", "cosine"],
         value: |c| json(&c.metric),
+        line: |c| toml_value(&c.metric),
     },
     ClassifierOption {
         name: "classifier.weights",
@@ -447,6 +491,7 @@ pub const CLASSIFIER_OPTIONS: &[ClassifierOption] = &[
         advice: "one vote per neighbour (the thesis), or each by 1 / distance",
         search: &["uniform", "distance"],
         value: |c| json(&c.weights),
+        line: |c| toml_value(&c.weights),
     },
     ClassifierOption {
         name: "classifier.standardize",
@@ -455,6 +500,7 @@ pub const CLASSIFIER_OPTIONS: &[ClassifierOption] = &[
         advice: "z-score every feature over the training set: features of very different sizes",
         search: &["false", "true"],
         value: |c| json(&c.standardize),
+        line: |c| toml_value(&c.standardize),
     },
     ClassifierOption {
         name: "classifier.k_candidates",
@@ -463,6 +509,7 @@ pub const CLASSIFIER_OPTIONS: &[ClassifierOption] = &[
         advice: "the values k = \"auto\" tries (default 1, 3, 5, …, 15)",
         search: &[],
         value: |c| json(&c.k_candidates),
+        line: |c| toml_value(&c.k_candidates),
     },
 ];
 
@@ -487,7 +534,7 @@ impl ClassifierOption {
     }
     /// As [`AnalysisOption::written`].
     pub fn written(&self, c: &Classifier) -> Option<String> {
-        Some((self.value)(c)).filter(|v| v != "null")
+        (self.line)(c)
     }
 }
 
@@ -563,9 +610,10 @@ impl AnalysisOption {
         plain((self.value)(a))
     }
     /// The value `a` gives it as a profile line writes it (`"mean"`,
-    /// `0.0003`, `[1,49]`); `None` when it is left out.
+    /// `0.0003`, `[1, 49]`, `{ length = 1.49, hop = 0.745 }`); `None` when
+    /// the line is left out (an option unset, or unused beside another).
     pub fn written(&self, a: &Analysis) -> Option<String> {
-        Some((self.value)(a)).filter(|v| v != "null")
+        (self.line)(a)
     }
 }
 

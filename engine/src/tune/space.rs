@@ -15,10 +15,12 @@ use std::sync::LazyLock;
 use serde::Serialize;
 
 use crate::analysis::check_settings;
+use crate::profile::fitted::{fitting_bands, float, floor3};
 use crate::profile::options::{
-    ANALYSIS_OPTIONS, CLASSIFIER_OPTIONS, Kind, classifier_option, option as option_named,
+    ANALYSIS_OPTIONS, AnalysisOption, CLASSIFIER_OPTIONS, ClassifierOption, Group, Kind,
+    classifier_option, option as option_named,
 };
-use crate::profile::{Analysis, BandScale, Bands, Classifier, Windows};
+use crate::profile::{Analysis, Classifier, Windows};
 
 /// One option searched: its name (the profile key) and its values as they
 /// are written in a profile or described, simplest first.
@@ -57,6 +59,25 @@ pub fn space() -> &'static [Searched] {
             .collect()
     });
     &SPACE
+}
+
+/// The options `tune` decides: every `[analysis]` option of a group it
+/// searches (the spectrum and its features, the sub-windows), in list
+/// order, and every `[classifier]` option. The rest (the signal, the
+/// resampling) stays the profile's.
+pub fn decided_options() -> (
+    impl Iterator<Item = &'static AnalysisOption>,
+    impl Iterator<Item = &'static ClassifierOption>,
+) {
+    let searched = |g: Group| {
+        ANALYSIS_OPTIONS
+            .iter()
+            .any(|o| o.group == g && !o.search.is_empty())
+    };
+    (
+        ANALYSIS_OPTIONS.iter().filter(move |o| searched(o.group)),
+        CLASSIFIER_OPTIONS.iter(),
+    )
 }
 
 /// One point of the grid: the position of its value in each row of
@@ -116,7 +137,7 @@ impl Setting {
                     _ => "none".into(),
                 },
                 "windows" => match a.windows {
-                    Some(w) => format!("{} every {}", trim(w.length), trim(w.hop)),
+                    Some(w) => format!("{} every {}", float(w.length), float(w.hop)),
                     None => "none".into(),
                 },
                 "welch_segment" if a.welch_segment.is_none() => "-".into(),
@@ -136,24 +157,6 @@ impl Setting {
     }
 }
 
-/// A number as TOML writes it, shortest (`0.25`, `3.0`).
-pub fn trim(v: f64) -> String {
-    let s = format!("{v}");
-    if s.contains('.') || s.contains('e') {
-        s
-    } else {
-        format!("{s}.0")
-    }
-}
-
-/// An enum's profile spelling (its serde name).
-pub fn kebab<T: Serialize>(v: &T) -> String {
-    serde_json::to_value(v)
-        .ok()
-        .and_then(|v| v.as_str().map(str::to_string))
-        .unwrap_or_default()
-}
-
 /// The largest power of two at most `n` (1 for 0).
 fn floor_pow2(n: usize) -> usize {
     if n <= 1 {
@@ -161,42 +164,6 @@ fn floor_pow2(n: usize) -> usize {
     } else {
         1usize << (usize::BITS - 1 - n.leading_zeros())
     }
-}
-
-/// A value rounded down to three significant digits, so a written band
-/// edge or sub-window reads cleanly and stays inside what it bounds.
-fn floor3(v: f64) -> f64 {
-    if v <= 0.0 || !v.is_finite() {
-        return v;
-    }
-    let scale = 10f64.powi(2 - v.log10().floor() as i32);
-    (v * scale).floor() / scale
-}
-
-/// Log bands from a few bins up to Nyquist that each hold a bin: 32, or
-/// fewer when the spectrum is too coarse; `cepstra` of them kept.
-fn fitting_bands(a: &Analysis, cepstra: usize) -> Option<Bands> {
-    let bw = a.bin_width();
-    let nyquist = bw * (a.dft_points() / 2) as f64;
-    for count in [32, 24, 16, 12, 8] {
-        for lowest in [2.0, 4.0, 8.0] {
-            let b = Bands {
-                count,
-                from: floor3(bw * lowest),
-                to: floor3(nyquist),
-                scale: BandScale::Log,
-            };
-            let candidate = Analysis {
-                bands: Some(b),
-                cepstra: Some(cepstra.min(count)),
-                ..a.clone()
-            };
-            if b.to > b.from && check_settings(&candidate).is_ok() {
-                return Some(b);
-            }
-        }
-    }
-    None
 }
 
 /// A value relative to the data (`points/4`, `window/4`): its divisor.
@@ -227,22 +194,23 @@ fn written<T: Serialize + serde::de::DeserializeOwned>(
     toml::Value::Table(t).try_into().ok()
 }
 
+/// `base` with the `fields` left out (at their defaults).
+fn left_out<'a, T: Serialize + serde::de::DeserializeOwned>(
+    base: &T,
+    fields: impl Iterator<Item = &'a str>,
+) -> Option<T> {
+    let mut t = toml::Table::try_from(base).ok()?;
+    for field in fields {
+        t.remove(field);
+    }
+    toml::Value::Table(t).try_into().ok()
+}
+
 /// The analysis and classifier of one point of the grid over the profile's
 /// own, or `None` when the values do not fit together or the data (a
 /// segment below 16 points, no bands that fit, a setting the analysis
 /// refuses).
 pub fn resolve(base: (&Analysis, &Classifier), values: &[usize]) -> Option<Setting> {
-    let mut a = base.0.clone();
-    let mut c = base.1.clone();
-    // What the search decides is set afresh; the rest (channels, axis,
-    // window, spacing, detrend) is the profile's.
-    a.band = None;
-    a.bands = None;
-    a.cepstra = None;
-    a.drop_level = false;
-    a.welch_overlap = None;
-    a.welch_segment = None;
-    c.k_candidates = None;
     let rows = space();
     let mut chosen = Vec::with_capacity(rows.len());
     for (row, &v) in rows.iter().zip(values) {
@@ -260,16 +228,38 @@ pub fn resolve(base: (&Analysis, &Classifier), values: &[usize]) -> Option<Setti
             .map(|(row, v)| (row.option, *v, row.kind))
             .collect()
     };
-    let scan_leg = a.window_is_scan_leg;
+    // What the search decides starts afresh: an option it decides but
+    // does not search, or one whose value is relative to the data, is
+    // left out (at its default) until set; the rest (channels, axis,
+    // window, spacing, detrend) is the profile's.
+    let (analysis, classifier) = decided_options();
+    let afresh = |field: &str, search: &[&str]| {
+        search.is_empty()
+            || chosen
+                .iter()
+                .any(|(row, v)| row.option == field && v.contains('/'))
+    };
+    let mut a: Analysis = left_out(
+        base.0,
+        analysis
+            .filter(|o| afresh(o.field(), o.search))
+            .map(|o| o.field()),
+    )?;
+    let mut c: Classifier = left_out(
+        base.1,
+        classifier
+            .filter(|o| afresh(o.field(), o.search))
+            .map(|o| o.field()),
+    )?;
     a = written(&a, &as_written(true))?;
-    a.window_is_scan_leg = scan_leg;
+    a.window_is_scan_leg = base.0.window_is_scan_leg;
     c = written(&c, &as_written(false))?;
     let value = |option: &str| chosen.iter().find(|(r, _)| r.option == option).map(|x| x.1);
     if let Some(n) = value("windows").and_then(|v| share(v, "window")) {
-        let length = floor3((a.window[1] - a.window[0]) / n as f64);
+        let length = floor3((a.window[1] - a.window[0]) / n as f64).0;
         a.windows = Some(Windows {
             length,
-            hop: floor3(length / 2.0),
+            hop: floor3(length / 2.0).0,
         });
     }
     // A power of two, at most this share of the (sub-)window's points,
@@ -289,7 +279,7 @@ pub fn resolve(base: (&Analysis, &Classifier), values: &[usize]) -> Option<Setti
             if !a.spectrum.is_log() {
                 return None;
             }
-            let bands = fitting_bands(&a, n)?;
+            let bands = fitting_bands(&a)?;
             a.bands = Some(bands);
             a.cepstra = Some(n.min(bands.count));
         }

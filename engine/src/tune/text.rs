@@ -7,73 +7,30 @@
 use std::fmt::Write as _;
 
 use super::TuneReport;
-use super::space::{Setting, kebab, space, trim};
-use crate::profile::options::{classifier_option, option};
+use super::space::{Setting, decided_options};
 use crate::profile::{Analysis, Classifier};
 
 /// A key and the value written for it (`None`: the key must not be set).
 type Line = (&'static str, Option<String>);
 
 /// The keys `tune` decides, per section, and what the chosen setting
-/// writes for each.
+/// writes for each (as the option list writes it), in list order.
 pub(super) fn decided(setting: &Setting) -> Vec<(&'static str, Vec<Line>)> {
-    let a = &setting.analysis;
-    let c = &setting.classifier;
-    let mut analysis = vec![
-        ("spectrum", Some(quoted(&a.spectrum))),
-        ("taper", Some(quoted(&a.taper))),
-        ("welch_segment", a.welch_segment.map(|s| s.to_string())),
-        ("welch_overlap", None),
-        ("band", None),
+    let (analysis, classifier) = decided_options();
+    vec![
         (
-            "bins",
-            a.bands
-                .is_none()
-                .then(|| format!("[{}, {}]", a.bins[0], a.bins[1])),
+            "analysis",
+            analysis
+                .map(|o| (o.field(), o.written(&setting.analysis)))
+                .collect(),
         ),
         (
-            "bands",
-            a.bands.map(|b| {
-                format!(
-                    "{{ count = {}, from = {}, to = {}, scale = {} }}",
-                    b.count,
-                    trim(b.from),
-                    trim(b.to),
-                    quoted(&b.scale)
-                )
-            }),
+            "classifier",
+            classifier
+                .map(|o| (o.field(), o.written(&setting.classifier)))
+                .collect(),
         ),
-        ("cepstra", a.cepstra.map(|n| n.to_string())),
-        ("drop_level", a.drop_level.then(|| "true".to_string())),
-        (
-            "windows",
-            a.windows
-                .map(|w| format!("{{ length = {}, hop = {} }}", trim(w.length), trim(w.hop))),
-        ),
-    ];
-    let mut classifier = vec![
-        ("k", Some(c.k.to_string())),
-        ("metric", Some(quoted(&c.metric))),
-        ("weights", Some(quoted(&c.weights))),
-        ("standardize", Some(c.standardize.to_string())),
-        ("k_candidates", None),
-    ];
-    // A searched option named by no line above (a newly declared one):
-    // its value as a profile writes it.
-    for row in space() {
-        let (lines, value) = if row.features {
-            (&mut analysis, option(row.option).map(|o| o.written(a)))
-        } else {
-            (
-                &mut classifier,
-                classifier_option(row.option).map(|o| o.written(c)),
-            )
-        };
-        if let Some(value) = value.filter(|_| lines.iter().all(|(k, _)| *k != row.option)) {
-            lines.push((row.option, value));
-        }
-    }
-    vec![("analysis", analysis), ("classifier", classifier)]
+    ]
 }
 
 /// Whether a profile read back from [`tuned_profile`]'s text holds the
@@ -86,11 +43,6 @@ pub fn reads_back_as(setting: &Setting, analysis: &Analysis, classifier: &Classi
         want.bins = analysis.bins;
     }
     want == *analysis && setting.classifier == *classifier
-}
-
-/// An option's profile spelling, quoted: `"log-welch"`.
-fn quoted<T: serde::Serialize>(v: &T) -> String {
-    format!("\"{}\"", kebab(v))
 }
 
 /// The key a `key = value` line sets, when it is one.

@@ -7,8 +7,9 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::survey::Survey;
+use crate::profile::fitted::fitting_bands;
 use crate::profile::options::Group;
-use crate::profile::{Analysis, Bands, SpectrumKind, Taper, check_options};
+use crate::profile::{Analysis, Classifier, Metric, SpectrumKind, Taper, check_options};
 
 #[cfg(test)]
 mod tests;
@@ -499,18 +500,17 @@ fn windows_group(p: &Plan) -> Result<OptionGroup, String> {
 }
 
 fn classifier_table(doc: &mut Doc, p: &Plan) {
-    doc.table("classifier");
     let k = if p.min_count <= 10 { 1 } else { 5 };
     let why = if k == 1 {
         "the nearest recording decides: few recordings per label"
     } else {
         "five neighbours vote: enough recordings per label to outvote a stray one"
     };
-    doc.lines(&[
-        line("k", k.to_string(), why),
-        line("metric", "\"euclidean\"", "the distance between spectra"),
-    ]);
-    doc.blank();
+    let c = Classifier {
+        k,
+        metric: Metric::Euclidean,
+        ..Classifier::default()
+    };
     let mut groups = vec![OptionGroup {
         when: "z-score every feature over the training set: features of very different sizes (several channels, log and linear)".into(),
         keys: vec![("standardize", "true".into())],
@@ -527,7 +527,11 @@ fn classifier_table(doc: &mut Doc, p: &Plan) {
             .into(),
         keys: vec![("metric", "\"cosine\"".into())],
     });
-    doc.groups(&groups);
+    doc.classifier(
+        &c,
+        &[("k", why), ("metric", "the distance between spectra")],
+        groups,
+    );
 }
 
 /// The evaluation methods that can test every label, the first choice
@@ -643,34 +647,4 @@ fn group_by_group(p: &Plan) -> Option<OptionGroup> {
             ("group_by", format!("{key:?}")),
         ],
     })
-}
-
-/// Log-spaced bands from a few bins up to Nyquist that each hold a bin:
-/// as many as 32, fewer when the spectrum is too coarse.
-fn fitting_bands(a: &Analysis) -> Option<Bands> {
-    let bw = a.bin_width();
-    let nyquist = bw * (a.dft_points() / 2) as f64;
-    for count in [32, 24, 16, 12, 8] {
-        for lowest in [2.0, 4.0, 8.0, 16.0] {
-            let from = floor3(bw * lowest).0;
-            let to = floor3(nyquist).0;
-            if !(from > 0.0 && to > from) {
-                continue;
-            }
-            let b = Bands {
-                count,
-                from,
-                to,
-                scale: crate::profile::BandScale::Log,
-            };
-            let candidate = Analysis {
-                bands: Some(b),
-                ..a.clone()
-            };
-            if check_options(&candidate).is_ok() {
-                return Some(b);
-            }
-        }
-    }
-    None
 }

@@ -206,3 +206,70 @@ fn exactly_one_option_labels_the_features() {
     };
     assert_eq!(FeatureNames::of(&a), FeatureNames::Cepstra { first: 1 });
 }
+
+/// Each option's line as a profile writes it reads back as its value:
+/// the lines of an analysis (and a classifier) make the same one again.
+#[test]
+fn written_lines_read_back_as_the_values() {
+    let a = Analysis {
+        channel: "vib".into(),
+        axis: "t_s".into(),
+        window: [0.0, 5.99],
+        spacing: 1.0 / 2200.0,
+        spectrum: SpectrumKind::LogWelch,
+        taper: crate::profile::Taper::Hann,
+        welch_segment: Some(256),
+        welch_overlap: Some(0.25),
+        bands: Some(crate::profile::Bands {
+            count: 32,
+            from: 68.7,
+            to: 1100.0,
+            scale: crate::profile::BandScale::Log,
+        }),
+        cepstra: Some(13),
+        drop_level: true,
+        windows: Some(crate::profile::Windows {
+            length: 1.49,
+            hop: 0.745,
+        }),
+        channels: vec!["acc".into()],
+        ..Analysis::default()
+    };
+    let text: String = ANALYSIS_OPTIONS
+        .iter()
+        .filter_map(|o| Some(format!("{} = {}\n", o.field(), o.written(&a)?)))
+        .collect();
+    assert!(!text.contains("bins"), "bands replace bins:\n{text}");
+    assert!(
+        text.contains("bands = { count = 32, from = 68.7, to = 1100.0, scale = \"log\" }"),
+        "{text}"
+    );
+    let back: Analysis = toml::from_str(&text).unwrap();
+    assert_eq!(
+        back,
+        Analysis {
+            bins: back.bins,
+            ..a
+        }
+    );
+    let c = Classifier {
+        k: 3,
+        metric: super::super::Metric::Cosine,
+        standardize: true,
+        k_candidates: Some(vec![1, 3]),
+        ..Classifier::default()
+    };
+    let text: String = CLASSIFIER_OPTIONS
+        .iter()
+        .filter_map(|o| Some(format!("{} = {}\n", o.field(), o.written(&c)?)))
+        .collect();
+    assert_eq!(toml::from_str::<Classifier>(&text).unwrap(), c);
+    let auto = Classifier {
+        k: super::super::K_AUTO,
+        ..c
+    };
+    assert_eq!(
+        classifier_option("k").unwrap().written(&auto).unwrap(),
+        "\"auto\""
+    );
+}

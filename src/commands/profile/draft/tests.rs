@@ -95,12 +95,3 @@ fn a_recording_too_short_is_refused_naming_it() {
     let e = draft(&s, "short", Path::new("rec")).unwrap_err();
     assert!(e.contains("a/a_001.csv") && e.contains("too short"), "{e}");
 }
-
-#[test]
-fn three_significant_digits_round_the_right_way() {
-    assert_eq!(floor3(0.08979).1, "0.0897");
-    assert_eq!(floor3(4.999).1, "4.99");
-    assert_eq!(floor3(123.9).1, "123.0");
-    assert_eq!(ceil3(0.000101).1, "0.000101");
-    assert_eq!(ceil3(0.0001011).1, "0.000102");
-}

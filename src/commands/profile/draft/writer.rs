@@ -2,47 +2,16 @@
 //! (`crate::profile::options`): the `[analysis]` lines group by group in
 //! the list's order, each with the draft's reason or else the option's
 //! advice, every group followed by its commented alternatives; the
-//! commented option groups of every table; and the reading back of those
-//! groups ([`groups_of`]) and their putting in place ([`apply_group`]).
+//! `[classifier]` lines in the list's order, their values as the options
+//! write them; the commented option groups of every table; and the reading
+//! back of those groups ([`groups_of`]) and their putting in place
+//! ([`apply_group`]).
 
 use std::fmt::Write as _;
 
-use crate::profile::options::{ANALYSIS_OPTIONS, Group, in_group, option};
-
-/// Round down to three significant digits, as text TOML reads back exactly.
-pub fn floor3(x: f64) -> (f64, String) {
-    round3(x, f64::floor)
-}
-
-pub fn ceil3(x: f64) -> (f64, String) {
-    round3(x, f64::ceil)
-}
-
-fn round3(x: f64, how: fn(f64) -> f64) -> (f64, String) {
-    let e = x.abs().log10().floor() as i32 - 2;
-    let decimals = (-e).max(0) as usize;
-    let v = how(x / 10f64.powi(e)) * 10f64.powi(e);
-    let text = format!("{v:.decimals$}");
-    let v: f64 = text.parse().unwrap_or(v);
-    (
-        v,
-        if text.contains('.') {
-            text
-        } else {
-            format!("{text}.0")
-        },
-    )
-}
-
-/// A float as TOML, read back to the same value.
-pub fn float(v: f64) -> String {
-    let t = format!("{v}");
-    if t.contains('.') || t.contains('e') {
-        t
-    } else {
-        format!("{t}.0")
-    }
-}
+use crate::profile::Classifier;
+pub use crate::profile::fitted::{ceil3, float, floor3};
+use crate::profile::options::{ANALYSIS_OPTIONS, CLASSIFIER_OPTIONS, Group, in_group, option};
 
 /// One `key = value` line, with why it was chosen (a trailing comment;
 /// `None`: an `[analysis]` option's advice) and a comment above it.
@@ -207,6 +176,40 @@ impl Doc {
         // A key of no group (none today) is still written.
         self.lines(&lines);
         self.gap();
+    }
+}
+
+impl Doc {
+    /// The `[classifier]` table from the option list: a line for each
+    /// option the draft gives a reason for (`why`), in list order, its
+    /// value as the option writes `c`'s; then the commented option groups,
+    /// their keys in list order.
+    pub fn classifier(
+        &mut self,
+        c: &Classifier,
+        why: &[(&'static str, &str)],
+        mut groups: Vec<OptionGroup>,
+    ) {
+        self.table("classifier");
+        let lines: Vec<Line> = CLASSIFIER_OPTIONS
+            .iter()
+            .filter_map(|o| {
+                let (_, why) = why.iter().find(|(k, _)| *k == o.field())?;
+                Some(line(o.field(), o.written(c)?, *why))
+            })
+            .collect();
+        debug_assert_eq!(
+            lines.len(),
+            why.len(),
+            "a reason for no [classifier] option"
+        );
+        self.lines(&lines);
+        self.blank();
+        let rank = |key: &str| CLASSIFIER_OPTIONS.iter().position(|o| o.field() == key);
+        for g in &mut groups {
+            g.keys.sort_by_key(|(k, _)| rank(k));
+        }
+        self.groups(&groups);
     }
 }
 
