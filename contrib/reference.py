@@ -291,8 +291,10 @@ def main():
     if method == "k-fold":
         folds = args.folds or ev.get("folds", 10)
         splits = StratifiedKFold(n_splits=folds, shuffle=True, random_state=0).split(idx, y)
+        how = f"{folds}-fold (scikit-learn's stratified folds, not hapticlab's)"
     elif method == "leave-one-out":
         splits = [(idx[idx != j], idx[j : j + 1]) for j in idx]
+        how = "leave-one-out"
     else:
         ntr, nte = ev["train_per_class"], ev["test_per_class"]
         train, test = [], []
@@ -301,6 +303,7 @@ def main():
             train += list(mine[:ntr])
             test += list(mine[ntr : ntr + nte])
         splits = [(np.array(train), np.array(test))]
+        how = f"holdout, the first {ntr} of each label train and the next {nte} test"
     right = total = 0
     for tr, te in splits:
         smallest = min(np.isin(rec, tr[y[tr] == l]).sum() for l in set(y[tr]))
@@ -309,7 +312,7 @@ def main():
         right += int((predict(X, rec, y, tr, te, c) == y[te]).sum())
         total += len(te)
     elapsed = time.perf_counter() - started
-    print(f"accuracy: {right}/{total} ({100.0 * right / total:.1f} %) over {len(names)} recordings in {elapsed:.2f} s")
+    print(f"accuracy: {right}/{total} ({100.0 * right / total:.1f} %) over {len(names)} recordings, {how}, in {elapsed:.2f} s")
 
 
 if __name__ == "__main__":

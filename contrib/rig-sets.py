@@ -27,7 +27,7 @@ Import them with
 
     hapticlab import OUT_DIR/noise/*/*.csv --rate 1000 --out rec/noise
     hapticlab import OUT_DIR/sound/*/*.wav --out rec/sound
-    hapticlab import OUT_DIR/fingertip/*/*.csv --rate 2200 --out rec/fingertip
+    hapticlab import OUT_DIR/fingertip/*/*.csv --rate 2200 --out rec/finger
     hapticlab import OUT_DIR/long/*/*.csv --rate 100 --split 2 --out rec/long
 
 and the first 5 trials of each fingertip material are the earliest

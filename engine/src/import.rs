@@ -64,7 +64,7 @@ pub struct Request {
     pub delimiter: Option<char>,
     /// Replace existing recordings.
     pub force: bool,
-    /// Compress each recording to OUT/<label>/<file stem>.csv.gz (Zopfli; gzip -9 past 4 MiB of text).
+    /// Compress each recording to OUT/<label>/<file stem>.csv.gz (gzip -9).
     pub gzip: bool,
     /// Cut each input into consecutive trials this many seconds long
     /// (<stem>-seg001.csv, …, in time order), for one long recording per material.

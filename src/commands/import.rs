@@ -47,7 +47,7 @@ pub struct ImportArgs {
     /// Replace existing recordings.
     #[arg(long)]
     pub force: bool,
-    /// Compress each recording to OUT/<label>/<file stem>.csv.gz (Zopfli; gzip -9 past 4 MiB of text).
+    /// Compress each recording to OUT/<label>/<file stem>.csv.gz (gzip -9).
     #[arg(long)]
     pub gzip: bool,
     /// Cut each input into consecutive trials this many seconds long

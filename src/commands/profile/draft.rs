@@ -601,6 +601,9 @@ fn evaluation_table(doc: &mut Doc, p: &Plan) {
     for (k, v) in &first.keys {
         let _ = writeln!(doc.0, "{k} = {v}");
     }
+    if !others.is_empty() {
+        doc.comment("(a method group below replaces every line above: comment them all out)");
+    }
     doc.blank();
     let mut groups = others;
     groups.extend(group_by_group(p));
