@@ -164,6 +164,7 @@ fn every_line_profile_new_writes_passes_check_on_folders_of_every_kind() {
         match name {
             "short" => assert!(text.contains("(none offered: "), "{text}"),
             "long" | "sound" => {
+                assert!(!text.contains("source after another"), "{text}");
                 assert!(text.contains("taper = \"hann\""), "{text}");
                 assert!(text.contains("# windows = "), "{text}");
             }
@@ -174,6 +175,7 @@ fn every_line_profile_new_writes_passes_check_on_folders_of_every_kind() {
             "segments" => {
                 assert!(text.contains("method = \"holdout\"\n"), "{text}");
                 assert!(text.contains("# group_by = \"source\""), "{text}");
+                assert!(text.contains("one\n# source after another"), "{text}");
             }
             _ => {}
         }

@@ -540,6 +540,10 @@ fn evaluation_table(doc: &mut Doc, p: &Plan) {
     let min = p.min_count;
     let folds = min.clamp(2, 10);
     let (train, test) = time_split(p);
+    let grouping = group_by_group(p);
+    let by_source = grouping
+        .as_ref()
+        .is_some_and(|g| g.keys.contains(&("group_by", "\"source\"".into())));
     let loo = OptionGroup {
         when: "each recording tested against all the others: few recordings per label".into(),
         keys: vec![("method", "\"leave-one-out\"".into())],
@@ -574,7 +578,13 @@ fn evaluation_table(doc: &mut Doc, p: &Plan) {
         (
             format!(
                 "The recordings are consecutive segments of longer ones (`import --split`): neighbours\n\
-                 resemble each other, so the first {train} segments of each label train and the next {test} test."
+                 resemble each other, so the first {train} segments of each label train and the next {test} test.{}",
+                if by_source {
+                    "\nA label with several source files: the split runs through them in file-name order, one\n\
+                     source after another; the group_by group below keeps each source on one side instead."
+                } else {
+                    ""
+                }
             ),
             holdout,
             vec![kfold, loo],
@@ -606,7 +616,7 @@ fn evaluation_table(doc: &mut Doc, p: &Plan) {
     }
     doc.blank();
     let mut groups = others;
-    groups.extend(group_by_group(p));
+    groups.extend(grouping);
     doc.groups(&groups);
 }
 
