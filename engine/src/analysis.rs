@@ -389,18 +389,25 @@ impl FeatureExtractor {
         signals: &[&[f64]],
     ) -> Result<&[f64], AnalysisError> {
         let per = self.settings.features_per_channel();
-        let want = 1 + self.settings.channels.len();
-        if signals.len() != want {
-            return Err(AnalysisError::Settings(format!(
-                "{want} channel(s) to analyse but {} given",
-                signals.len()
-            )));
-        }
+        self.check_channels(signals.len())?;
         for (c, signal) in signals.iter().enumerate().rev() {
             self.transform(axis, signal)?;
             self.keep_channel(c, per);
         }
         check_finite(&self.features)
+    }
+
+    /// Refuses `given` signals unless there is one per channel analysed
+    /// (`channel`, then `channels`).
+    fn check_channels(&self, given: usize) -> Result<(), AnalysisError> {
+        let want = 1 + self.settings.channels.len();
+        if given == want {
+            Ok(())
+        } else {
+            Err(AnalysisError::Settings(format!(
+                "{want} channel(s) to analyse but {given} given"
+            )))
+        }
     }
 
     /// Channel `c`'s features (`per` of them) of the spectrum last
@@ -449,15 +456,9 @@ impl FeatureExtractor {
         axis: &[f64],
         signals: &[&[f64]],
     ) -> Result<Vec<Vec<f64>>, AnalysisError> {
-        // One pass decides whether the sub-windows may each visit only
-        // their own samples (see `Resampler::run_in_order`); otherwise each
-        // goes over the whole recording, as a single window does.
-        self.in_order = sub_windows_may_search(axis, signals) && self.sub_windows.len() > 1;
-        let all = (0..self.sub_windows.len())
-            .map(|j| self.window_features(j, axis, signals).map(<[f64]>::to_vec))
-            .collect();
-        self.in_order = false;
-        all
+        self.each_sub_window(axis, signals, |fx| {
+            fx.features_of_channels(axis, signals).map(<[f64]>::to_vec)
+        })
     }
 
     /// Every sub-window's channels (`channel`, then `channels`) resampled,
@@ -471,27 +472,39 @@ impl FeatureExtractor {
         axis: &[f64],
         signals: &[&[f64]],
     ) -> Result<Vec<Vec<Vec<f64>>>, AnalysisError> {
+        self.check_channels(signals.len())?;
+        self.each_sub_window(axis, signals, |fx| {
+            signals
+                .iter()
+                .map(|signal| {
+                    fx.resample_own(axis, signal)?;
+                    Ok(fx.resampled.clone())
+                })
+                .collect()
+        })
+    }
+
+    /// `each` for every sub-window in order, the resampler started at it;
+    /// afterwards the resampler starts at the first again.
+    fn each_sub_window<T>(
+        &mut self,
+        axis: &[f64],
+        signals: &[&[f64]],
+        mut each: impl FnMut(&mut Self) -> Result<T, AnalysisError>,
+    ) -> Result<Vec<T>, AnalysisError> {
+        // One pass decides whether the sub-windows may each visit only
+        // their own samples (see `Resampler::run_in_order`); otherwise each
+        // goes over the whole recording, as a single window does.
         self.in_order = sub_windows_may_search(axis, signals) && self.sub_windows.len() > 1;
-        let mut all = Vec::with_capacity(self.sub_windows.len());
-        let mut done = Ok(());
-        for j in 0..self.sub_windows.len() {
-            self.resampler.set_start(self.sub_windows[j][0]);
-            let mut channels = Vec::with_capacity(signals.len());
-            for signal in signals {
-                if let Err(e) = self.resample_own(axis, signal) {
-                    done = Err(e);
-                    break;
-                }
-                channels.push(self.resampled.clone());
-            }
-            if done.is_err() {
-                break;
-            }
-            all.push(channels);
-        }
+        let all = (0..self.sub_windows.len())
+            .map(|j| {
+                self.resampler.set_start(self.sub_windows[j][0]);
+                each(self)
+            })
+            .collect();
         self.resampler.set_start(self.sub_windows[0][0]);
         self.in_order = false;
-        done.map(|()| all)
+        all
     }
 
     /// The features of one sub-window from its resampled channels (one of
@@ -501,12 +514,12 @@ impl FeatureExtractor {
         channels: &[Vec<f64>],
     ) -> Result<&[f64], AnalysisError> {
         let per = self.settings.features_per_channel();
-        let want = 1 + self.settings.channels.len();
-        if channels.len() != want || channels.iter().any(|c| c.len() != self.resampled.len()) {
+        self.check_channels(channels.len())?;
+        if let Some(c) = channels.iter().find(|c| c.len() != self.resampled.len()) {
             return Err(AnalysisError::Settings(format!(
-                "{want} channel(s) of {} points to transform but {} given",
+                "{} resampled points to transform but {} given",
                 self.resampled.len(),
-                channels.len()
+                c.len()
             )));
         }
         for (c, points) in channels.iter().enumerate().rev() {

@@ -309,24 +309,15 @@ impl<'m> Predictor<'m> {
             Features::Whole(f) => vec![f.as_slice()],
             Features::Windows(w) => w.iter().map(Vec::as_slice).collect(),
         };
-        let examples = &self.model.examples;
-        let mut at = 0;
-        while at < examples.len() {
-            let file = &examples[at].file;
-            let n = examples[at..]
-                .iter()
-                .take_while(|e| &e.file == file)
-                .count();
-            let own = &examples[at..at + n];
-            if n == wanted.len()
-                && own.iter().zip(&wanted).all(|(e, w)| e.features == *w)
-                && !Path::new(file).exists()
-            {
-                return Some(file.clone());
-            }
-            at += n;
-        }
-        None
+        self.model
+            .examples
+            .chunk_by(|a, b| a.file == b.file)
+            .find(|own| {
+                own.len() == wanted.len()
+                    && own.iter().zip(&wanted).all(|(e, w)| e.features == *w)
+                    && !Path::new(&own[0].file).exists()
+            })
+            .map(|own| own[0].file.clone())
     }
 }
 

@@ -463,13 +463,16 @@ pub fn tune(
         })
         .collect();
     ordered.sort_by_key(|&(g, _)| g);
+    let shared: Vec<bool> = grids
+        .iter()
+        .map(|&(a, count)| count > 1 && resampled_points(scans, a) <= RESAMPLED_MOST)
+        .collect();
     let mut kept: (Option<usize>, Resampled) = (None, Vec::new());
     let mut done = 0;
     progress(0, settings.len());
     for (g, members) in ordered {
         let analysis = &settings[members[0]].analysis;
-        let share = grids[g].1 > 1 && resampled_points(scans, analysis)? <= RESAMPLED_MOST;
-        let features = if share {
+        let features = if shared[g] {
             if kept.0 != Some(g) {
                 kept.1.clear(); // one grid's points in memory at a time
                 kept = (Some(g), resample(scans, analysis, options.threads)?);

@@ -128,10 +128,9 @@ pub const RESAMPLED_MOST: usize = 8 << 20;
 
 /// How many points resampling every scan onto `analysis`'s grids gives
 /// (sub-windows × points × channels per scan).
-pub fn resampled_points(scans: &[Entry], analysis: &Analysis) -> Result<usize, DatasetError> {
-    let fx = FeatureExtractor::try_new(analysis).map_err(DatasetError::Settings)?;
+pub fn resampled_points(scans: &[Entry], analysis: &Analysis) -> usize {
     let channels = 1 + analysis.channels.len();
-    Ok(scans.len() * fx.sub_windows().len() * fx.points() * channels)
+    scans.len() * analysis.sub_windows().len() * analysis.points() * channels
 }
 
 /// `f` over `items` in one chunk per thread, results in item order.
