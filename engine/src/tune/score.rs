@@ -218,6 +218,10 @@ impl Pairwise {
     }
 }
 
+/// Test windows whose distances are computed together, each training
+/// window read once for them all.
+const QUERY_BLOCK: usize = 32;
+
 /// One fold to score: recordings (indices into the features) that train
 /// and that test.
 pub struct Fold<'a> {
@@ -291,46 +295,91 @@ pub fn fold_correct(
         .max()
         .unwrap_or(1)
         .clamp(1, rows.len().max(1));
+    // Each test window's k_most nearest training windows, nearest first
+    // (ties in training order, as the model's search), in test order.
+    let test_windows: Vec<(usize, usize)> = fold
+        .test
+        .iter()
+        .flat_map(|&t| (0..features[t].len()).map(move |w| (t, w)))
+        .collect();
+    let by = |a: &(f64, usize), b: &(f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
+    let keep_nearest = |mut ranked: Vec<(f64, usize)>| {
+        if k_most < ranked.len() {
+            ranked.select_nth_unstable_by(k_most, by);
+            ranked.truncate(k_most);
+        }
+        ranked.sort_unstable_by(by);
+        ranked
+    };
+    let nearest: Vec<Vec<(f64, usize)>> = match table {
+        Some(p) => test_windows
+            .iter()
+            .map(|&(t, w)| {
+                let q_at = p.at(t, w).unwrap_or(0);
+                let from = &p.values[q_at * p.n..(q_at + 1) * p.n];
+                keep_nearest(
+                    row_at
+                        .iter()
+                        .enumerate()
+                        .map(|(i, &at)| (from[at], i))
+                        .collect(),
+                )
+            })
+            .collect(),
+        None => {
+            let mut out = Vec::with_capacity(test_windows.len());
+            for block in test_windows.chunks(QUERY_BLOCK) {
+                let queries: Vec<Vec<f64>> = block
+                    .iter()
+                    .map(|&(t, w)| {
+                        let window = &features[t][w];
+                        match &scaling {
+                            Some(s) => {
+                                let mut q = vec![0.0; d];
+                                s.apply(window, &mut q);
+                                q
+                            }
+                            None => window.clone(),
+                        }
+                    })
+                    .collect();
+                let q_norms: Vec<f64> = queries
+                    .iter()
+                    .map(|q| {
+                        if metric == Metric::Cosine {
+                            dot(q, q).sqrt()
+                        } else {
+                            0.0
+                        }
+                    })
+                    .collect();
+                // Each training window once per block of queries, rather
+                // than once per query: the same values, a fraction of the
+                // memory traffic when the windows are long spectra.
+                let mut ranked: Vec<Vec<(f64, usize)>> =
+                    vec![Vec::with_capacity(rows.len()); queries.len()];
+                for (i, (row, &n)) in matrix.chunks_exact(d.max(1)).zip(&norms).enumerate() {
+                    for ((q, &q_norm), r) in queries.iter().zip(&q_norms).zip(ranked.iter_mut()) {
+                        r.push((rank_value(metric, q, q_norm, row, n), i));
+                    }
+                }
+                out.extend(ranked.into_iter().map(keep_nearest));
+            }
+            out
+        }
+    };
     let mut correct = vec![0usize; voters.len()];
-    let mut q = vec![0.0; d];
-    let mut ranked: Vec<(f64, usize)> = Vec::with_capacity(rows.len());
     // Per voter: sub-windows won and neighbour votes, per class.
     let mut won = vec![vec![0usize; n_classes]; voters.len()];
     let mut votes = vec![vec![0usize; n_classes]; voters.len()];
+    let mut at = 0;
     for &t in fold.test {
         for v in won.iter_mut().chain(votes.iter_mut()) {
             v.iter_mut().for_each(|x| *x = 0);
         }
-        for (w, window) in features[t].iter().enumerate() {
-            ranked.clear();
-            if let Some((p, q_at)) = table.and_then(|p| Some((p, p.at(t, w)?))) {
-                let from = &p.values[q_at * p.n..(q_at + 1) * p.n];
-                ranked.extend(row_at.iter().enumerate().map(|(i, &at)| (from[at], i)));
-            } else {
-                match &scaling {
-                    Some(s) => s.apply(window, &mut q),
-                    None => q.copy_from_slice(window),
-                }
-                let q_norm = if metric == Metric::Cosine {
-                    dot(&q, &q).sqrt()
-                } else {
-                    0.0
-                };
-                ranked.extend(
-                    matrix
-                        .chunks_exact(d.max(1))
-                        .zip(&norms)
-                        .enumerate()
-                        .map(|(i, (row, &n))| (rank_value(metric, &q, q_norm, row, n), i)),
-                );
-            }
-            // The k nearest, ties in training order, as the model's search.
-            let by = |a: &(f64, usize), b: &(f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
-            if k_most < ranked.len() {
-                ranked.select_nth_unstable_by(k_most, by);
-                ranked.truncate(k_most);
-            }
-            ranked.sort_unstable_by(by);
+        for _ in 0..features[t].len() {
+            let ranked = &nearest[at];
+            at += 1;
             for (v, &(k, weights)) in voters.iter().enumerate() {
                 let k = k.clamp(1, ranked.len().max(1));
                 let (order, count) =
@@ -377,7 +426,8 @@ mod tests {
             (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
         };
         let labels = ["a", "b", "c"];
-        let classes: Vec<usize> = (0..18).map(|i| i % 3).collect();
+        // 60 test windows: more than one block of queries.
+        let classes: Vec<usize> = (0..60).map(|i| i % 3).collect();
         let features: Features = classes
             .iter()
             .map(|&c| {
@@ -386,8 +436,8 @@ mod tests {
                     .collect()
             })
             .collect();
-        let train: Vec<usize> = (0..12).collect();
-        let test: Vec<usize> = (12..18).collect();
+        let train: Vec<usize> = (0..40).collect();
+        let test: Vec<usize> = (40..60).collect();
         let voters: Vec<(usize, Weights)> = [1, 3, 5, 40]
             .into_iter()
             .flat_map(|k| [(k, Weights::Uniform), (k, Weights::Distance)])
@@ -426,7 +476,7 @@ mod tests {
                 );
                 // A table of every pair (or of more recordings than the
                 // fold's) counts the same.
-                let all: Vec<usize> = (0..18).rev().collect();
+                let all: Vec<usize> = (0..60).rev().collect();
                 let table = Pairwise::new(&features, &all, metric, 2).unwrap();
                 let tabled = fold_correct(
                     &features,
