@@ -29,7 +29,7 @@ pub struct TuneArgs {
     pub out: PathBuf,
     /// Settings scored at most; a larger grid is sampled (whole feature
     /// settings, each with every classifier setting) with the seed.
-    #[arg(long, default_value_t = 192, value_parser = clap::value_parser!(u64).range(1..))]
+    #[arg(long, default_value_t = 768, value_parser = clap::value_parser!(u64).range(1..))]
     pub budget: u64,
     /// Seeds the sampling and the inner folds (the outer split is the profile's).
     #[arg(long, default_value_t = 0)]

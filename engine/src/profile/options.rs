@@ -126,6 +126,8 @@ pub struct AnalysisOption {
     /// each as a profile writes it (a word, a number, `true`), `none` for
     /// the option left out, or relative to the data as `tune` resolves it
     /// (`points/4`: a power of two, at most a quarter of the points;
+    /// `points/1`: the largest power of two within the points, searched only
+    /// where that is short (`WHOLE_SEGMENT_MOST` in tune's space);
     /// `window/4`: a quarter of the window).
     pub search: &'static [&'static str],
     /// The value as the model file writes it, and whether two analyses
@@ -339,7 +341,8 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
         })
     }),
     // Searched as a share of the points (a power of two): one table serves
-    // any rate and window.
+    // any rate and window. A short (sub-)window's whole length too: a
+    // quarter of 50 points is below any segment worth a spectrum.
     opt(
         "analysis.welch_segment",
         Kind::Integer,
@@ -354,7 +357,7 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
             |a| toml_value(&a.welch_segment),
         ),
     )
-    .searched(&["points/4", "points/16"]),
+    .searched(&["points/4", "points/16", "points/1"]),
     opt(
         "analysis.welch_overlap",
         Kind::Number,

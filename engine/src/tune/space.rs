@@ -166,6 +166,15 @@ fn floor_pow2(n: usize) -> usize {
     }
 }
 
+/// The longest Welch segment searched as the whole (sub-)window
+/// (`points/1`): short windows only, such as 2 s of a 100 Hz IMU or its
+/// half-second sub-windows, where a quarter of the points leaves too few
+/// for a spectrum (a quarter of 50 points is 12) and one or two segments
+/// of it are the resolution there is. A long window is served by its
+/// quarter and sixteenth; its whole length would give thousands of noisy
+/// bins.
+pub const WHOLE_SEGMENT_MOST: usize = 256;
+
 /// A value relative to the data (`points/4`, `window/4`): its divisor.
 fn share(value: &str, of: &str) -> Option<usize> {
     value.strip_prefix(of)?.strip_prefix('/')?.parse().ok()
@@ -266,7 +275,7 @@ pub fn resolve(base: (&Analysis, &Classifier), values: &[usize]) -> Option<Setti
     // and every bin of it but DC.
     if let Some(n) = value("welch_segment").and_then(|v| share(v, "points")) {
         let segment = floor_pow2(a.points() / n.max(1));
-        if segment < 16 {
+        if segment < 16 || (n == 1 && segment > WHOLE_SEGMENT_MOST) {
             return None;
         }
         a.welch_segment = Some(segment);
@@ -361,15 +370,20 @@ mod tests {
     /// coarse spectra still get bands (8 of them) for cepstra, and half
     /// windows start every half window, though that is half a sample period
     /// off the samples (the analysis bins samples on edges: issue 21).
-    #[test]
-    fn short_trials_get_coarse_bands_and_half_windows_every_half() {
-        let a = Analysis {
+    /// 2 s at 100 Hz (the long set cut into trials): 199 points.
+    fn short_trials() -> Analysis {
+        Analysis {
             channel: "acc".into(),
             axis: "t_s".into(),
             window: [0.0, 1.98],
             spacing: 0.01,
             ..Analysis::default()
-        };
+        }
+    }
+
+    #[test]
+    fn short_trials_get_coarse_bands_and_half_windows_every_half() {
+        let a = short_trials();
         let c = Classifier::default();
         let g = grid((&a, &c));
         assert!(
@@ -383,6 +397,36 @@ mod tests {
             .map(|w| w.hop)
             .collect();
         assert!(hops.contains(&0.495), "{hops:?}");
+    }
+
+    /// A short (sub-)window is also one segment as long as it allows: a
+    /// quarter of the trial's 50-point sub-windows (12 points) is too few,
+    /// so without it sub-windows of short trials were never searched. A
+    /// long window is not (its whole length: thousands of bins).
+    #[test]
+    fn a_short_window_is_searched_whole_and_a_long_one_is_not() {
+        let c = Classifier::default();
+        let segments = |a: &Analysis, length: Option<f64>| -> Vec<usize> {
+            let mut s: Vec<usize> = grid((a, &c))
+                .iter()
+                .filter(|s| s.analysis.windows.map(|w| w.length) == length)
+                .filter_map(|s| s.analysis.welch_segment)
+                .collect();
+            s.sort_unstable();
+            s.dedup();
+            s
+        };
+        let short = short_trials();
+        assert_eq!(segments(&short, None), [32, 128]);
+        assert_eq!(segments(&short, Some(0.495)), [32]);
+        assert_eq!(segments(&short, Some(0.99)), [16, 64]);
+        let (long, _) = fingertip();
+        assert_eq!(segments(&long, None), [512, 2048]);
+        assert!(
+            grid((&long, &c))
+                .iter()
+                .all(|s| s.analysis.welch_segment.is_some_and(|n| n <= 2048))
+        );
     }
 
     #[test]
@@ -408,8 +452,10 @@ mod tests {
     /// resolved), so a newly searched option needs only its declaration.
     #[test]
     fn every_declared_value_sets_its_option() {
+        // A long window and a short one (a whole segment only fits there).
         let (a, c) = fingertip();
-        let g = grid((&a, &c));
+        let mut g = grid((&a, &c));
+        g.extend(grid((&short_trials(), &c)));
         for (row, r) in space().iter().enumerate() {
             for (i, v) in r.values.iter().enumerate() {
                 let s = g
