@@ -22,7 +22,7 @@ use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use crate::recording::files::{
     check_output_kind, move_no_replace, not_regular, read_input, same_file_as,
 };
-use crate::recording::{Digits, MAX_RATE_HZ, RecordingError, RecordingWriter};
+use crate::recording::{Digits, MAX_RATE_HZ, MIN_RATE_HZ, RecordingError, RecordingWriter};
 
 mod checks;
 mod csv;
@@ -46,7 +46,8 @@ pub struct Request {
     pub out: PathBuf,
     /// CSV: the column holding each row's time in seconds.
     pub time_column: Option<String>,
-    /// The sampling rate in Hz (CSV without a time column; WAV files carry their own).
+    /// The sampling rate in Hz, from [`MIN_RATE_HZ`] to [`MAX_RATE_HZ`] (CSV
+    /// without a time column; WAV files carry their own).
     pub rate: Option<f64>,
     /// CSV: the channel columns, comma-separated (default: every column but the time and label columns).
     pub channels: Vec<String>,
@@ -153,6 +154,16 @@ fn bad(m: impl std::fmt::Display) -> ImportError {
     ImportError::BadInput(m.to_string())
 }
 
+/// `x` as a person would write it in a message: `0`, `-1000`, `0.001`,
+/// and `1e-310` or `1e16` only where the digits would run on.
+fn plain(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-4..1e15).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
 /// `key=value` with the value in TOML (a bare word is taken as a string).
 pub fn parse_meta(kv: &str) -> Result<(String, toml::Value), ImportError> {
     let (k, v) = kv
@@ -239,12 +250,19 @@ pub fn check_options(args: &Request) -> Result<Vec<(String, toml::Value)>, Impor
             )));
         }
     }
+    // Checked for every format before any file is read: slower, the
+    // sample times run to hundreds of digits or overflow; faster, `t_s`
+    // cannot tell one sample from the next.
     if let Some(r) = args.rate
-        && !(r.is_finite() && r > 0.0 && r <= MAX_RATE_HZ)
+        && !(r.is_finite() && (MIN_RATE_HZ..=MAX_RATE_HZ).contains(&r))
     {
         return Err(bad(format!(
-            "--rate must be a positive number of Hz up to {MAX_RATE_HZ:e} (beyond it `t_s` \
-             cannot be written apart sample by sample), got {r:e}"
+            "--rate must be from {} Hz (a sample every {} s) to {MAX_RATE_HZ:e} Hz, got {}: \
+             slower, the sample times would not be finite or would run to hundreds of digits; \
+             faster, `t_s` could not tell the samples apart",
+            plain(MIN_RATE_HZ),
+            plain(1.0 / MIN_RATE_HZ),
+            plain(r)
         )));
     }
     if let Some(l) = &args.label {

@@ -107,6 +107,61 @@ fn rates_whose_times_cannot_be_written_and_burst_zero_are_refused() {
     );
 }
 
+/// Every format timed by `--rate` (headerless text as .txt, .dat and
+/// .csv, .npy, .npz, .mat): a rate whose times overflow (1e-310 Hz) or run
+/// to hundreds of digits (1e-300 Hz), or too fast to tell samples apart,
+/// is refused before anything is written; the slowest rate taken writes
+/// times of a few digits.
+#[test]
+fn rates_too_slow_or_too_fast_for_the_times_are_refused_for_every_format() {
+    let dir = tempfile::tempdir().unwrap();
+    let formats = Path::new(REPO).join("tests/data/formats");
+    let lmt = std::fs::read(formats.join("lmt.txt")).unwrap();
+    let mut inputs = vec![formats.join("lmt.txt")];
+    for ext in ["dat", "csv"] {
+        let f = dir.path().join(format!("headerless.{ext}"));
+        std::fs::write(&f, &lmt).unwrap();
+        inputs.push(f);
+    }
+    for f in ["one.npy", "arrays.npz", "signal.mat"] {
+        inputs.push(formats.join(f));
+    }
+    for f in &inputs {
+        for (rate, said) in [
+            ("1e-310", "got 1e-310"),
+            ("1e-300", "got 1e-300"),
+            ("0.0009", "got 0.0009"),
+            ("2e15", "got 2e15"),
+        ] {
+            refused(
+                &["--label", "S", "--rate", rate, p(f)],
+                &["--rate must be from 0.001 Hz", "to 1e15 Hz", said],
+            );
+        }
+    }
+    let out = dir.path().join("out");
+    let r = run(&[
+        "import",
+        "--label",
+        "S",
+        "--rate",
+        "0.001",
+        "--out",
+        p(&out),
+        p(&inputs[0]),
+    ]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let rec = recording::read(&out.join("S/lmt.csv")).unwrap();
+    assert_eq!(rec.data[0][299], 299_000.0);
+    let text = std::fs::read_to_string(out.join("S/lmt.csv")).unwrap();
+    assert!(
+        text.lines()
+            .filter(|l| !l.starts_with('#'))
+            .all(|l| l.len() < 30),
+        "{text}"
+    );
+}
+
 #[test]
 fn a_blank_label_or_one_with_spaces_at_its_ends_is_refused() {
     let f = format!("{DATA}/bom.csv");

@@ -293,15 +293,11 @@ fn sample_times(
         }
         (None, None) => unreachable!("mapping() refuses a file with neither"),
     };
-    // A rate too small, or times too far apart, overflow to inf (or NaN).
+    // Times too far apart overflow to inf (or NaN) when shared within a
+    // burst; a rate too small for its times is refused before any file.
     if let Some(i) = time.iter().position(|t| !t.is_finite()) {
-        let from = match args.rate {
-            // Only a rate below about 1e-300 overflows: print it as such.
-            Some(r) => format!("--rate {r:e}"),
-            None => "the time column's intervals".to_string(),
-        };
         return Err(bad(format!(
-            "{origin}: the time of sample {} overflows (it is {}, from {from})",
+            "{origin}: the time of sample {} overflows (it is {}, from the time column's intervals)",
             i + 1,
             time[i]
         )));
