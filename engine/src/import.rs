@@ -265,6 +265,11 @@ pub fn check_options(args: &Request) -> Result<Vec<(String, toml::Value)>, Impor
             plain(r)
         )));
     }
+    if args.burst == 0 {
+        return Err(bad(
+            "--burst 0: a row holds at least one sample of each channel (--burst 1, the default)",
+        ));
+    }
     if let Some(l) = &args.label {
         crate::recording::check_label(l).map_err(|e| bad(format!("--label: {e}")))?;
     }

@@ -70,7 +70,9 @@ fn csv_only_flags_given_for_a_wav_are_refused_by_name() {
     // Beside a CSV they apply to it, and the WAV is named in a warning.
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    let csv = format!("{DATA}/bom.csv");
+    let untimed = dir.path().join("untimed.csv");
+    std::fs::write(&untimed, "acc\n1\n2\n").unwrap();
+    let csv = p(&untimed).to_string();
     let r = run(&[
         "import",
         "--label",
@@ -253,4 +255,68 @@ fn bad_names_are_blamed_on_the_input_and_the_flag_not_the_staging_folder() {
     );
     assert!(!r.stderr.contains(".import-"), "{r:?}");
     assert_eq!(std::fs::read_to_string(&file).unwrap(), "mine");
+}
+
+/// A CSV whose column is named like the time (`time`, `t_s`, any case):
+/// with `--rate` it is refused rather than kept as a channel `profile new`
+/// would choose, naming `--time-column` and the other columns; without a
+/// rate, the message names the column to take the times from.
+#[test]
+fn a_time_column_is_not_kept_as_a_channel_under_rate() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = |name: &str, text: &str| {
+        let f = dir.path().join(name);
+        std::fs::write(&f, text).unwrap();
+        p(&f).to_string()
+    };
+    let three = csv("three.csv", "time,acc,force\n0,1,2\n0.001,3,4\n");
+    refused(
+        &["--label", "S", "--rate", "1000", &three],
+        &[
+            &three,
+            "column `time` looks like the time",
+            "--time-column time instead of --rate",
+            "--channels acc,force",
+        ],
+    );
+    let ts = csv("ts.csv", "t_s,acc\n0,1\n0.001,3\n");
+    let r = refused(
+        &["--label", "S", "--rate", "1000", &ts],
+        &[&ts, "column `t_s`", "--time-column t_s"],
+    );
+    assert!(!r.stderr.contains("appears twice"), "{r:?}");
+    refused(
+        &[
+            "--label",
+            "S",
+            "--rate",
+            "1000",
+            "--channels",
+            "t_s,acc",
+            &ts,
+        ],
+        &[&ts, "`t_s` (--channels)", "--time-column t_s"],
+    );
+    let stamp = csv("stamp.csv", "Timestamp,acc\n0,1\n0.001,3\n");
+    refused(
+        &["--label", "S", &stamp],
+        &[
+            &stamp,
+            "give --time-column or --rate",
+            "`Timestamp` looks like the time: --time-column Timestamp",
+        ],
+    );
+    // The ways out: the times from the column, or the channels named.
+    for way in [
+        &["--time-column", "time"][..],
+        &["--rate", "1000", "--channels", "acc,force"],
+    ] {
+        let out = dir.path().join(format!("out{}", way.len()));
+        let mut args = vec!["import", "--label", "S", "--out", p(&out), &three];
+        args.extend(way);
+        let r = run(&args);
+        assert_eq!(r.code, Some(0), "{args:?}: {r:?}");
+        let rec = recording::read(&out.join("S/three.csv")).unwrap();
+        assert_eq!(rec.columns, ["t_s", "acc", "force"]);
+    }
 }

@@ -60,14 +60,25 @@ pub(super) fn check_written_names(
 ) -> Result<(), ImportError> {
     let mut columns = vec!["t_s"];
     columns.extend(imp.names.iter().map(String::as_str));
-    if let Err(e) = crate::recording::check_columns(&columns) {
-        let from = if !args.names.is_empty() {
-            "--names"
-        } else if !args.channels.is_empty() {
-            "--channels"
+    let from = if !args.names.is_empty() {
+        "--names"
+    } else if !args.channels.is_empty() {
+        "--channels"
+    } else {
+        "the header"
+    };
+    // A channel named `t_s` would meet the recording's own time column.
+    if imp.names.iter().any(|n| n == "t_s") {
+        let way = if from == "--names" {
+            "choose another name"
         } else {
-            "the header"
+            "take the times from it with --time-column t_s, or rename the channel with --names A,B,…"
         };
+        return Err(bad(format!(
+            "{origin}: a channel named `t_s` ({from}) would be a second time column: {way}"
+        )));
+    }
+    if let Err(e) = crate::recording::check_columns(&columns) {
         return Err(bad(format!(
             "{origin}: the channel names ({from}): {e}; give others with --names A,B,…"
         )));

@@ -7,6 +7,37 @@
 use super::{ImportError, Imported, Request, bad};
 use crate::recording::{Digits, time_decimals};
 
+/// Column names that say a column holds the sample times (compared
+/// without case): under `--rate` such a column would be kept as a
+/// channel, analysed as a signal, and chosen by `profile new`.
+const TIME_NAMES: [&str; 18] = [
+    "t",
+    "t_s",
+    "ts",
+    "time",
+    "time_s",
+    "time_sec",
+    "times",
+    "time (s)",
+    "time(s)",
+    "time [s]",
+    "time[s]",
+    "timestamp",
+    "timestamps",
+    "seconds",
+    "secs",
+    "sec",
+    "elapsed",
+    "elapsed_s",
+];
+
+/// The first column whose name says it is the time, if any.
+fn time_like(cols: &[String]) -> Option<&str> {
+    cols.iter()
+        .map(|c| c.as_str())
+        .find(|c| TIME_NAMES.iter().any(|t| c.eq_ignore_ascii_case(t)))
+}
+
 /// The header line: where it is, the field separator, the column names.
 struct Header {
     /// Its line number, from 1.
@@ -110,13 +141,12 @@ fn mapping(header: &Header, origin: &str, args: &Request) -> Result<Mapping, Imp
         .as_deref()
         .map(|l| find(l, "label"))
         .transpose()?;
-    let channels = channel_columns(&header.cols, time, label, args, &find)?;
-    let burst = args.burst;
-    if burst == 0 {
-        return Err(bad(
-            "--burst 0: a row holds at least one sample of each channel (--burst 1, the default)",
-        ));
+    if time.is_none() {
+        check_no_time_kept(header, label, origin, args)?;
     }
+    let channels = channel_columns(&header.cols, time, label, args, &find)?;
+    // `--burst 0` is refused by `check_options`, before any file.
+    let burst = args.burst.max(1);
     if channels.is_empty() || !channels.len().is_multiple_of(burst) {
         return Err(bad(format!(
             "{origin}: {} channel column(s) cannot be split into bursts of {burst}",
@@ -137,9 +167,6 @@ fn mapping(header: &Header, origin: &str, args: &Request) -> Result<Mapping, Imp
     } else {
         (1..=n_channels).map(|c| format!("ch{c}")).collect()
     };
-    if time.is_none() && args.rate.is_none() {
-        return Err(bad(format!("{origin}: give --time-column or --rate")));
-    }
     Ok(Mapping {
         time,
         label,
@@ -147,6 +174,45 @@ fn mapping(header: &Header, origin: &str, args: &Request) -> Result<Mapping, Imp
         burst,
         names,
     })
+}
+
+/// Without a time column: a rate is needed, and a column named like the
+/// time must not become a channel unnoticed (with `--channels` the user
+/// has chosen the columns).
+fn check_no_time_kept(
+    header: &Header,
+    label: Option<usize>,
+    origin: &str,
+    args: &Request,
+) -> Result<(), ImportError> {
+    let label = label.map(|i| header.cols[i].as_str());
+    let time = time_like(&header.cols).filter(|&t| Some(t) != label);
+    match (args.rate, time) {
+        (None, None) => Err(bad(format!("{origin}: give --time-column or --rate"))),
+        (None, Some(t)) => Err(bad(format!(
+            "{origin}: give --time-column or --rate (column `{t}` looks like the time: \
+             --time-column {t}, if it holds seconds)"
+        ))),
+        (Some(_), Some(t)) if args.channels.is_empty() => {
+            let others: Vec<&str> = header
+                .cols
+                .iter()
+                .map(String::as_str)
+                .filter(|&c| c != t && Some(c) != label)
+                .collect();
+            let or = if others.is_empty() {
+                format!("or keep it as a signal with --channels {t}")
+            } else {
+                format!("or leave it out with --channels {}", others.join(","))
+            };
+            Err(bad(format!(
+                "{origin}: column `{t}` looks like the time, and with --rate it would be kept \
+                 as a channel: take the times from it with --time-column {t} instead of \
+                 --rate (if it holds seconds), {or}"
+            )))
+        }
+        (Some(_), _) => Ok(()),
+    }
 }
 
 /// The channel columns' indices: `--channels` in order (each named once),
