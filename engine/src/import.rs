@@ -67,11 +67,12 @@ pub struct Request {
     pub force: bool,
     /// Compress each recording to OUT/<label>/<file stem>.csv.gz (gzip -9).
     pub gzip: bool,
-    /// Cut each input into consecutive trials this many seconds long
-    /// (<stem>-seg001.csv, …, in time order), for one long recording per material.
+    /// Cut each input into consecutive trials this many seconds long, at
+    /// least 16 samples (<stem>-seg001.csv, …, in time order), for one long
+    /// recording per material.
     pub split: Option<f64>,
-    /// With --split: seconds from one trial's start to the next (default: the
-    /// trial's length, no overlap).
+    /// With --split: seconds from one trial's start to the next, at least a
+    /// tenth of the trial's length (default: the length, no overlap).
     pub split_hop: Option<f64>,
     /// Files converted at once (default: the number of cores; 0 means the same).
     pub threads: Option<usize>,
@@ -274,7 +275,7 @@ pub fn check_options(args: &Request) -> Result<Vec<(String, toml::Value)>, Impor
         crate::recording::check_label(l).map_err(|e| bad(format!("--label: {e}")))?;
     }
     if let Some(length) = args.split {
-        split::check(length, args.split_hop)?;
+        split::check(length, args.split_hop, args.rate)?;
     }
     Ok(extra)
 }
@@ -401,8 +402,8 @@ fn stage(
     let Some(length) = args.split else {
         return Ok(vec![stage_one(f, &imp, &label, &stem, args, staging)?]);
     };
-    let (length, hop) = split::check(length, args.split_hop)?;
-    let parts = split::split(&imp, &origin, length, hop)?;
+    let cut = split::check(length, args.split_hop, args.rate)?;
+    let parts = split::split(&imp, &origin, cut)?;
     parts
         .iter()
         .enumerate()

@@ -50,12 +50,13 @@ pub struct ImportArgs {
     /// Compress each recording to OUT/<label>/<file stem>.csv.gz (gzip -9).
     #[arg(long)]
     pub gzip: bool,
-    /// Cut each input into consecutive trials this many seconds long
-    /// (<stem>-seg001.csv, …, in time order), for one long recording per material.
+    /// Cut each input into consecutive trials this many seconds long, at
+    /// least 16 samples (<stem>-seg001.csv, …, in time order), for one long
+    /// recording per material.
     #[arg(long, value_name = "SECONDS")]
     pub split: Option<f64>,
-    /// With --split: seconds from one trial's start to the next (default: the
-    /// trial's length, no overlap).
+    /// With --split: seconds from one trial's start to the next, at least a
+    /// tenth of the trial's length (default: the length, no overlap).
     #[arg(long, value_name = "SECONDS", requires = "split")]
     pub split_hop: Option<f64>,
     /// Files converted at once (default: the number of cores; 0 means the same).
