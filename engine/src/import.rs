@@ -76,6 +76,9 @@ pub struct Request {
     pub split_hop: Option<f64>,
     /// Files converted at once (default: the number of cores; 0 means the same).
     pub threads: Option<usize>,
+    /// Begin each recording's name with the name of the folder above its
+    /// input's own (days/day1/felt/trial1.txt → OUT/felt/day1-trial1.csv).
+    pub prefix_parent: bool,
 }
 
 impl Default for Request {
@@ -97,6 +100,7 @@ impl Default for Request {
             split: None,
             split_hop: None,
             threads: None,
+            prefix_parent: false,
         }
     }
 }
@@ -352,6 +356,31 @@ fn label_of(
     Ok(label)
 }
 
+/// The name of the folder above input `f`'s own (`day1` for
+/// `days/day1/felt/trial1.txt`), if it has one.
+fn folder_above(f: &Path) -> Option<String> {
+    let path = f.canonicalize().ok()?;
+    let name = path.parent()?.parent()?.file_name()?;
+    Some(name.to_string_lossy().into_owned())
+}
+
+/// `--prefix-parent`'s prefix for input `f`: the folder above its own.
+fn prefix_of(f: &Path, origin: &str) -> Result<String, ImportError> {
+    let prefix = folder_above(f).ok_or_else(|| {
+        bad(format!(
+            "{origin}: --prefix-parent: its folder has no folder above it to name the recording by"
+        ))
+    })?;
+    if prefix.starts_with('.') {
+        // OUT/<label>/.x-name.csv would be hidden, and every command skips it.
+        return Err(bad(format!(
+            "{origin}: --prefix-parent: the folder above its own, {prefix:?}, is hidden and \
+             would give a hidden recording: leave out --prefix-parent, or rename the folder"
+        )));
+    }
+    Ok(prefix)
+}
+
 /// Reads, parses and writes input `f` under `staging` (as `<label>/<stem>.csv`
 /// or `.csv.gz`; with `--split`, one `<stem>-segNNN` per trial).
 fn stage(
@@ -384,6 +413,11 @@ fn stage(
              command skips: rename the file without the leading '.'"
         )));
     }
+    let stem = if args.prefix_parent {
+        format!("{}-{stem}", prefix_of(f, &origin)?)
+    } else {
+        stem
+    };
     let mut imp = parse_file(bytes, &origin, &ext, args)?;
     let label = label_of(f, &origin, args, imp.label.take())?;
     imp.meta
@@ -444,6 +478,7 @@ fn stage_one(
     }
     let staged = write_recording(&staging.join(&csv), imp, label, args.gzip)?;
     Ok(Staged {
+        input: f.to_path_buf(),
         path,
         other,
         staged,

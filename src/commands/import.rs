@@ -62,6 +62,11 @@ pub struct ImportArgs {
     /// Files converted at once (default: the number of cores; 0 means the same).
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
+    /// Begin each recording's name with the name of the folder above its
+    /// input's own, for inputs of one name in several session folders
+    /// (days/day1/felt/trial1.txt → OUT/felt/day1-trial1.csv).
+    #[arg(long)]
+    pub prefix_parent: bool,
 }
 
 impl From<ImportArgs> for Request {
@@ -83,6 +88,7 @@ impl From<ImportArgs> for Request {
             split: a.split,
             split_hop: a.split_hop,
             threads: a.threads,
+            prefix_parent: a.prefix_parent,
         }
     }
 }

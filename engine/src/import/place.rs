@@ -11,6 +11,8 @@ use crate::recording::files::move_no_replace;
 
 /// One input converted into the staging folder, waiting to be moved in place.
 pub(super) struct Staged {
+    /// The input it was converted from.
+    pub input: PathBuf,
     /// Where it goes, and the other name of the same recording (`.csv`
     /// beside `.csv.gz`), replaced with it under `--force`.
     pub path: PathBuf,
@@ -52,16 +54,15 @@ pub(super) fn settle(
     results: Vec<Option<Result<Vec<Staged>, ImportError>>>,
 ) -> Result<Vec<PathBuf>, ImportError> {
     let mut staged: Vec<Staged> = Vec::new();
-    let mut places = std::collections::HashSet::new();
+    // Where each recording goes: the index of the staged one going there.
+    let mut places = std::collections::HashMap::new();
     for r in results {
         // A job not taken comes after a failure, which is met first.
         for s in r.ok_or_else(|| ImportError::Runtime("an input was skipped".into()))?? {
-            if !places.insert(s.path.clone()) {
-                return Err(bad(format!(
-                    "two inputs would both write {}",
-                    s.path.display()
-                )));
+            if let Some(&first) = places.get(&s.path) {
+                return Err(one_place_for_two(&staged[first], &s, args));
             }
+            places.insert(s.path.clone(), staged.len());
             staged.push(s);
         }
     }
@@ -70,6 +71,30 @@ pub(super) fn settle(
     }
     crate::recording::sync_folder(staging).map_err(|e| ImportError::Runtime(e.to_string()))?;
     place(&staged, args.force)
+}
+
+/// Two staged recordings bound for one place: both inputs named, and the
+/// way to import them.
+fn one_place_for_two(a: &Staged, b: &Staged, args: &Request) -> ImportError {
+    let (ia, ib) = (a.input.display(), b.input.display());
+    let same = a.input.canonicalize().ok();
+    if same.is_some() && same == b.input.canonicalize().ok() {
+        return bad(format!(
+            "{ia} is given twice (also as {ib}): name each input once"
+        ));
+    }
+    let way = match (super::folder_above(&a.input), super::folder_above(&b.input)) {
+        (Some(fa), Some(fb)) if fa != fb && !args.prefix_parent => format!(
+            "give --prefix-parent to begin each recording's name with the folder above its \
+             input's ({fa}-…, {fb}-…), or import them in two runs into different --out folders"
+        ),
+        _ => "rename one of them, or import them in two runs into different --out folders"
+            .to_string(),
+    };
+    bad(format!(
+        "{ia} and {ib} would both be written to {}: {way}",
+        a.path.display()
+    ))
 }
 
 /// Moves every staged recording in place. Without `force` each move is
@@ -133,6 +158,7 @@ mod tests {
         let s = staging.join(name);
         std::fs::write(&s, text).unwrap();
         Staged {
+            input: PathBuf::from(name),
             path: out.join(name),
             other: out.join(format!("{name}.gz")),
             staged: s,
