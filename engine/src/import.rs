@@ -30,7 +30,7 @@ mod place;
 mod split;
 mod text;
 mod wav;
-use checks::{check_written_names, csv_only_flags_for_wav};
+use checks::{check_written_names, flags_a_wav_ignores};
 pub use csv::parse_csv;
 use place::{Staged, remove_abandoned_staging, settle};
 pub use wav::parse_wav;
@@ -47,7 +47,8 @@ pub struct Request {
     /// CSV: the column holding each row's time in seconds.
     pub time_column: Option<String>,
     /// The sampling rate in Hz, from [`MIN_RATE_HZ`] to [`MAX_RATE_HZ`] (CSV
-    /// without a time column; WAV files carry their own).
+    /// without a time column, headerless text, .npy, .npz and .mat; WAV files
+    /// carry their own).
     pub rate: Option<f64>,
     /// CSV: the channel columns, comma-separated (default: every column but the time and label columns).
     pub channels: Vec<String>,
@@ -197,7 +198,8 @@ pub fn parse_meta(kv: &str) -> Result<(String, toml::Value), ImportError> {
 
 /// Writes `imp` as a recording at `path` (a `.csv`), each column with the
 /// digits `imp` asks for, then gzips it to `path.gz` when `gzip`; the file
-/// written. Not fsynced: the caller syncs the batch.
+/// written. Not fsynced: the caller syncs the batch. What the format cannot
+/// hold is a [`ImportError::BadInput`] naming neither file.
 pub fn write_recording(
     path: &Path,
     imp: &Imported,
@@ -216,9 +218,11 @@ pub fn write_recording(
     let mut w =
         RecordingWriter::create_with_digits(path, &meta, &columns, &digits).map_err(|e| {
             match e {
+                // What the recording cannot hold, without the path written
+                // to (a staging file): the caller names the input.
+                RecordingError::Write { reason, .. } => ImportError::BadInput(reason),
                 // A folder that cannot be made or written is no fault of the input.
-                RecordingError::Io { .. } => ImportError::Runtime(e.to_string()),
-                _ => ImportError::BadInput(format!("{}: {e}", path.display())),
+                _ => ImportError::Runtime(e.to_string()),
             }
         })?;
     w.defer_sync();
@@ -294,6 +298,11 @@ pub fn parse_file(
     ext: &str,
     args: &Request,
 ) -> Result<Imported, ImportError> {
+    if bytes.is_empty() {
+        return Err(bad(format!(
+            "{origin}: the file is empty (0 bytes): nothing to import"
+        )));
+    }
     match ext.to_ascii_lowercase().as_str() {
         "wav" | "wave" => {
             let mut w = parse_wav(&bytes, origin)?;
@@ -312,6 +321,11 @@ pub fn parse_file(
         "csv" | "txt" | "tsv" | "dat" => {
             let text =
                 String::from_utf8(bytes).map_err(|_| bad(format!("{origin}: not UTF-8 text")))?;
+            if !text::has_lines(&text) {
+                return Err(bad(format!(
+                    "{origin}: holds no header and no samples, only blank or comment lines"
+                )));
+            }
             if text::is_headerless(&text) {
                 text::parse(&text, origin, args)
             } else {
@@ -476,7 +490,11 @@ fn stage_one(
             there.display()
         )));
     }
-    let staged = write_recording(&staging.join(&csv), imp, label, args.gzip)?;
+    let staged =
+        write_recording(&staging.join(&csv), imp, label, args.gzip).map_err(|e| match e {
+            ImportError::BadInput(m) => bad(format!("{}: {m}", f.display())),
+            runtime => runtime,
+        })?;
     Ok(Staged {
         input: f.to_path_buf(),
         path,
@@ -538,7 +556,7 @@ fn run_jobs<T: Send>(
 /// number of threads.
 pub fn run(args: &Request, report: &dyn Report) -> Result<Vec<PathBuf>, ImportError> {
     let extra = check_options(args)?;
-    if let Some(warning) = csv_only_flags_for_wav(args)? {
+    if let Some(warning) = flags_a_wav_ignores(args)? {
         report.warn(&warning);
     }
     let threads = match args.threads {

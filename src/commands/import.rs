@@ -20,7 +20,8 @@ pub struct ImportArgs {
     /// CSV: the column holding each row's time in seconds.
     #[arg(long, value_name = "NAME", conflicts_with = "rate")]
     pub time_column: Option<String>,
-    /// The sampling rate in Hz, from 0.001 to 1e15 (CSV without a time column; WAV files carry their own).
+    /// The sampling rate in Hz, from 0.001 to 1e15 (CSV without a time column, headerless
+    /// text, .npy, .npz and .mat; WAV files carry their own).
     #[arg(long, value_name = "HZ")]
     pub rate: Option<f64>,
     /// CSV: the channel columns, comma-separated (default: every column but the time and label columns).

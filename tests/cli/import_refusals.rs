@@ -65,7 +65,12 @@ fn csv_only_flags_given_for_a_wav_are_refused_by_name() {
         if flag == "--label-column" {
             args.drain(0..2);
         }
-        refused(&args, &[&f, flag, "CSV files only"]);
+        let scope = if flag == "--rate" {
+            "--rate applies to files without a rate of their own (CSV, text, .npy, .npz, .mat)"
+        } else {
+            "applies to CSV files only"
+        };
+        refused(&args, &[&f, flag, scope, "leave it out"]);
     }
     // Beside a CSV they apply to it, and the WAV is named in a warning.
     let dir = tempfile::tempdir().unwrap();
@@ -87,7 +92,7 @@ fn csv_only_flags_given_for_a_wav_are_refused_by_name() {
     assert_eq!(r.code, Some(0), "{r:?}");
     assert!(
         r.stderr
-            .contains("warning: --rate applies to the CSV files only; tests/data/import/mono.wav"),
+            .contains("warning: --rate applies to files without a rate of their own (CSV, text, .npy, .npz, .mat); tests/data/import/mono.wav"),
         "{r:?}"
     );
     // Without them the same file imports.
@@ -318,5 +323,80 @@ fn a_time_column_is_not_kept_as_a_channel_under_rate() {
         assert_eq!(r.code, Some(0), "{args:?}: {r:?}");
         let rec = recording::read(&out.join("S/three.csv")).unwrap();
         assert_eq!(rec.columns, ["t_s", "acc", "force"]);
+    }
+}
+
+/// Each refusal names the input once (never the staging folder), the line
+/// where there is one, and numbers as written: `--meta` of a key `--split`
+/// writes, `--names` counted against a CSV, a time column that goes back,
+/// empty files, an `.npz`/`.mat` whose scalar looks like the rate, `--rate`
+/// 0 and -1e3.
+#[test]
+fn messages_name_the_input_once_and_the_numbers_plainly() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = |name: &str, text: &str| {
+        let f = dir.path().join(name);
+        std::fs::write(&f, text).unwrap();
+        p(&f).to_string()
+    };
+    let trace = file("trace.txt", &"1\n2\n3\n".repeat(100));
+    let r = refused(
+        &[
+            "--label",
+            "S",
+            "--rate",
+            "100",
+            "--meta",
+            "segment=1",
+            "--split",
+            "0.5",
+            &trace,
+        ],
+        &["--meta segment", "with --split", "choose another key"],
+    );
+    assert_eq!(r.stderr.matches("trace.txt").count(), 1, "{r:?}");
+    let two = file("two.csv", "time,acc,force\n0,1,2\n0.001,3,4\n");
+    refused(
+        &[
+            "--label",
+            "S",
+            "--time-column",
+            "time",
+            "--names",
+            "a",
+            &two,
+        ],
+        &[&format!(
+            "--names gives 1 name(s) but {two} has 2 channel(s) (acc, force)"
+        )],
+    );
+    let back = file("back.csv", "t,acc\n0,1\n0.1,2\n0.05,3\n");
+    refused(
+        &["--label", "S", "--time-column", "t", &back],
+        &[&format!(
+            "{back}:4: the time column `t` goes from 0.1 to 0.05"
+        )],
+    );
+    for empty in ["empty.txt", "empty.mat", "empty.npy"] {
+        let f = file(empty, "");
+        refused(
+            &["--label", "S", "--rate", "100", &f],
+            &[&format!("{f}: the file is empty")],
+        );
+    }
+    let notes = file("notes.txt", "# a header comment\n\n% another\n");
+    refused(
+        &["--label", "S", "--rate", "100", &notes],
+        &[&notes, "no samples, only blank or comment lines"],
+    );
+    for f in ["arrays.npz", "signal.mat"] {
+        let f = format!("tests/data/formats/{f}");
+        refused(
+            &["--label", "S", &f],
+            &[&f, "scalar `fs` = 1000 looks like one", "give --rate 1000"],
+        );
+    }
+    for (rate, got) in [("--rate=0", "got 0:"), ("--rate=-1e3", "got -1000:")] {
+        refused(&["--label", "S", rate, &trace], &[got]);
     }
 }

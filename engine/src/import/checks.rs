@@ -4,13 +4,14 @@
 
 use std::path::PathBuf;
 
-use super::{ImportError, Imported, Request, bad};
+use super::{ImportError, Imported, Request, bad, split};
 
-/// The flags that mean something for a CSV only, given for WAV inputs,
-/// which carry their own rate and channels: refused when every input is a
-/// WAV (nothing takes them), else a warning to print (they apply to the CSV
-/// files alone), so the user never believes they reached a WAV.
-pub(super) fn csv_only_flags_for_wav(args: &Request) -> Result<Option<String>, ImportError> {
+/// The flags a WAV file does not take, which carries its own rate and
+/// channels: refused when every input is a WAV (nothing takes them), else a
+/// warning to print (they apply to the other files alone), so the user
+/// never believes they reached a WAV. `--rate` is for every format without
+/// a rate of its own; the others are for CSV files only.
+pub(super) fn flags_a_wav_ignores(args: &Request) -> Result<Option<String>, ImportError> {
     let is_wav = |f: &PathBuf| {
         f.extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("wav") || e.eq_ignore_ascii_case("wave"))
@@ -18,33 +19,47 @@ pub(super) fn csv_only_flags_for_wav(args: &Request) -> Result<Option<String>, I
     let Some(wav) = args.files.iter().find(|f| is_wav(f)) else {
         return Ok(None);
     };
-    let given = [
-        ("--rate", args.rate.is_some()),
+    let csv_only = [
         ("--time-column", args.time_column.is_some()),
         ("--channels", !args.channels.is_empty()),
         ("--label-column", args.label_column.is_some()),
         ("--burst", args.burst != 1),
         ("--delimiter", args.delimiter.is_some()),
     ];
-    let flags: Vec<&str> = given
+    let csv_only: Vec<&str> = csv_only
         .iter()
         .filter(|(_, on)| *on)
         .map(|(f, _)| *f)
         .collect();
-    if flags.is_empty() {
+    let mut said = Vec::new();
+    if args.rate.is_some() {
+        said.push(
+            "--rate applies to files without a rate of their own (CSV, text, .npy, .npz, .mat)"
+                .to_string(),
+        );
+    }
+    let verb = match (said.is_empty(), csv_only.len()) {
+        (false, _) => "",
+        (true, 1) => " applies",
+        (true, _) => " apply",
+    };
+    if !csv_only.is_empty() {
+        said.push(format!("{}{verb} to CSV files only", csv_only.join(", ")));
+    }
+    if said.is_empty() {
         return Ok(None);
     }
-    let flags = flags.join(", ");
+    let one = usize::from(args.rate.is_some()) + csv_only.len() == 1;
+    let said = said.join(", ");
     if args.files.iter().all(is_wav) {
         return Err(bad(format!(
-            "{}: {flags} applies to CSV files only (a WAV file carries its own rate and \
-             channels): leave it out",
-            wav.display()
+            "{}: {said}; a WAV file carries its own rate and channels: leave {} out",
+            wav.display(),
+            if one { "it" } else { "them" }
         )));
     }
     Ok(Some(format!(
-        "warning: {flags} applies to the CSV files only; {} and any other WAV file keep \
-         their own rate and channels",
+        "warning: {said}; {} and any other WAV file keep their own rate and channels",
         wav.display()
     )))
 }
@@ -89,6 +104,17 @@ pub(super) fn check_written_names(
     {
         return Err(bad(format!(
             "{origin}: --meta {k}: the import writes `{k}` itself; choose another key"
+        )));
+    }
+    // Each trial's own keys are added after this check, when it is cut.
+    if args.split.is_some()
+        && let Some((k, _)) = extra
+            .iter()
+            .find(|(k, _)| split::KEYS.contains(&k.as_str()))
+    {
+        return Err(bad(format!(
+            "{origin}: --meta {k}: with --split the import writes `{k}` itself, for each \
+             trial; choose another key"
         )));
     }
     Ok(())

@@ -4,7 +4,7 @@
 //! channel consecutive, flattened in order); the label from a
 //! `--label-column` (constant within a file).
 
-use super::{ImportError, Imported, Request, bad};
+use super::{ImportError, Imported, Request, bad, plain};
 use crate::recording::{Digits, time_decimals};
 
 /// Column names that say a column holds the sample times (compared
@@ -86,9 +86,11 @@ pub fn parse_csv(text: &str, origin: &str, args: &Request) -> Result<Imported, I
         .lines()
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
-    let (hline, header) = lines
-        .next()
-        .ok_or_else(|| bad(format!("{origin}: no header line")))?;
+    let (hline, header) = lines.next().ok_or_else(|| {
+        bad(format!(
+            "{origin}: holds no header and no samples, only blank or comment lines"
+        ))
+    })?;
     let header = header_of(hline + 1, header, args);
     let map = mapping(&header, origin, args)?;
     let rows = rows(lines, &header, &map, origin)?;
@@ -156,9 +158,11 @@ fn mapping(header: &Header, origin: &str, args: &Request) -> Result<Mapping, Imp
     let n_channels = channels.len() / burst;
     let names: Vec<String> = if !args.names.is_empty() {
         if args.names.len() != n_channels {
+            let columns: Vec<&str> = channels.iter().map(|&i| header.cols[i].as_str()).collect();
             return Err(bad(format!(
-                "--names gives {} name(s) but there are {n_channels} channel(s)",
-                args.names.len()
+                "--names gives {} name(s) but {origin} has {n_channels} channel(s) ({})",
+                args.names.len(),
+                columns.join(", ")
             )));
         }
         args.names.clone()
@@ -286,7 +290,20 @@ fn rows<'a>(
                 })
         };
         if let Some(t) = map.time {
-            out.times.push(num(t)?);
+            let time = num(t)?;
+            if let Some(&before) = out.times.last()
+                && time <= before
+            {
+                return Err(bad(format!(
+                    "{origin}:{}: the time column `{}` goes from {} to {}: it must increase \
+                     row by row",
+                    ln + 1,
+                    cols[t],
+                    plain(before),
+                    plain(time)
+                )));
+            }
+            out.times.push(time);
         }
         if let Some(l) = map.label {
             match &out.label {
@@ -328,11 +345,7 @@ fn sample_times(
             (0..n_rows * burst).map(|i| i as f64 / rate).collect()
         }
         (Some(_), rate) => {
-            if row_times.windows(2).any(|w| w[1] <= w[0]) {
-                return Err(bad(format!(
-                    "{origin}: the time column must increase row by row"
-                )));
-            }
+            // `rows` has checked that the times increase.
             // Within a burst, samples are 1/rate apart; without a rate, the
             // median row interval shared evenly.
             let dt = match rate {

@@ -19,6 +19,9 @@ pub const MIN_TRIAL_SAMPLES: usize = 16;
 /// (`--split 2 --split-hop 0.001` wrote 58,001 files, 1.9 GB).
 const MIN_HOP_PART: f64 = 0.1;
 
+/// The metadata keys each trial gets: its number, start and length.
+pub const KEYS: [&str; 3] = ["segment", "segment_start_s", "segment_length_s"];
+
 /// `--split` and `--split-hop`, checked: how to cut each input.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Cut {
@@ -138,10 +141,11 @@ pub fn split(imp: &Imported, origin: &str, cut: Cut) -> Result<Vec<Imported>, Im
             )));
         }
         let mut meta = imp.meta.clone();
+        let [number, start_s, length_s] = KEYS.map(String::from);
         meta.extend([
-            ("segment".to_string(), toml::Value::Integer(j as i64 + 1)),
-            ("segment_start_s".to_string(), toml::Value::Float(start)),
-            ("segment_length_s".to_string(), toml::Value::Float(length)),
+            (number, toml::Value::Integer(j as i64 + 1)),
+            (start_s, toml::Value::Float(start)),
+            (length_s, toml::Value::Float(length)),
         ]);
         out.push(Imported {
             label: imp.label.clone(),
