@@ -30,7 +30,7 @@ mod place;
 mod split;
 mod text;
 mod wav;
-use checks::{check_written_names, flags_a_wav_ignores};
+use checks::{check_written_names, flags_a_wav_ignores, one_folder_for_every_label};
 pub use csv::parse_csv;
 use place::{Staged, remove_abandoned_staging, settle};
 pub use wav::parse_wav;
@@ -584,6 +584,12 @@ pub fn run(args: &Request, report: &dyn Report) -> Result<Vec<PathBuf>, ImportEr
     if moved.is_err() && !out_existed {
         // Only empty folders go: the ones this import made.
         let _ = std::fs::remove_dir(&args.out);
+    }
+    // Said once the import is done, so a refusal stays one line.
+    if moved.is_ok()
+        && let Some(warning) = one_folder_for_every_label(args)
+    {
+        report.warn(&warning);
     }
     moved
 }

@@ -209,3 +209,56 @@ fn trials_too_short_for_a_spectrum_and_hops_past_90_percent_overlap_are_refused(
         &["--split-hop", "sample period"],
     );
 }
+
+/// `import raw/long/*.csv --split 2`: every trial is labelled "long", the
+/// inputs' one folder. It imports (the label is each file's folder) and
+/// says so in one warning; inputs in a folder per label get none.
+#[test]
+fn inputs_all_in_one_folder_are_imported_with_a_warning_that_they_share_its_label() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = long_traces(&dir.path().join("in"));
+    let long = dir.path().join("raw").join("long");
+    fs::create_dir_all(&long).unwrap();
+    let mut together = Vec::new();
+    for f in &files {
+        let to = long.join(Path::new(f).file_name().unwrap());
+        fs::copy(f, &to).unwrap();
+        together.push(p(&to).to_string());
+    }
+    let rec = dir.path().join("rec");
+    let mut args = vec!["import", "--rate", "100", "--split", "2", "--out", p(&rec)];
+    args.extend(together.iter().map(String::as_str));
+    let r = run(&args);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let warnings: Vec<&str> = r
+        .stderr
+        .lines()
+        .filter(|l| l.starts_with("warning:"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "{r:?}");
+    for s in [
+        "all 3 inputs are in one folder",
+        p(&long),
+        "labelled \"long\"",
+        "the label is each file's folder",
+        "--label",
+    ] {
+        assert!(warnings[0].contains(s), "{s:?} missing: {r:?}");
+    }
+    assert_eq!(fs::read_dir(rec.join("long")).unwrap().count(), 90);
+
+    let apart = dir.path().join("apart");
+    let mut args = vec![
+        "import",
+        "--rate",
+        "100",
+        "--split",
+        "2",
+        "--out",
+        p(&apart),
+    ];
+    args.extend(files.iter().map(String::as_str));
+    let r = run(&args);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(!r.stderr.contains("warning"), "{r:?}");
+}

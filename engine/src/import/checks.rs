@@ -2,7 +2,7 @@
 //! before anything is written so a fault is blamed on the input and the
 //! flag, never on the staging folder.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::{ImportError, Imported, Request, bad, split};
 
@@ -118,4 +118,33 @@ pub(super) fn check_written_names(
         )));
     }
     Ok(())
+}
+
+/// A warning when two or more inputs all sit in one folder and take their
+/// label from it: every recording gets that one label (`import
+/// raw/long/*.txt` labels all of them "long"), which is right only when
+/// they are all one texture.
+pub(super) fn one_folder_for_every_label(args: &Request) -> Option<String> {
+    if args.label.is_some() || args.label_column.is_some() || args.files.len() < 2 {
+        return None;
+    }
+    let folder = |f: &PathBuf| f.canonicalize().ok()?.parent().map(Path::to_path_buf);
+    let first = folder(&args.files[0])?;
+    if !args.files[1..]
+        .iter()
+        .all(|f| folder(f).as_ref() == Some(&first))
+    {
+        return None;
+    }
+    let label = first.file_name()?.to_string_lossy().into_owned();
+    let shown = match args.files[0].parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.display().to_string(),
+        _ => first.display().to_string(),
+    };
+    Some(format!(
+        "warning: all {} inputs are in one folder, {shown}, so every recording is labelled \
+         {label:?} (the label is each file's folder): if they are not all one texture, give \
+         each texture's files a folder of its own (DIR/<label>/FILE), or import each with --label",
+        args.files.len()
+    ))
 }
