@@ -64,7 +64,9 @@ pub struct Request {
     pub meta: Vec<String>,
     /// CSV field separator (default: `,`, or `;` or a tab when the header has one and no comma).
     pub delimiter: Option<char>,
-    /// Replace existing recordings.
+    /// Replace the recordings already at the names this import writes
+    /// (OUT/<label>/<stem>.csv or .csv.gz, the other of the two removed);
+    /// without it a name taken is refused and nothing is imported.
     pub force: bool,
     /// Compress each recording to OUT/<label>/<file stem>.csv.gz (gzip -9).
     pub gzip: bool,

@@ -45,7 +45,9 @@ pub struct ImportArgs {
     /// CSV field separator (default: `,`, or `;` or a tab when the header has one and no comma).
     #[arg(long, value_name = "CHAR")]
     pub delimiter: Option<char>,
-    /// Replace existing recordings.
+    /// Replace the recordings already at the names this import writes
+    /// (OUT/<label>/<stem>.csv or .csv.gz, the other of the two removed);
+    /// without it a name taken is refused and nothing is imported.
     #[arg(long)]
     pub force: bool,
     /// Compress each recording to OUT/<label>/<file stem>.csv.gz (gzip -9).
