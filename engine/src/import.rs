@@ -10,7 +10,7 @@
 //! with decimals enough for the rate (within 0.5 % of a sample period).
 //!
 //! Files are converted on every core into a hidden staging folder under
-//! `--out` and moved in place only once all are complete, so a bad input
+//! `--out` and moved in place only once all are complete (`place.rs`), so a bad input
 //! leaves nothing behind and an interrupted import no half recording.
 //! This module reads only the files it is given and writes only under
 //! [`Request::out`]. It never prints: warnings and progress go to a
@@ -19,20 +19,20 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
-use crate::recording::files::{
-    check_output_kind, move_no_replace, not_regular, read_input, same_file_as,
-};
-use crate::recording::{Digits, MAX_RATE_HZ, RecordingError, RecordingWriter};
+use crate::recording::files::{check_output_kind, not_regular, read_input, same_file_as};
+use crate::recording::{Digits, MAX_RATE_HZ, MIN_RATE_HZ, RecordingError, RecordingWriter};
 
 mod checks;
 mod csv;
 mod mat;
 mod npy;
+mod place;
 mod split;
 mod text;
 mod wav;
-use checks::{check_written_names, csv_only_flags_for_wav};
+use checks::{check_written_names, flags_a_wav_ignores, one_folder_for_every_label};
 pub use csv::parse_csv;
+use place::{Staged, remove_abandoned_staging, settle};
 pub use wav::parse_wav;
 
 /// What to import and how: the files, the folder, and the mapping of
@@ -46,7 +46,9 @@ pub struct Request {
     pub out: PathBuf,
     /// CSV: the column holding each row's time in seconds.
     pub time_column: Option<String>,
-    /// The sampling rate in Hz (CSV without a time column; WAV files carry their own).
+    /// The sampling rate in Hz, from [`MIN_RATE_HZ`] to [`MAX_RATE_HZ`] (CSV
+    /// without a time column, headerless text, .npy, .npz and .mat; WAV files
+    /// carry their own).
     pub rate: Option<f64>,
     /// CSV: the channel columns, comma-separated (default: every column but the time and label columns).
     pub channels: Vec<String>,
@@ -62,18 +64,24 @@ pub struct Request {
     pub meta: Vec<String>,
     /// CSV field separator (default: `,`, or `;` or a tab when the header has one and no comma).
     pub delimiter: Option<char>,
-    /// Replace existing recordings.
+    /// Replace the recordings already at the names this import writes
+    /// (OUT/<label>/<stem>.csv or .csv.gz, the other of the two removed);
+    /// without it a name taken is refused and nothing is imported.
     pub force: bool,
     /// Compress each recording to OUT/<label>/<file stem>.csv.gz (gzip -9).
     pub gzip: bool,
-    /// Cut each input into consecutive trials this many seconds long
-    /// (<stem>-seg001.csv, …, in time order), for one long recording per material.
+    /// Cut each input into consecutive trials this many seconds long, at
+    /// least 16 samples (<stem>-seg001.csv, …, in time order), for one long
+    /// recording per material.
     pub split: Option<f64>,
-    /// With --split: seconds from one trial's start to the next (default: the
-    /// trial's length, no overlap).
+    /// With --split: seconds from one trial's start to the next, at least a
+    /// tenth of the trial's length (default: the length, no overlap).
     pub split_hop: Option<f64>,
     /// Files converted at once (default: the number of cores; 0 means the same).
     pub threads: Option<usize>,
+    /// Begin each recording's name with the name of the folder above its
+    /// input's own (days/day1/felt/trial1.txt → OUT/felt/day1-trial1.csv).
+    pub prefix_parent: bool,
 }
 
 impl Default for Request {
@@ -95,6 +103,7 @@ impl Default for Request {
             split: None,
             split_hop: None,
             threads: None,
+            prefix_parent: false,
         }
     }
 }
@@ -153,6 +162,16 @@ fn bad(m: impl std::fmt::Display) -> ImportError {
     ImportError::BadInput(m.to_string())
 }
 
+/// `x` as a person would write it in a message: `0`, `-1000`, `0.001`,
+/// and `1e-310` or `1e16` only where the digits would run on.
+fn plain(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-4..1e15).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
 /// `key=value` with the value in TOML (a bare word is taken as a string).
 pub fn parse_meta(kv: &str) -> Result<(String, toml::Value), ImportError> {
     let (k, v) = kv
@@ -181,7 +200,8 @@ pub fn parse_meta(kv: &str) -> Result<(String, toml::Value), ImportError> {
 
 /// Writes `imp` as a recording at `path` (a `.csv`), each column with the
 /// digits `imp` asks for, then gzips it to `path.gz` when `gzip`; the file
-/// written. Not fsynced: the caller syncs the batch.
+/// written. Not fsynced: the caller syncs the batch. What the format cannot
+/// hold is a [`ImportError::BadInput`] naming neither file.
 pub fn write_recording(
     path: &Path,
     imp: &Imported,
@@ -200,9 +220,11 @@ pub fn write_recording(
     let mut w =
         RecordingWriter::create_with_digits(path, &meta, &columns, &digits).map_err(|e| {
             match e {
+                // What the recording cannot hold, without the path written
+                // to (a staging file): the caller names the input.
+                RecordingError::Write { reason, .. } => ImportError::BadInput(reason),
                 // A folder that cannot be made or written is no fault of the input.
-                RecordingError::Io { .. } => ImportError::Runtime(e.to_string()),
-                _ => ImportError::BadInput(format!("{}: {e}", path.display())),
+                _ => ImportError::Runtime(e.to_string()),
             }
         })?;
     w.defer_sync();
@@ -239,19 +261,31 @@ pub fn check_options(args: &Request) -> Result<Vec<(String, toml::Value)>, Impor
             )));
         }
     }
+    // Checked for every format before any file is read: slower, the
+    // sample times run to hundreds of digits or overflow; faster, `t_s`
+    // cannot tell one sample from the next.
     if let Some(r) = args.rate
-        && !(r.is_finite() && r > 0.0 && r <= MAX_RATE_HZ)
+        && !(r.is_finite() && (MIN_RATE_HZ..=MAX_RATE_HZ).contains(&r))
     {
         return Err(bad(format!(
-            "--rate must be a positive number of Hz up to {MAX_RATE_HZ:e} (beyond it `t_s` \
-             cannot be written apart sample by sample), got {r:e}"
+            "--rate must be from {} Hz (a sample every {} s) to {MAX_RATE_HZ:e} Hz, got {}: \
+             slower, the sample times would not be finite or would run to hundreds of digits; \
+             faster, `t_s` could not tell the samples apart",
+            plain(MIN_RATE_HZ),
+            plain(1.0 / MIN_RATE_HZ),
+            plain(r)
         )));
+    }
+    if args.burst == 0 {
+        return Err(bad(
+            "--burst 0: a row holds at least one sample of each channel (--burst 1, the default)",
+        ));
     }
     if let Some(l) = &args.label {
         crate::recording::check_label(l).map_err(|e| bad(format!("--label: {e}")))?;
     }
     if let Some(length) = args.split {
-        split::check(length, args.split_hop)?;
+        split::check(length, args.split_hop, args.rate)?;
     }
     Ok(extra)
 }
@@ -266,6 +300,11 @@ pub fn parse_file(
     ext: &str,
     args: &Request,
 ) -> Result<Imported, ImportError> {
+    if bytes.is_empty() {
+        return Err(bad(format!(
+            "{origin}: the file is empty (0 bytes): nothing to import"
+        )));
+    }
     match ext.to_ascii_lowercase().as_str() {
         "wav" | "wave" => {
             let mut w = parse_wav(&bytes, origin)?;
@@ -284,6 +323,11 @@ pub fn parse_file(
         "csv" | "txt" | "tsv" | "dat" => {
             let text =
                 String::from_utf8(bytes).map_err(|_| bad(format!("{origin}: not UTF-8 text")))?;
+            if !text::has_lines(&text) {
+                return Err(bad(format!(
+                    "{origin}: holds no header and no samples, only blank or comment lines"
+                )));
+            }
             if text::is_headerless(&text) {
                 text::parse(&text, origin, args)
             } else {
@@ -297,15 +341,6 @@ pub fn parse_file(
             "{origin}: unknown format (expected .csv, .txt, .dat, .wav, .npy, .npz or .mat)"
         ))),
     }
-}
-
-/// One input converted into the staging folder, waiting to be moved in place.
-struct Staged {
-    /// Where it goes, and the other name of the same recording (`.csv`
-    /// beside `.csv.gz`), replaced with it under `--force`.
-    path: PathBuf,
-    other: PathBuf,
-    staged: PathBuf,
 }
 
 /// The label of input `f`: `--label`, the label column, or its folder's name.
@@ -335,6 +370,31 @@ fn label_of(
     crate::recording::check_label(&label)
         .map_err(|e| bad(format!("{origin}: label {label:?}: {e}")))?;
     Ok(label)
+}
+
+/// The name of the folder above input `f`'s own (`day1` for
+/// `days/day1/felt/trial1.txt`), if it has one.
+fn folder_above(f: &Path) -> Option<String> {
+    let path = f.canonicalize().ok()?;
+    let name = path.parent()?.parent()?.file_name()?;
+    Some(name.to_string_lossy().into_owned())
+}
+
+/// `--prefix-parent`'s prefix for input `f`: the folder above its own.
+fn prefix_of(f: &Path, origin: &str) -> Result<String, ImportError> {
+    let prefix = folder_above(f).ok_or_else(|| {
+        bad(format!(
+            "{origin}: --prefix-parent: its folder has no folder above it to name the recording by"
+        ))
+    })?;
+    if prefix.starts_with('.') {
+        // OUT/<label>/.x-name.csv would be hidden, and every command skips it.
+        return Err(bad(format!(
+            "{origin}: --prefix-parent: the folder above its own, {prefix:?}, is hidden and \
+             would give a hidden recording: leave out --prefix-parent, or rename the folder"
+        )));
+    }
+    Ok(prefix)
 }
 
 /// Reads, parses and writes input `f` under `staging` (as `<label>/<stem>.csv`
@@ -369,6 +429,11 @@ fn stage(
              command skips: rename the file without the leading '.'"
         )));
     }
+    let stem = if args.prefix_parent {
+        format!("{}-{stem}", prefix_of(f, &origin)?)
+    } else {
+        stem
+    };
     let mut imp = parse_file(bytes, &origin, &ext, args)?;
     let label = label_of(f, &origin, args, imp.label.take())?;
     imp.meta
@@ -378,8 +443,8 @@ fn stage(
     let Some(length) = args.split else {
         return Ok(vec![stage_one(f, &imp, &label, &stem, args, staging)?]);
     };
-    let (length, hop) = split::check(length, args.split_hop)?;
-    let parts = split::split(&imp, &origin, length, hop)?;
+    let cut = split::check(length, args.split_hop, args.rate)?;
+    let parts = split::split(&imp, &origin, cut)?;
     parts
         .iter()
         .enumerate()
@@ -427,8 +492,13 @@ fn stage_one(
             there.display()
         )));
     }
-    let staged = write_recording(&staging.join(&csv), imp, label, args.gzip)?;
+    let staged =
+        write_recording(&staging.join(&csv), imp, label, args.gzip).map_err(|e| match e {
+            ImportError::BadInput(m) => bad(format!("{}: {m}", f.display())),
+            runtime => runtime,
+        })?;
     Ok(Staged {
+        input: f.to_path_buf(),
         path,
         other,
         staged,
@@ -488,7 +558,7 @@ fn run_jobs<T: Send>(
 /// number of threads.
 pub fn run(args: &Request, report: &dyn Report) -> Result<Vec<PathBuf>, ImportError> {
     let extra = check_options(args)?;
-    if let Some(warning) = csv_only_flags_for_wav(args)? {
+    if let Some(warning) = flags_a_wav_ignores(args)? {
         report.warn(&warning);
     }
     let threads = match args.threads {
@@ -517,171 +587,11 @@ pub fn run(args: &Request, report: &dyn Report) -> Result<Vec<PathBuf>, ImportEr
         // Only empty folders go: the ones this import made.
         let _ = std::fs::remove_dir(&args.out);
     }
+    // Said once the import is done, so a refusal stays one line.
+    if moved.is_ok()
+        && let Some(warning) = one_folder_for_every_label(args)
+    {
+        report.warn(&warning);
+    }
     moved
-}
-
-/// Remove the staging folders (`.import-<pid>`) of imports that were killed:
-/// those whose process is gone. A running import's folder is left alone.
-fn remove_abandoned_staging(out: &Path) {
-    let Ok(entries) = std::fs::read_dir(out) else {
-        return;
-    };
-    for entry in entries.flatten() {
-        let name = entry.file_name();
-        let Some(pid) = name
-            .to_str()
-            .and_then(|n| n.strip_prefix(".import-"))
-            .and_then(|p| p.parse::<libc::pid_t>().ok())
-        else {
-            continue;
-        };
-        // SAFETY: kill with signal 0 sends nothing; it only asks whether
-        // the process exists (EPERM: it does, under another user).
-        let alive = pid > 0
-            && (unsafe { libc::kill(pid, 0) } == 0
-                || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM));
-        if !alive && entry.path().is_dir() {
-            let _ = std::fs::remove_dir_all(entry.path());
-        }
-    }
-}
-
-/// The first failure in input order, or every staged recording synced and
-/// moved in place.
-fn settle(
-    args: &Request,
-    staging: &Path,
-    results: Vec<Option<Result<Vec<Staged>, ImportError>>>,
-) -> Result<Vec<PathBuf>, ImportError> {
-    let mut staged: Vec<Staged> = Vec::new();
-    let mut places = std::collections::HashSet::new();
-    for r in results {
-        // A job not taken comes after a failure, which is met first.
-        for s in r.ok_or_else(|| ImportError::Runtime("an input was skipped".into()))?? {
-            if !places.insert(s.path.clone()) {
-                return Err(bad(format!(
-                    "two inputs would both write {}",
-                    s.path.display()
-                )));
-            }
-            staged.push(s);
-        }
-    }
-    if staged.is_empty() {
-        return Ok(Vec::new());
-    }
-    crate::recording::sync_folder(staging).map_err(|e| ImportError::Runtime(e.to_string()))?;
-    place(&staged, args.force)
-}
-
-/// Moves every staged recording in place. Without `force` each move is
-/// one atomic step that fails when the name is taken ([`move_no_replace`]),
-/// so of two imports of the same names at once one gets each name; the one
-/// that meets a name taken removes the recordings it placed itself and
-/// refuses, naming it: a folder never ends with a mix of two batches.
-fn place(staged: &[Staged], force: bool) -> Result<Vec<PathBuf>, ImportError> {
-    let mut written = Vec::with_capacity(staged.len());
-    for s in staged {
-        if let Err(e) = place_one(s, force) {
-            // Only ours go: each was placed by this run a moment ago.
-            for p in &written {
-                let _ = std::fs::remove_file(p);
-            }
-            return Err(e);
-        }
-        written.push(s.path.clone());
-    }
-    Ok(written)
-}
-
-fn place_one(s: &Staged, force: bool) -> Result<(), ImportError> {
-    let fail = |p: &Path, e: std::io::Error| ImportError::Runtime(format!("{}: {e}", p.display()));
-    if let Some(d) = s.path.parent() {
-        std::fs::create_dir_all(d).map_err(|e| fail(d, e))?;
-    }
-    if force {
-        std::fs::rename(&s.staged, &s.path).map_err(|e| fail(&s.path, e))?;
-        if s.other.exists() {
-            std::fs::remove_file(&s.other).map_err(|e| fail(&s.other, e))?;
-        }
-        return Ok(());
-    }
-    let taken = |p: &Path| {
-        bad(format!(
-            "{}: already exists (placed by another import running at the same time, or there before); nothing was imported: import into another --out, or use --force to replace it",
-            p.display()
-        ))
-    };
-    match move_no_replace(&s.staged, &s.path) {
-        Ok(()) => {}
-        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => return Err(taken(&s.path)),
-        Err(e) => return Err(fail(&s.path, e)),
-    }
-    if s.other.exists() {
-        // The same recording under its other name (.csv beside .csv.gz).
-        let _ = std::fs::remove_file(&s.path);
-        return Err(taken(&s.other));
-    }
-    Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A staged file `name` holding `text`, bound for `out/name`.
-    fn staged(staging: &Path, out: &Path, name: &str, text: &str) -> Staged {
-        std::fs::create_dir_all(staging).unwrap();
-        let s = staging.join(name);
-        std::fs::write(&s, text).unwrap();
-        Staged {
-            path: out.join(name),
-            other: out.join(format!("{name}.gz")),
-            staged: s,
-        }
-    }
-
-    #[test]
-    fn a_name_taken_while_placing_undoes_only_this_runs_files() {
-        let dir = tempfile::tempdir().unwrap();
-        let (staging, out) = (dir.path().join(".import-1"), dir.path().join("out"));
-        let batch: Vec<Staged> = ["a.csv", "b.csv", "c.csv"]
-            .iter()
-            .map(|n| staged(&staging, &out, n, "ours"))
-            .collect();
-        // Another import placed c.csv after this one's check, before its move.
-        std::fs::create_dir_all(&out).unwrap();
-        std::fs::write(out.join("c.csv"), "theirs").unwrap();
-        let e = place(&batch, false).unwrap_err();
-        assert!(e.is_bad_input());
-        assert!(
-            e.to_string().contains("c.csv: already exists"),
-            "{}",
-            e.to_string()
-        );
-        let mut left: Vec<String> = std::fs::read_dir(&out)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        left.sort();
-        assert_eq!(left, ["c.csv"]);
-        assert_eq!(
-            std::fs::read_to_string(out.join("c.csv")).unwrap(),
-            "theirs"
-        );
-        // The other name of a recording placed is a collision too.
-        let one = [staged(&staging, &out, "d.csv", "ours")];
-        std::fs::write(out.join("d.csv.gz"), "theirs").unwrap();
-        let e = place(&one, false).unwrap_err();
-        assert!(
-            e.to_string().contains("d.csv.gz: already exists"),
-            "{}",
-            e.to_string()
-        );
-        assert!(!out.join("d.csv").exists());
-        // With --force the batch replaces.
-        let forced = [staged(&staging, &out, "c.csv", "ours")];
-        assert_eq!(place(&forced, true).unwrap(), [out.join("c.csv")]);
-        assert_eq!(std::fs::read_to_string(out.join("c.csv")).unwrap(), "ours");
-    }
 }

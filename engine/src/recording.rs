@@ -43,8 +43,8 @@ mod writer;
 pub use label::check_label;
 use reader::{Select, gunzip, parse_text};
 pub use writer::{
-    Digits, MAX_RATE_HZ, RecordingWriter, compress, compress_quickly, decimals_for, sync_folder,
-    time_decimals,
+    Digits, MAX_RATE_HZ, MIN_RATE_HZ, RecordingWriter, compress, compress_quickly, decimals_for,
+    sync_folder, time_decimals,
 };
 
 #[derive(Debug, thiserror::Error)]

@@ -20,7 +20,8 @@ pub struct ImportArgs {
     /// CSV: the column holding each row's time in seconds.
     #[arg(long, value_name = "NAME", conflicts_with = "rate")]
     pub time_column: Option<String>,
-    /// The sampling rate in Hz (CSV without a time column; WAV files carry their own).
+    /// The sampling rate in Hz, from 0.001 to 1e15 (CSV without a time column, headerless
+    /// text, .npy, .npz and .mat; WAV files carry their own).
     #[arg(long, value_name = "HZ")]
     pub rate: Option<f64>,
     /// CSV: the channel columns, comma-separated (default: every column but the time and label columns).
@@ -44,23 +45,31 @@ pub struct ImportArgs {
     /// CSV field separator (default: `,`, or `;` or a tab when the header has one and no comma).
     #[arg(long, value_name = "CHAR")]
     pub delimiter: Option<char>,
-    /// Replace existing recordings.
+    /// Replace the recordings already at the names this import writes
+    /// (OUT/<label>/<stem>.csv or .csv.gz, the other of the two removed);
+    /// without it a name taken is refused and nothing is imported.
     #[arg(long)]
     pub force: bool,
     /// Compress each recording to OUT/<label>/<file stem>.csv.gz (gzip -9).
     #[arg(long)]
     pub gzip: bool,
-    /// Cut each input into consecutive trials this many seconds long
-    /// (<stem>-seg001.csv, …, in time order), for one long recording per material.
+    /// Cut each input into consecutive trials this many seconds long, at
+    /// least 16 samples (<stem>-seg001.csv, …, in time order), for one long
+    /// recording per material.
     #[arg(long, value_name = "SECONDS")]
     pub split: Option<f64>,
-    /// With --split: seconds from one trial's start to the next (default: the
-    /// trial's length, no overlap).
+    /// With --split: seconds from one trial's start to the next, at least a
+    /// tenth of the trial's length (default: the length, no overlap).
     #[arg(long, value_name = "SECONDS", requires = "split")]
     pub split_hop: Option<f64>,
     /// Files converted at once (default: the number of cores; 0 means the same).
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
+    /// Begin each recording's name with the name of the folder above its
+    /// input's own, for inputs of one name in several session folders
+    /// (days/day1/felt/trial1.txt → OUT/felt/day1-trial1.csv).
+    #[arg(long)]
+    pub prefix_parent: bool,
 }
 
 impl From<ImportArgs> for Request {
@@ -82,6 +91,7 @@ impl From<ImportArgs> for Request {
             split: a.split,
             split_hop: a.split_hop,
             threads: a.threads,
+            prefix_parent: a.prefix_parent,
         }
     }
 }

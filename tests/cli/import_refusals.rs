@@ -65,12 +65,19 @@ fn csv_only_flags_given_for_a_wav_are_refused_by_name() {
         if flag == "--label-column" {
             args.drain(0..2);
         }
-        refused(&args, &[&f, flag, "CSV files only"]);
+        let scope = if flag == "--rate" {
+            "--rate applies to files without a rate of their own (CSV, text, .npy, .npz, .mat)"
+        } else {
+            "applies to CSV files only"
+        };
+        refused(&args, &[&f, flag, scope, "leave it out"]);
     }
     // Beside a CSV they apply to it, and the WAV is named in a warning.
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");
-    let csv = format!("{DATA}/bom.csv");
+    let untimed = dir.path().join("untimed.csv");
+    std::fs::write(&untimed, "acc\n1\n2\n").unwrap();
+    let csv = p(&untimed).to_string();
     let r = run(&[
         "import",
         "--label",
@@ -85,7 +92,7 @@ fn csv_only_flags_given_for_a_wav_are_refused_by_name() {
     assert_eq!(r.code, Some(0), "{r:?}");
     assert!(
         r.stderr
-            .contains("warning: --rate applies to the CSV files only; tests/data/import/mono.wav"),
+            .contains("warning: --rate applies to files without a rate of their own (CSV, text, .npy, .npz, .mat); tests/data/import/mono.wav"),
         "{r:?}"
     );
     // Without them the same file imports.
@@ -104,6 +111,61 @@ fn rates_whose_times_cannot_be_written_and_burst_zero_are_refused() {
     refused(
         &["--label", "S", "--rate", "1000", "--burst", "0", &f],
         &["--burst 0"],
+    );
+}
+
+/// Every format timed by `--rate` (headerless text as .txt, .dat and
+/// .csv, .npy, .npz, .mat): a rate whose times overflow (1e-310 Hz) or run
+/// to hundreds of digits (1e-300 Hz), or too fast to tell samples apart,
+/// is refused before anything is written; the slowest rate taken writes
+/// times of a few digits.
+#[test]
+fn rates_too_slow_or_too_fast_for_the_times_are_refused_for_every_format() {
+    let dir = tempfile::tempdir().unwrap();
+    let formats = Path::new(REPO).join("tests/data/formats");
+    let lmt = std::fs::read(formats.join("lmt.txt")).unwrap();
+    let mut inputs = vec![formats.join("lmt.txt")];
+    for ext in ["dat", "csv"] {
+        let f = dir.path().join(format!("headerless.{ext}"));
+        std::fs::write(&f, &lmt).unwrap();
+        inputs.push(f);
+    }
+    for f in ["one.npy", "arrays.npz", "signal.mat"] {
+        inputs.push(formats.join(f));
+    }
+    for f in &inputs {
+        for (rate, said) in [
+            ("1e-310", "got 1e-310"),
+            ("1e-300", "got 1e-300"),
+            ("0.0009", "got 0.0009"),
+            ("2e15", "got 2e15"),
+        ] {
+            refused(
+                &["--label", "S", "--rate", rate, p(f)],
+                &["--rate must be from 0.001 Hz", "to 1e15 Hz", said],
+            );
+        }
+    }
+    let out = dir.path().join("out");
+    let r = run(&[
+        "import",
+        "--label",
+        "S",
+        "--rate",
+        "0.001",
+        "--out",
+        p(&out),
+        p(&inputs[0]),
+    ]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let rec = recording::read(&out.join("S/lmt.csv")).unwrap();
+    assert_eq!(rec.data[0][299], 299_000.0);
+    let text = std::fs::read_to_string(out.join("S/lmt.csv")).unwrap();
+    assert!(
+        text.lines()
+            .filter(|l| !l.starts_with('#'))
+            .all(|l| l.len() < 30),
+        "{text}"
     );
 }
 
@@ -198,4 +260,143 @@ fn bad_names_are_blamed_on_the_input_and_the_flag_not_the_staging_folder() {
     );
     assert!(!r.stderr.contains(".import-"), "{r:?}");
     assert_eq!(std::fs::read_to_string(&file).unwrap(), "mine");
+}
+
+/// A CSV whose column is named like the time (`time`, `t_s`, any case):
+/// with `--rate` it is refused rather than kept as a channel `profile new`
+/// would choose, naming `--time-column` and the other columns; without a
+/// rate, the message names the column to take the times from.
+#[test]
+fn a_time_column_is_not_kept_as_a_channel_under_rate() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = |name: &str, text: &str| {
+        let f = dir.path().join(name);
+        std::fs::write(&f, text).unwrap();
+        p(&f).to_string()
+    };
+    let three = csv("three.csv", "time,acc,force\n0,1,2\n0.001,3,4\n");
+    refused(
+        &["--label", "S", "--rate", "1000", &three],
+        &[
+            &three,
+            "column `time` looks like the time",
+            "--time-column time instead of --rate",
+            "--channels acc,force",
+        ],
+    );
+    let ts = csv("ts.csv", "t_s,acc\n0,1\n0.001,3\n");
+    let r = refused(
+        &["--label", "S", "--rate", "1000", &ts],
+        &[&ts, "column `t_s`", "--time-column t_s"],
+    );
+    assert!(!r.stderr.contains("appears twice"), "{r:?}");
+    refused(
+        &[
+            "--label",
+            "S",
+            "--rate",
+            "1000",
+            "--channels",
+            "t_s,acc",
+            &ts,
+        ],
+        &[&ts, "`t_s` (--channels)", "--time-column t_s"],
+    );
+    let stamp = csv("stamp.csv", "Timestamp,acc\n0,1\n0.001,3\n");
+    refused(
+        &["--label", "S", &stamp],
+        &[
+            &stamp,
+            "give --time-column or --rate",
+            "`Timestamp` looks like the time: --time-column Timestamp",
+        ],
+    );
+    // The ways out: the times from the column, or the channels named.
+    for way in [
+        &["--time-column", "time"][..],
+        &["--rate", "1000", "--channels", "acc,force"],
+    ] {
+        let out = dir.path().join(format!("out{}", way.len()));
+        let mut args = vec!["import", "--label", "S", "--out", p(&out), &three];
+        args.extend(way);
+        let r = run(&args);
+        assert_eq!(r.code, Some(0), "{args:?}: {r:?}");
+        let rec = recording::read(&out.join("S/three.csv")).unwrap();
+        assert_eq!(rec.columns, ["t_s", "acc", "force"]);
+    }
+}
+
+/// Each refusal names the input once (never the staging folder), the line
+/// where there is one, and numbers as written: `--meta` of a key `--split`
+/// writes, `--names` counted against a CSV, a time column that goes back,
+/// empty files, an `.npz`/`.mat` whose scalar looks like the rate, `--rate`
+/// 0 and -1e3.
+#[test]
+fn messages_name_the_input_once_and_the_numbers_plainly() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = |name: &str, text: &str| {
+        let f = dir.path().join(name);
+        std::fs::write(&f, text).unwrap();
+        p(&f).to_string()
+    };
+    let trace = file("trace.txt", &"1\n2\n3\n".repeat(100));
+    let r = refused(
+        &[
+            "--label",
+            "S",
+            "--rate",
+            "100",
+            "--meta",
+            "segment=1",
+            "--split",
+            "0.5",
+            &trace,
+        ],
+        &["--meta segment", "with --split", "choose another key"],
+    );
+    assert_eq!(r.stderr.matches("trace.txt").count(), 1, "{r:?}");
+    let two = file("two.csv", "time,acc,force\n0,1,2\n0.001,3,4\n");
+    refused(
+        &[
+            "--label",
+            "S",
+            "--time-column",
+            "time",
+            "--names",
+            "a",
+            &two,
+        ],
+        &[&format!(
+            "--names gives 1 name(s) but {two} has 2 channel(s) (acc, force)"
+        )],
+    );
+    let back = file("back.csv", "t,acc\n0,1\n0.1,2\n0.05,3\n");
+    refused(
+        &["--label", "S", "--time-column", "t", &back],
+        &[&format!(
+            "{back}:4: the time column `t` goes from 0.1 to 0.05"
+        )],
+    );
+    for empty in ["empty.txt", "empty.mat", "empty.npy"] {
+        let f = file(empty, "");
+        refused(
+            &["--label", "S", "--rate", "100", &f],
+            &[&format!("{f}: the file is empty")],
+        );
+    }
+    let notes = file("notes.txt", "# a header comment\n\n% another\n");
+    refused(
+        &["--label", "S", "--rate", "100", &notes],
+        &[&notes, "no samples, only blank or comment lines"],
+    );
+    for f in ["arrays.npz", "signal.mat"] {
+        let f = format!("tests/data/formats/{f}");
+        refused(
+            &["--label", "S", &f],
+            &[&f, "scalar `fs` = 1000 looks like one", "give --rate 1000"],
+        );
+    }
+    for (rate, got) in [("--rate=0", "got 0:"), ("--rate=-1e3", "got -1000:")] {
+        refused(&["--label", "S", rate, &trace], &[got]);
+    }
 }

@@ -144,3 +144,121 @@ fn sub_windows_half_a_sample_period_off_the_samples_evaluate() {
         "{v}"
     );
 }
+
+/// `import ARGS --out OUT` must refuse with exit 2 and one line holding
+/// each of `says` (and none of `not`), leaving nothing under `--out`.
+fn refused(files: &[String], args: &[&str], says: &[&str], not: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let mut all = vec!["import", "--out", p(&out)];
+    all.extend(args);
+    all.extend(files.iter().map(String::as_str));
+    let r = run(&all);
+    assert_eq!(r.code, Some(2), "{all:?}: {r:?}");
+    assert_eq!(r.stderr.lines().count(), 1, "one line: {r:?}");
+    for s in says {
+        assert!(r.stderr.contains(s), "{s:?} missing: {r:?}");
+    }
+    for s in not {
+        assert!(!r.stderr.contains(s), "{s:?} said: {r:?}");
+    }
+    assert!(!out.exists(), "left {out:?} behind");
+}
+
+/// Typos that wrote tens of thousands of files: a hop of a thousandth of
+/// the trial (58,001 files), trials of one sample (60,000 files). Both are
+/// refused before anything is written, saying what to give; a trial too
+/// short at the input's own rate (its time column) speaks of --split.
+#[test]
+fn trials_too_short_for_a_spectrum_and_hops_past_90_percent_overlap_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = long_traces(&dir.path().join("in"));
+    refused(
+        &files,
+        &["--rate", "100", "--split", "2", "--split-hop", "0.001"],
+        &[
+            "--split-hop 0.001 s is below a tenth of --split 2 s",
+            "90 %",
+            "give --split-hop 0.2 or more",
+        ],
+        &[],
+    );
+    refused(
+        &files,
+        &["--rate", "100", "--split", "0.01"],
+        &[
+            "--split 0.01 s holds 1 sample(s) at 100 Hz",
+            "at least 16",
+            "give --split 0.16 or more",
+        ],
+        &["--split-hop"],
+    );
+    let timed = dir.path().join("timed.csv");
+    let mut text = String::from("t,acc\n");
+    for i in 0..3000 {
+        let _ = writeln!(text, "{},{}", i as f64 / 1000.0, i % 7);
+    }
+    fs::write(&timed, text).unwrap();
+    refused(
+        &[p(&timed).to_string()],
+        &["--time-column", "t", "--label", "L", "--split", "0.0001"],
+        &[
+            "timed.csv: --split 0.0001 s holds 1 sample(s) at 1000 Hz",
+            "give --split 0.016 or more",
+        ],
+        &["--split-hop", "sample period"],
+    );
+}
+
+/// `import raw/long/*.csv --split 2`: every trial is labelled "long", the
+/// inputs' one folder. It imports (the label is each file's folder) and
+/// says so in one warning; inputs in a folder per label get none.
+#[test]
+fn inputs_all_in_one_folder_are_imported_with_a_warning_that_they_share_its_label() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = long_traces(&dir.path().join("in"));
+    let long = dir.path().join("raw").join("long");
+    fs::create_dir_all(&long).unwrap();
+    let mut together = Vec::new();
+    for f in &files {
+        let to = long.join(Path::new(f).file_name().unwrap());
+        fs::copy(f, &to).unwrap();
+        together.push(p(&to).to_string());
+    }
+    let rec = dir.path().join("rec");
+    let mut args = vec!["import", "--rate", "100", "--split", "2", "--out", p(&rec)];
+    args.extend(together.iter().map(String::as_str));
+    let r = run(&args);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let warnings: Vec<&str> = r
+        .stderr
+        .lines()
+        .filter(|l| l.starts_with("warning:"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "{r:?}");
+    for s in [
+        "all 3 inputs are in one folder",
+        p(&long),
+        "labelled \"long\"",
+        "the label is each file's folder",
+        "--label",
+    ] {
+        assert!(warnings[0].contains(s), "{s:?} missing: {r:?}");
+    }
+    assert_eq!(fs::read_dir(rec.join("long")).unwrap().count(), 90);
+
+    let apart = dir.path().join("apart");
+    let mut args = vec![
+        "import",
+        "--rate",
+        "100",
+        "--split",
+        "2",
+        "--out",
+        p(&apart),
+    ];
+    args.extend(files.iter().map(String::as_str));
+    let r = run(&args);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(!r.stderr.contains("warning"), "{r:?}");
+}

@@ -1,5 +1,6 @@
 //! Issue 19: nothing lost, nothing hung. No command writes over one of
-//! its inputs, a recording or anything but a regular file; a FIFO is never
+//! its inputs or anything but a regular file, nor over a recording but
+//! `import --force` and `simulate --overwrite`; a FIFO is never
 //! read (skipped with a warning inside a dataset, refused when named); two
 //! imports into one folder at once never mix.
 
@@ -98,6 +99,64 @@ fn features_and_train_never_write_over_an_input_or_a_recording() {
         std::fs::read_to_string(&table)
             .unwrap()
             .starts_with("file,label")
+    );
+}
+
+/// A profile is never written over a recording, `--overwrite` or not, and
+/// the refusal says which commands do replace recordings; `import --force`
+/// is one: it replaces the recording at the name it writes, which without
+/// it is refused.
+#[test]
+fn only_the_commands_that_write_recordings_replace_one_and_only_when_told() {
+    let dir = tempfile::tempdir().unwrap();
+    let ds = small_dataset(dir.path());
+    let rec = ds.join("S1/S1_001.csv.gz");
+    let before = std::fs::read(&rec).unwrap();
+    let r = run(&[
+        "profile",
+        "new",
+        "--from",
+        p(&ds),
+        "--out",
+        p(&rec),
+        "--overwrite",
+    ]);
+    assert_eq!(r.code, Some(2), "{r:?}");
+    for s in [
+        "this is a recording",
+        "--overwrite included",
+        "only import --force and simulate --overwrite replace recordings",
+    ] {
+        assert!(r.stderr.contains(s), "{s:?} missing: {r:?}");
+    }
+    assert!(!r.stderr.contains("--force included"), "{r:?}");
+    assert_eq!(std::fs::read(&rec).unwrap(), before);
+
+    let input = dir.path().join("trace.txt");
+    let out = dir.path().join("out");
+    let import = |values: &str, more: &[&str]| {
+        std::fs::write(&input, values).unwrap();
+        let mut args = vec!["import", "--rate", "100", "--label", "S", "--out", p(&out)];
+        args.extend(more);
+        args.push(p(&input));
+        run(&args)
+    };
+    assert_eq!(import("1\n2\n", &[]).code, Some(0));
+    let r = import("3\n4\n", &[]);
+    assert_eq!(r.code, Some(2), "{r:?}");
+    assert!(
+        r.stderr
+            .contains("already exists (use --force to replace it)"),
+        "{r:?}"
+    );
+    let r = import("3\n4\n", &["--force"]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let again = hapticlab::recording::read(&out.join("S/trace.csv")).unwrap();
+    assert_eq!(again.column("ch1").unwrap(), [3.0, 4.0]);
+    let help = run(&["import", "--help"]).stdout;
+    assert!(
+        help.contains("Replace the recordings already at the names this import writes"),
+        "{help}"
     );
 }
 

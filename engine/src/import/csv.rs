@@ -4,8 +4,39 @@
 //! channel consecutive, flattened in order); the label from a
 //! `--label-column` (constant within a file).
 
-use super::{ImportError, Imported, Request, bad};
+use super::{ImportError, Imported, Request, bad, plain};
 use crate::recording::{Digits, time_decimals};
+
+/// Column names that say a column holds the sample times (compared
+/// without case): under `--rate` such a column would be kept as a
+/// channel, analysed as a signal, and chosen by `profile new`.
+const TIME_NAMES: [&str; 18] = [
+    "t",
+    "t_s",
+    "ts",
+    "time",
+    "time_s",
+    "time_sec",
+    "times",
+    "time (s)",
+    "time(s)",
+    "time [s]",
+    "time[s]",
+    "timestamp",
+    "timestamps",
+    "seconds",
+    "secs",
+    "sec",
+    "elapsed",
+    "elapsed_s",
+];
+
+/// The first column whose name says it is the time, if any.
+fn time_like(cols: &[String]) -> Option<&str> {
+    cols.iter()
+        .map(|c| c.as_str())
+        .find(|c| TIME_NAMES.iter().any(|t| c.eq_ignore_ascii_case(t)))
+}
 
 /// The header line: where it is, the field separator, the column names.
 struct Header {
@@ -55,9 +86,11 @@ pub fn parse_csv(text: &str, origin: &str, args: &Request) -> Result<Imported, I
         .lines()
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
-    let (hline, header) = lines
-        .next()
-        .ok_or_else(|| bad(format!("{origin}: no header line")))?;
+    let (hline, header) = lines.next().ok_or_else(|| {
+        bad(format!(
+            "{origin}: holds no header and no samples, only blank or comment lines"
+        ))
+    })?;
     let header = header_of(hline + 1, header, args);
     let map = mapping(&header, origin, args)?;
     let rows = rows(lines, &header, &map, origin)?;
@@ -110,13 +143,12 @@ fn mapping(header: &Header, origin: &str, args: &Request) -> Result<Mapping, Imp
         .as_deref()
         .map(|l| find(l, "label"))
         .transpose()?;
-    let channels = channel_columns(&header.cols, time, label, args, &find)?;
-    let burst = args.burst;
-    if burst == 0 {
-        return Err(bad(
-            "--burst 0: a row holds at least one sample of each channel (--burst 1, the default)",
-        ));
+    if time.is_none() {
+        check_no_time_kept(header, label, origin, args)?;
     }
+    let channels = channel_columns(&header.cols, time, label, args, &find)?;
+    // `--burst 0` is refused by `check_options`, before any file.
+    let burst = args.burst.max(1);
     if channels.is_empty() || !channels.len().is_multiple_of(burst) {
         return Err(bad(format!(
             "{origin}: {} channel column(s) cannot be split into bursts of {burst}",
@@ -126,9 +158,11 @@ fn mapping(header: &Header, origin: &str, args: &Request) -> Result<Mapping, Imp
     let n_channels = channels.len() / burst;
     let names: Vec<String> = if !args.names.is_empty() {
         if args.names.len() != n_channels {
+            let columns: Vec<&str> = channels.iter().map(|&i| header.cols[i].as_str()).collect();
             return Err(bad(format!(
-                "--names gives {} name(s) but there are {n_channels} channel(s)",
-                args.names.len()
+                "--names gives {} name(s) but {origin} has {n_channels} channel(s) ({})",
+                args.names.len(),
+                columns.join(", ")
             )));
         }
         args.names.clone()
@@ -137,9 +171,6 @@ fn mapping(header: &Header, origin: &str, args: &Request) -> Result<Mapping, Imp
     } else {
         (1..=n_channels).map(|c| format!("ch{c}")).collect()
     };
-    if time.is_none() && args.rate.is_none() {
-        return Err(bad(format!("{origin}: give --time-column or --rate")));
-    }
     Ok(Mapping {
         time,
         label,
@@ -147,6 +178,45 @@ fn mapping(header: &Header, origin: &str, args: &Request) -> Result<Mapping, Imp
         burst,
         names,
     })
+}
+
+/// Without a time column: a rate is needed, and a column named like the
+/// time must not become a channel unnoticed (with `--channels` the user
+/// has chosen the columns).
+fn check_no_time_kept(
+    header: &Header,
+    label: Option<usize>,
+    origin: &str,
+    args: &Request,
+) -> Result<(), ImportError> {
+    let label = label.map(|i| header.cols[i].as_str());
+    let time = time_like(&header.cols).filter(|&t| Some(t) != label);
+    match (args.rate, time) {
+        (None, None) => Err(bad(format!("{origin}: give --time-column or --rate"))),
+        (None, Some(t)) => Err(bad(format!(
+            "{origin}: give --time-column or --rate (column `{t}` looks like the time: \
+             --time-column {t}, if it holds seconds)"
+        ))),
+        (Some(_), Some(t)) if args.channels.is_empty() => {
+            let others: Vec<&str> = header
+                .cols
+                .iter()
+                .map(String::as_str)
+                .filter(|&c| c != t && Some(c) != label)
+                .collect();
+            let or = if others.is_empty() {
+                format!("or keep it as a signal with --channels {t}")
+            } else {
+                format!("or leave it out with --channels {}", others.join(","))
+            };
+            Err(bad(format!(
+                "{origin}: column `{t}` looks like the time, and with --rate it would be kept \
+                 as a channel: take the times from it with --time-column {t} instead of \
+                 --rate (if it holds seconds), {or}"
+            )))
+        }
+        (Some(_), _) => Ok(()),
+    }
 }
 
 /// The channel columns' indices: `--channels` in order (each named once),
@@ -220,7 +290,20 @@ fn rows<'a>(
                 })
         };
         if let Some(t) = map.time {
-            out.times.push(num(t)?);
+            let time = num(t)?;
+            if let Some(&before) = out.times.last()
+                && time <= before
+            {
+                return Err(bad(format!(
+                    "{origin}:{}: the time column `{}` goes from {} to {}: it must increase \
+                     row by row",
+                    ln + 1,
+                    cols[t],
+                    plain(before),
+                    plain(time)
+                )));
+            }
+            out.times.push(time);
         }
         if let Some(l) = map.label {
             match &out.label {
@@ -262,11 +345,7 @@ fn sample_times(
             (0..n_rows * burst).map(|i| i as f64 / rate).collect()
         }
         (Some(_), rate) => {
-            if row_times.windows(2).any(|w| w[1] <= w[0]) {
-                return Err(bad(format!(
-                    "{origin}: the time column must increase row by row"
-                )));
-            }
+            // `rows` has checked that the times increase.
             // Within a burst, samples are 1/rate apart; without a rate, the
             // median row interval shared evenly.
             let dt = match rate {
@@ -293,15 +372,11 @@ fn sample_times(
         }
         (None, None) => unreachable!("mapping() refuses a file with neither"),
     };
-    // A rate too small, or times too far apart, overflow to inf (or NaN).
+    // Times too far apart overflow to inf (or NaN) when shared within a
+    // burst; a rate too small for its times is refused before any file.
     if let Some(i) = time.iter().position(|t| !t.is_finite()) {
-        let from = match args.rate {
-            // Only a rate below about 1e-300 overflows: print it as such.
-            Some(r) => format!("--rate {r:e}"),
-            None => "the time column's intervals".to_string(),
-        };
         return Err(bad(format!(
-            "{origin}: the time of sample {} overflows (it is {}, from {from})",
+            "{origin}: the time of sample {} overflows (it is {}, from the time column's intervals)",
             i + 1,
             time[i]
         )));

@@ -220,6 +220,5 @@ pub fn parse_mat_file(b: &[u8], origin: &str, args: &Request) -> Result<Imported
             "{origin}: no numeric vector or matrix among its variables"
         )));
     }
-    meta.retain(|(k, _)| super::npy::scalar_key(k));
     signal(channels, digits, meta, args, origin, "a .mat file")
 }

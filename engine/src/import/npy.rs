@@ -195,21 +195,51 @@ pub(super) fn channels_of(
     }
 }
 
+/// Names of a scalar that may hold the sample rate (compared without
+/// case): named in the message asking for `--rate`, never taken as the
+/// rate, since its unit (Hz, kHz) and meaning are a guess.
+const RATE_NAMES: [&str; 12] = [
+    "fs",
+    "fs_hz",
+    "sr",
+    "srate",
+    "rate",
+    "rate_hz",
+    "samplerate",
+    "sample_rate",
+    "sample_rate_hz",
+    "sampling_rate",
+    "sampling_rate_hz",
+    "sampling_frequency",
+];
+
 /// The recording of named channels sampled at `--rate`, renamed by
-/// `--names`; every channel the same length.
+/// `--names`; every channel the same length. `meta` holds the file's
+/// scalars; those a `--meta` key could be are kept as metadata.
 pub(super) fn signal(
     channels: Vec<(String, Vec<f64>)>,
     digits: Vec<Digits>,
-    meta: Vec<(String, toml::Value)>,
+    mut meta: Vec<(String, toml::Value)>,
     args: &Request,
     origin: &str,
     what: &str,
 ) -> Result<Imported, ImportError> {
-    let rate = args.rate.ok_or_else(|| {
-        bad(format!(
-            "{origin}: {what} carries no sample rate: give --rate HZ"
-        ))
-    })?;
+    let Some(rate) = args.rate else {
+        let like_rate = meta
+            .iter()
+            .find(|(k, _)| RATE_NAMES.iter().any(|r| k.eq_ignore_ascii_case(r)));
+        return Err(bad(match like_rate {
+            Some((k, v)) => {
+                let v = v.as_float().map_or_else(|| v.to_string(), super::plain);
+                format!(
+                    "{origin}: {what} carries no sample rate import can be sure of; its scalar \
+                     `{k}` = {v} looks like one: give --rate {v} if that is in Hz"
+                )
+            }
+            None => format!("{origin}: {what} carries no sample rate: give --rate HZ"),
+        }));
+    };
+    meta.retain(|(k, _)| scalar_key(k));
     let n = channels.first().map_or(0, |c| c.1.len());
     if n == 0 {
         return Err(bad(format!("{origin}: no samples")));
@@ -290,23 +320,16 @@ pub fn parse_npz_file(bytes: &[u8], origin: &str, args: &Request) -> Result<Impo
             digits.push(a.digits);
         }
     }
-    meta.retain(|(k, _)| scalar_key(k));
     signal(channels, digits, meta, args, origin, "an .npz file")
 }
 
 /// Whether a scalar array or variable named `k` can be metadata: a key
 /// `--meta` would take, and none the import sets itself.
-pub(super) fn scalar_key(k: &str) -> bool {
-    const SET: [&str; 7] = [
-        "source",
-        "device",
-        "segment",
-        "segment_start_s",
-        "segment_length_s",
-        "wav_format",
-        "full_scale",
-    ];
-    super::parse_meta(&format!("{k}=0")).is_ok() && !SET.contains(&k)
+fn scalar_key(k: &str) -> bool {
+    const SET: [&str; 4] = ["source", "device", "wav_format", "full_scale"];
+    super::parse_meta(&format!("{k}=0")).is_ok()
+        && !SET.contains(&k)
+        && !super::split::KEYS.contains(&k)
 }
 
 /// The entries of a zip archive (name, bytes), stored or deflated, in the

@@ -19,6 +19,11 @@ fn fields(line: &str) -> impl Iterator<Item = &str> {
         .filter(|f| !f.is_empty())
 }
 
+/// Whether `text` holds anything but blank lines and comments.
+pub fn has_lines(text: &str) -> bool {
+    data_lines(text).next().is_some()
+}
+
 /// Whether `text` starts with a line of numbers only (no header).
 pub fn is_headerless(text: &str) -> bool {
     data_lines(text).next().is_some_and(|(_, l)| {

@@ -9,7 +9,8 @@
 //!   [`FORMAT_LINE`], plain or gzipped) and never anything but a regular
 //!   file (a device, FIFO, socket or folder). `--overwrite`/`--force`
 //!   extend to neither: they only let a command replace a file of its own
-//!   kind.
+//!   kind (`import --force` and `simulate --overwrite` replace recordings
+//!   with the recordings they write, by [`check_output_kind`]).
 //!
 //! Ground layer: knows the recording's first line and nothing above it;
 //! never prints.
@@ -108,7 +109,7 @@ pub enum OutputError {
     )]
     IsInput { out: PathBuf, input: PathBuf },
     #[error(
-        "{}: this is a recording; nothing was written (no command writes over a recording, --overwrite or --force included): give another output file",
+        "{}: this is a recording; nothing was written (a profile, model, table or figure never replaces a recording, --overwrite included; only import --force and simulate --overwrite replace recordings, with the ones they write): give another output file",
         out.display()
     )]
     IsRecording { out: PathBuf },

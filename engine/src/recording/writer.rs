@@ -40,6 +40,12 @@ pub enum Digits {
 /// period (see [`time_decimals`]); past it, times would be written alike.
 pub const MAX_RATE_HZ: f64 = 1e15;
 
+/// The lowest rate an import times samples at: one sample every 1000 s.
+/// Slower, `i / rate` runs to hundreds of digits before the point (1e-300
+/// Hz) and then overflows (1e-310 Hz); at it, a billion samples still end
+/// within 13 digits, and no texture signal is sampled more slowly.
+pub const MIN_RATE_HZ: f64 = 1e-3;
+
 /// Decimals for `t_s` at `rate_hz`: a written time is within half a unit
 /// of the last decimal of the true one, so `ceil(log10(rate)) + 2` decimals
 /// keep it within 0.5 % of a sample period at any rate; never fewer than 6
