@@ -98,7 +98,10 @@ fn new(a: &NewArgs) -> Result<(), Failure> {
     Ok(())
 }
 
+/// A rate for people: `1 kHz`, `44.1 kHz`, `100 Hz` (six significant
+/// digits at most).
 fn rate_text(rate_hz: f64) -> String {
+    let rate_hz = crate::profile::fitted::significant(rate_hz, 6);
     if rate_hz >= 1000.0 {
         format!("{} kHz", rate_hz / 1000.0)
     } else {

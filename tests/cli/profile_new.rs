@@ -189,3 +189,50 @@ fn every_line_profile_new_writes_passes_check_on_folders_of_every_kind() {
     ]);
     assert_eq!(r.code, Some(0), "{r:?}");
 }
+
+/// `hapticlab import` of CSVs with a time column (`time`: seconds since the
+/// logger started, with three decimals, as a logger writes them): two
+/// labels × `per` files of `n` samples at 1 kHz, into `dir/rec`. Their
+/// differences carry float noise: (12.000 s - 10.001 s) / 1999 is not 0.001.
+fn imported_with_times(dir: &Path, per: usize, n: usize) -> std::path::PathBuf {
+    let raw = dir.join("raw");
+    let mut files = Vec::new();
+    for (l, label) in ["a", "b"].iter().enumerate() {
+        fs::create_dir_all(raw.join(label)).unwrap();
+        for i in 0..per {
+            let mut text = String::from("time,acc\n");
+            for j in 1..=n {
+                let v = ((j * (3 + l) + i) % 17) as f64 / 17.0 - 0.5;
+                let _ = writeln!(text, "{:.3},{v:.4}", 10.0 + j as f64 * 0.001);
+            }
+            let f = raw.join(label).join(format!("{label}-{i:02}.csv"));
+            fs::write(&f, text).unwrap();
+            files.push(f);
+        }
+    }
+    let rec = dir.join("rec");
+    let mut args: Vec<&str> = vec!["import", "--time-column", "time", "--out", p(&rec)];
+    args.extend(files.iter().map(|f| p(f)));
+    let r = run(&args);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    rec
+}
+
+#[test]
+fn a_rate_measured_from_sample_times_is_written_without_float_noise() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = imported_with_times(dir.path(), 3, 2000);
+    let out = dir.path().join("times.toml");
+    let r = run(&["profile", "new", "--from", p(&rec), "--out", p(&out)]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let text = fs::read_to_string(&out).unwrap();
+    assert!(r.stdout.contains("along t_s at 1 kHz"), "{r:?}");
+    assert!(text.contains("about 1000.0 samples a second"), "{text}");
+    assert!(text.contains("spacing = 0.001   #"), "{text}");
+    assert!(text.contains(": 1.999 s along t_s), 1991 points"), "{text}");
+    // No 999.9999999999998, 0.001000000000000001 or 1.9989999999999988.
+    for noise in ["99999", "00000"] {
+        assert!(!text.contains(noise), "{noise} in\n{text}");
+        assert!(!r.stdout.contains(noise), "{noise} in {r:?}");
+    }
+}

@@ -15,6 +15,7 @@ use crate::profile::{Analysis, Classifier, Metric, SpectrumKind, Taper, check_op
 mod tests;
 mod writer;
 
+pub use writer::shown;
 use writer::{Alternatives, Doc, Line, OptionGroup, advised, ceil3, float, floor3, line};
 pub use writer::{apply_group, groups_of};
 
@@ -53,10 +54,10 @@ fn spacing_of(s: &Survey, axis: &str, time: bool) -> (f64, String, String) {
         let why = if s.rates.len() > 1 {
             format!(
                 "one sample period of the slowest rate, 1 / {} Hz: the recordings' rates differ (see above), and every point must hold a sample of each",
-                float(slowest)
+                shown(slowest)
             )
         } else {
-            format!("one sample period, 1 / {} Hz", float(slowest))
+            format!("one sample period, 1 / {} Hz", shown(slowest))
         };
         return (1.0 / slowest, float(1.0 / slowest), why);
     }
@@ -121,7 +122,8 @@ fn plan<'a>(s: &'a Survey, from: &'a Path) -> Result<Plan<'a>, String> {
     let (extent, shortest_file) = s.shortest.get(axis).cloned().unwrap_or_default();
     let too_short = || {
         format!(
-            "{shortest_file}: the shortest complete recording spans only {extent} along {axis}: too short to analyse (at least 8 points of {spacing_text})"
+            "{shortest_file}: the shortest complete recording spans only {} along {axis}: too short to analyse (at least 8 points of {spacing_text})",
+            shown(extent)
         )
     };
     if !(extent.is_finite() && extent >= 8.0 * spacing) {
@@ -205,12 +207,12 @@ fn header(doc: &mut Doc, p: &Plan) {
         "Found: {} complete recording(s){left_out}; columns {}; about {} samples a second.",
         s.complete,
         s.columns.join(", "),
-        float(s.rate_hz)
+        shown(s.rate_hz)
     ));
     if s.rates.len() > 1 {
         doc.comment("The recordings' rates differ (rate: recordings, e.g.):");
         for (hz, count, file) in &s.rates {
-            doc.comment(&format!("  {} Hz: {count}, e.g. {file}", float(*hz)));
+            doc.comment(&format!("  {} Hz: {count}, e.g. {file}", shown(*hz)));
         }
     }
     doc.comment("Labels and recordings per label:");
@@ -257,7 +259,7 @@ fn analysis_table(doc: &mut Doc, p: &Plan) {
         advised("window", format!("[0.0, {}]", p.end_text)).below(format!(
             "The whole of the shortest complete recording ({}: {} {} along {axis}), {} points.",
             p.shortest_file,
-            float(p.extent),
+            shown(p.extent),
             p.unit,
             p.n
         )),

@@ -155,20 +155,24 @@ fn summarise(rec: &Recording, file: &Path, label: String) -> Seen {
         let mean = v.iter().sum::<f64>() / n as f64;
         spread.push((v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64).sqrt());
     }
-    let t_step = rec
-        .columns
-        .iter()
-        .position(|c| c == "t_s")
-        .map(|i| step[i])
-        .filter(|s| *s > 0.0);
+    let time = rec.columns.iter().position(|c| c == "t_s");
+    let t_step = time.map(|i| step[i]).filter(|s| *s > 0.0);
+    // The rate said in the metadata is exact but for float noise; one
+    // measured from `t_s` is as good as the samples' timing.
+    let rate_hz = match rec
+        .meta_f64("rate_hz")
+        .filter(|r| r.is_finite() && *r > 0.0)
+    {
+        Some(r) => Some(tidy_rate(r, FLOAT_NOISE)),
+        None => {
+            t_step.map(|s| tidy_rate(1.0 / s, time.map_or(FLOAT_NOISE, |i| timing(&rec.data[i]))))
+        }
+    };
     Seen {
         file: file.display().to_string(),
         label,
         columns: rec.columns.clone(),
-        rate_hz: rec
-            .meta_f64("rate_hz")
-            .filter(|r| r.is_finite() && *r > 0.0)
-            .or(t_step.map(|s| 1.0 / s)),
+        rate_hz,
         travel,
         step,
         spread,
@@ -178,6 +182,39 @@ fn summarise(rec: &Recording, file: &Path, label: String) -> Seen {
             .map(|(k, v)| (k.clone(), dataset::meta_text(v)))
             .collect(),
     }
+}
+
+/// The relative error of a rate that is only float noise (a sum of many
+/// sample times, or a rate written by a program as 999.9999999999998).
+const FLOAT_NOISE: f64 = 1e-9;
+
+/// The relative uncertainty of the mean sample period of `t`: twice the
+/// standard error of the periods (their jitter over the root of their
+/// number), at least [`FLOAT_NOISE`].
+fn timing(t: &[f64]) -> f64 {
+    let n = t.len().saturating_sub(1);
+    if n < 2 {
+        return FLOAT_NOISE;
+    }
+    let mean = (t[n] - t[0]) / n as f64;
+    let var = t
+        .windows(2)
+        .map(|w| (w[1] - w[0] - mean).powi(2))
+        .sum::<f64>()
+        / (n - 1) as f64;
+    (2.0 * var.sqrt() / (mean.abs() * (n as f64).sqrt())).max(FLOAT_NOISE)
+}
+
+/// `rate` to the fewest significant digits (up to 6) that agree with it
+/// within `tolerance` (relative): 1999 periods written as 0.001 s give
+/// 1000 Hz, not 999.9999999999998, whose period (the spacing) would be
+/// 0.001000000000000001. A rate the samples pin down more finely than 6
+/// digits allow stays as measured.
+pub fn tidy_rate(rate: f64, tolerance: f64) -> f64 {
+    (1..=6)
+        .map(|d| crate::profile::fitted::significant(rate, d))
+        .find(|r| ((r - rate) / rate).abs() <= tolerance)
+        .unwrap_or(rate)
 }
 
 /// Keys every hapticlab recording carries that say nothing about grouping.
@@ -380,5 +417,27 @@ impl Survey {
         } else {
             Vec::new()
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_rate_is_rounded_only_as_far_as_the_sample_times_allow() {
+        // Float noise rounds away; a rate written to 3 digits stays.
+        assert_eq!(tidy_rate(999.999_999_999_999_8, FLOAT_NOISE), 1000.0);
+        assert_eq!(tidy_rate(44_100.000_000_01, FLOAT_NOISE), 44_100.0);
+        // A clock 0.04 % slow, timed exactly, is not 1 kHz.
+        let slow: Vec<f64> = (0..2000).map(|i| i as f64 / 999.6).collect();
+        assert_eq!(tidy_rate(999.6, timing(&slow)), 999.6);
+        // 1 kHz with 50 µs of jitter on each sample: 1000 Hz is within it.
+        let jittered: Vec<f64> = (0..2000)
+            .map(|i| i as f64 * 0.001 + 5e-5 * ((i * 7919 % 13) as f64 / 6.0 - 1.0))
+            .collect();
+        let measured = 1999.0 / (jittered[1999] - jittered[0]);
+        assert_ne!(measured, 1000.0);
+        assert_eq!(tidy_rate(measured, timing(&jittered)), 1000.0);
     }
 }

@@ -11,6 +11,13 @@ use std::fmt::Write as _;
 
 use crate::profile::Classifier;
 pub use crate::profile::fitted::{ceil3, float, floor3};
+
+/// A measured number for people, in a comment: six significant digits at
+/// most (`1.999`, not the `1.9989999999999988` a difference of sample
+/// times gives), written as TOML would (`1000.0`).
+pub fn shown(x: f64) -> String {
+    float(crate::profile::fitted::significant(x, 6))
+}
 use crate::profile::options::{ANALYSIS_OPTIONS, CLASSIFIER_OPTIONS, Group, in_group, option};
 
 /// One `key = value` line, with why it was chosen (a trailing comment;
