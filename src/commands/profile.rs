@@ -16,10 +16,12 @@ use clap::{Args, Subcommand};
 use crate::profile::LoadedProfile;
 use crate::support::{Failure, bad, check_output, runtime, write_atomically};
 
+pub mod cautions;
 pub mod draft;
 pub mod survey;
 
-pub use draft::{apply_group, draft, groups_of};
+use cautions::rate_text;
+pub use draft::{Drafted, apply_group, draft, groups_of};
 pub use survey::{Survey, survey};
 
 #[derive(Debug, Args)]
@@ -70,18 +72,34 @@ fn new(a: &NewArgs) -> Result<(), Failure> {
         .out
         .file_stem()
         .map_or("recordings".into(), |n| n.to_string_lossy().into_owned());
-    let text = draft(&s, &name, &a.from).map_err(bad)?;
+    let Drafted { text, cautions } = draft(&s, &name, &a.from).map_err(bad)?;
     // What is written must load: a profile that does not is this command's fault.
     let base = a.out.parent().unwrap_or(Path::new("."));
     LoadedProfile::from_str(&text, &a.out.display().to_string(), base)
         .map_err(|e| runtime(format!("the profile drafted is invalid (a bug): {e}")))?;
     write_atomically(&a.out, &[], text.as_bytes())?;
+    for c in &cautions {
+        crate::errln!("warning: {}: {c}", a.from.display());
+    }
+    let axis = s.choice().axis;
+    // Along time, the rate the analysis resamples at; along a position,
+    // the recordings' own.
+    let rate = if axis == "t_s" {
+        s.slowest_rate()
+    } else {
+        s.rate_hz
+    };
     crate::outln!(
-        "wrote {}: analysis only, {} along {} at {}, {} label(s) from {} complete recording(s){}",
+        "wrote {}: analysis only, {} along {} at {}{}, {} label(s) from {} complete recording(s){}",
         a.out.display(),
-        s.channels(&s.choice().axis).join(", "),
-        s.choice().axis,
-        rate_text(s.rate_hz),
+        s.channels(&axis).join(", "),
+        axis,
+        rate_text(rate),
+        if axis == "t_s" && s.rates.len() > 1 {
+            " (the slowest of their rates: see the warning)"
+        } else {
+            ""
+        },
         s.labels.len(),
         s.complete,
         if s.incomplete.is_empty() {
@@ -96,15 +114,4 @@ fn new(a: &NewArgs) -> Result<(), Failure> {
         a.from.display()
     );
     Ok(())
-}
-
-/// A rate for people: `1 kHz`, `44.1 kHz`, `100 Hz` (six significant
-/// digits at most).
-fn rate_text(rate_hz: f64) -> String {
-    let rate_hz = crate::profile::fitted::significant(rate_hz, 6);
-    if rate_hz >= 1000.0 {
-        format!("{} kHz", rate_hz / 1000.0)
-    } else {
-        format!("{rate_hz} Hz")
-    }
 }

@@ -236,3 +236,47 @@ fn a_rate_measured_from_sample_times_is_written_without_float_noise() {
         assert!(!r.stdout.contains(noise), "{noise} in {r:?}");
     }
 }
+
+#[test]
+fn mixed_rates_are_reported_as_analysed_and_a_rate_of_one_label_is_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("rates");
+    // Label a at 1 kHz; label b "imported with --rate 100 by mistake".
+    for (label, rate, n) in [("a", 1000.0, 3000), ("b", 100.0, 300)] {
+        fs::create_dir_all(rec.join(label)).unwrap();
+        for i in 0..4 {
+            let text = recording(label, 0.05, n, rate, "", i);
+            fs::write(rec.join(label).join(format!("{label}-{i}.csv")), text).unwrap();
+        }
+    }
+    let out = dir.path().join("rates.toml");
+    let r = run(&["profile", "new", "--from", p(&rec), "--out", p(&out)]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let text = fs::read_to_string(&out).unwrap();
+    assert!(text.contains("spacing = 0.01 "), "{text}");
+    // The summary names the rate analysed, not the typical one.
+    assert!(
+        r.stdout
+            .contains("acc along t_s at 100 Hz (the slowest of their rates: see the warning)"),
+        "{r:?}"
+    );
+    let warning = r
+        .stderr
+        .lines()
+        .find(|l| l.starts_with("warning: ") && l.contains("rates differ"))
+        .unwrap_or_else(|| panic!("no warning of the rates: {r:?}"));
+    for said in [
+        "100 Hz: 4 recordings (b: 4); 1 kHz: 4 recordings (a: 4)",
+        "analysed at 100 Hz, the slowest (spacing = 0.01)",
+        "100 Hz goes with label b alone, 1 kHz goes with label a alone: the classifier would tell the labels apart by their rate, not their texture",
+        "--rate",
+    ] {
+        assert!(warning.contains(said), "{said:?} not in {warning}");
+    }
+    assert_eq!(r.stderr.lines().count(), 1, "{r:?}");
+    assert!(
+        text.contains("# Caution: the recordings' rates differ"),
+        "{text}"
+    );
+    assert!(text.contains("#   100.0 Hz: 4 (b: 4), e.g. "), "{text}");
+}

@@ -6,6 +6,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use super::cautions::{self, per_label};
 use super::survey::Survey;
 use crate::profile::fitted::fitting_bands;
 use crate::profile::options::Group;
@@ -16,8 +17,15 @@ mod tests;
 mod writer;
 
 pub use writer::shown;
-use writer::{Alternatives, Doc, Line, OptionGroup, advised, ceil3, float, floor3, line};
+use writer::{Alternatives, Doc, Line, OptionGroup, advised, ceil3, float, floor3, line, wrap};
 pub use writer::{apply_group, groups_of};
+
+/// A drafted profile's text, and the cautions its comments hold, for the
+/// command to say on standard error too.
+pub struct Drafted {
+    pub text: String,
+    pub cautions: Vec<String>,
+}
 
 /// What the survey decides before any text: the axis, rate, spacing,
 /// window and spectrum sizes every section derives from.
@@ -43,6 +51,8 @@ struct Plan<'a> {
     min_count: usize,
     /// The recordings are consecutive segments of longer ones (`import --split`).
     segments: bool,
+    /// What would quietly spoil the analysis ([`cautions`]).
+    cautions: Vec<String>,
 }
 
 /// The spacing along the axis: one sample period of the slowest rate in
@@ -50,7 +60,7 @@ struct Plan<'a> {
 /// 0.3 mm or ten steps along a position axis. (value, text, why).
 fn spacing_of(s: &Survey, axis: &str, time: bool) -> (f64, String, String) {
     if time {
-        let slowest = s.rates.first().map_or(s.rate_hz, |r| r.0);
+        let slowest = s.slowest_rate();
         let why = if s.rates.len() > 1 {
             format!(
                 "one sample period of the slowest rate, 1 / {} Hz: the recordings' rates differ (see above), and every point must hold a sample of each",
@@ -156,7 +166,6 @@ fn plan<'a>(s: &'a Survey, from: &'a Path) -> Result<Plan<'a>, String> {
         more: more.to_vec(),
         time,
         unit: if time { "s" } else { "m" },
-        spacing_text,
         spacing_why,
         extent,
         shortest_file,
@@ -168,11 +177,15 @@ fn plan<'a>(s: &'a Survey, from: &'a Path) -> Result<Plan<'a>, String> {
         magnitude_bins: (n / 2).min(128),
         min_count: s.labels.values().copied().min().unwrap_or(0),
         segments: s.varying_meta.iter().any(|k| k == "segment"),
+        cautions: cautions::of_rates(s, time.then_some(spacing_text.as_str()))
+            .into_iter()
+            .collect(),
+        spacing_text,
     })
 }
 
 /// The profile's text for the survey `s` of `from`.
-pub fn draft(s: &Survey, name: &str, from: &Path) -> Result<String, String> {
+pub fn draft(s: &Survey, name: &str, from: &Path) -> Result<Drafted, String> {
     let p = plan(s, from)?;
     let mut doc = Doc::default();
     header(&mut doc, &p);
@@ -187,7 +200,10 @@ pub fn draft(s: &Survey, name: &str, from: &Path) -> Result<String, String> {
     analysis_table(&mut doc, &p);
     classifier_table(&mut doc, &p);
     evaluation_table(&mut doc, &p);
-    Ok(doc.0)
+    Ok(Drafted {
+        text: doc.0,
+        cautions: p.cautions,
+    })
 }
 
 /// What was found, and how to use the option groups.
@@ -210,10 +226,19 @@ fn header(doc: &mut Doc, p: &Plan) {
         shown(s.rate_hz)
     ));
     if s.rates.len() > 1 {
-        doc.comment("The recordings' rates differ (rate: recordings, e.g.):");
-        for (hz, count, file) in &s.rates {
-            doc.comment(&format!("  {} Hz: {count}, e.g. {file}", shown(*hz)));
+        doc.comment("The recordings' rates differ (rate: recordings (per label), e.g.):");
+        for r in &s.rates {
+            doc.comment(&format!(
+                "  {} Hz: {} ({}), e.g. {}",
+                shown(r.hz),
+                r.count,
+                per_label(&r.labels),
+                r.file
+            ));
         }
+    }
+    for caution in &p.cautions {
+        doc.comment(&format!("Caution: {}.", wrap(caution, 90)));
     }
     doc.comment("Labels and recordings per label:");
     for (label, count) in &s.labels {

@@ -51,9 +51,28 @@ pub struct Survey {
     /// Per varying key: the fewest distinct values any label has, and
     /// whether some value is shared by two recordings (so the key groups).
     pub groups: BTreeMap<String, (usize, bool)>,
-    /// The distinct sample rates (within 1 %), slowest first: the rate, how
-    /// many recordings have it, and one of them.
-    pub rates: Vec<(f64, usize, String)>,
+    /// The distinct sample rates (within 1 %), slowest first.
+    pub rates: Vec<RateGroup>,
+}
+
+/// The recordings that share a sample rate (within 1 % of the slowest of
+/// them).
+#[derive(Debug, Clone)]
+pub struct RateGroup {
+    pub hz: f64,
+    pub count: usize,
+    /// One of them.
+    pub file: String,
+    /// How many of them each label has.
+    pub labels: BTreeMap<String, usize>,
+}
+
+impl Survey {
+    /// The rate a time axis is resampled at: the slowest, so that every
+    /// point holds a sample of each recording.
+    pub fn slowest_rate(&self) -> f64 {
+        self.rates.first().map_or(self.rate_hz, |r| r.hz)
+    }
 }
 
 /// Read every recording under `dir` (on every core) and sum them up.
@@ -331,17 +350,25 @@ fn grouping(seen: &[Seen], key: &str) -> (usize, bool) {
 }
 
 /// The recordings' rates, those within 1 % of each other counted as one.
-fn distinct_rates(seen: &[Seen]) -> Vec<(f64, usize, String)> {
-    let mut rated: Vec<(f64, &str)> = seen
+fn distinct_rates(seen: &[Seen]) -> Vec<RateGroup> {
+    let mut rated: Vec<(f64, &Seen)> = seen
         .iter()
-        .filter_map(|r| r.rate_hz.map(|h| (h, r.file.as_str())))
+        .filter_map(|r| r.rate_hz.map(|h| (h, r)))
         .collect();
     rated.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut out: Vec<(f64, usize, String)> = Vec::new();
-    for (hz, file) in rated {
+    let mut out: Vec<RateGroup> = Vec::new();
+    for (hz, r) in rated {
         match out.last_mut() {
-            Some(last) if hz <= last.0 * 1.01 => last.1 += 1,
-            _ => out.push((hz, 1, file.to_string())),
+            Some(last) if hz <= last.hz * 1.01 => last.count += 1,
+            _ => out.push(RateGroup {
+                hz,
+                count: 1,
+                file: r.file.clone(),
+                labels: BTreeMap::new(),
+            }),
+        }
+        if let Some(last) = out.last_mut() {
+            *last.labels.entry(r.label.clone()).or_default() += 1;
         }
     }
     out
