@@ -156,7 +156,7 @@ pub fn run(a: EvaluateArgs) -> Result<(), Failure> {
     let bar = Bar::default();
     let ev = request::run(&lp, &req, &bar);
     bar.end();
-    let ev = ev?;
+    let ev = ev.map_err(with_next_step)?;
     warn_skipped(&ev.skipped);
     if let Some(note) = ev.outcome.k_notice() {
         crate::errln!("note: {note}");
@@ -178,6 +178,25 @@ pub fn run(a: EvaluateArgs) -> Result<(), Failure> {
         crate::outp!("{}", table(&ev.outcome));
     }
     Ok(())
+}
+
+/// An evaluation's error, with what to do where its message leaves the
+/// user guessing: a recording that does not cover the window (a trial cut
+/// short, which `profile new` names) is refused rather than analysed as
+/// far as it goes.
+fn with_next_step(e: crate::evaluate::EvaluateError) -> Failure {
+    use crate::analysis::AnalysisError;
+    use crate::dataset::DatasetError;
+    use crate::evaluate::EvaluateError;
+    match &e {
+        EvaluateError::Dataset(DatasetError::Analysis {
+            source: AnalysisError::WindowNotCovered { .. },
+            ..
+        }) => bad(format!(
+            "{e}: remove the recording from the folder, or narrow the profile's window to what it covers"
+        )),
+        _ => e.into(),
+    }
 }
 
 /// A sweep's table (or JSON), then the verdict on the exit code: 0 when at

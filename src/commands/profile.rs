@@ -72,7 +72,11 @@ fn new(a: &NewArgs) -> Result<(), Failure> {
         .out
         .file_stem()
         .map_or("recordings".into(), |n| n.to_string_lossy().into_owned());
-    let Drafted { text, cautions } = draft(&s, &name, &a.from).map_err(bad)?;
+    let Drafted {
+        text,
+        cautions,
+        uncovered,
+    } = draft(&s, &name, &a.from).map_err(bad)?;
     // What is written must load: a profile that does not is this command's fault.
     let base = a.out.parent().unwrap_or(Path::new("."));
     LoadedProfile::from_str(&text, &a.out.display().to_string(), base)
@@ -102,11 +106,7 @@ fn new(a: &NewArgs) -> Result<(), Failure> {
         },
         s.labels.len(),
         s.complete,
-        if s.incomplete.is_empty() {
-            String::new()
-        } else {
-            format!(" ({} incomplete left out)", s.incomplete.len())
-        }
+        asides(s.incomplete.len(), uncovered)
     );
     crate::outln!(
         "next: hapticlab check {0} && hapticlab evaluate {1} -p {0}",
@@ -114,4 +114,23 @@ fn new(a: &NewArgs) -> Result<(), Failure> {
         a.from.display()
     );
     Ok(())
+}
+
+/// What the summary line adds about the recordings: the incomplete ones
+/// left out, the complete ones too short for the window.
+fn asides(incomplete: usize, uncovered: usize) -> String {
+    let mut said = Vec::new();
+    if uncovered > 0 {
+        said.push(format!(
+            "{uncovered} of them too short for the window: see the warning"
+        ));
+    }
+    if incomplete > 0 {
+        said.push(format!("{incomplete} incomplete left out"));
+    }
+    if said.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", said.join("; "))
+    }
 }

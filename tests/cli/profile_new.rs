@@ -280,3 +280,56 @@ fn mixed_rates_are_reported_as_analysed_and_a_rate_of_one_label_is_warned_about(
     );
     assert!(text.contains("#   100.0 Hz: 4 (b: 4), e.g. "), "{text}");
 }
+
+#[test]
+fn an_aborted_trial_is_named_and_the_window_fits_the_others() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("aborted");
+    // Nine trials of 2-3 s per label at 1 kHz, and one of b stopped after
+    // 40 samples.
+    folder(&rec, 9, |i| (2000 + 111 * i, 1000.0, String::new()));
+    let short = rec.join("b").join("b-009.csv");
+    fs::write(&short, recording("b", 0.17, 40, 1000.0, "", 9)).unwrap();
+    let out = dir.path().join("aborted.toml");
+    let r = run(&["profile", "new", "--from", p(&rec), "--out", p(&out)]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let text = fs::read_to_string(&out).unwrap();
+    // Fitted to the shortest trial that is not aborted (2 s), not to 40 ms.
+    assert!(text.contains("window = [0.0, 1.99]"), "{text}");
+    let warning = r
+        .stderr
+        .lines()
+        .find(|l| l.starts_with("warning: "))
+        .unwrap_or_else(|| panic!("no warning: {r:?}"));
+    for said in [
+        "1 recording is under half the median length along t_s (2.443 s): ",
+        "b-009.csv (0.039 s)",
+        "The window was fitted to the others (window = [0.0, 1.99]), so it does not cover it and evaluate refuses it until it is removed from the folder",
+        "; or, to keep it, set window = [0.0, 0.039] by hand",
+    ] {
+        assert!(warning.contains(said), "{said:?} not in {warning}");
+    }
+    assert!(
+        r.stdout.contains(
+            "from 19 complete recording(s) (1 of them too short for the window: see the warning)"
+        ),
+        "{r:?}"
+    );
+    assert!(
+        text.contains("# Caution: 1 recording is under half"),
+        "{text}"
+    );
+    // evaluate refuses the trial rather than analyse 40 ms of every other.
+    let r = run(&["evaluate", p(&rec), "-p", p(&out)]);
+    assert_eq!(r.code, Some(2), "{r:?}");
+    assert!(r.stderr.contains("b-009.csv: the scan covers"), "{r:?}");
+    assert!(
+        r.stderr.contains(
+            "1.990 s: remove the recording from the folder, or narrow the profile's window"
+        ),
+        "{r:?}"
+    );
+    fs::remove_file(&short).unwrap();
+    let r = run(&["evaluate", p(&rec), "-p", p(&out)]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+}

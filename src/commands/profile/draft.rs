@@ -25,6 +25,8 @@ pub use writer::{apply_group, groups_of};
 pub struct Drafted {
     pub text: String,
     pub cautions: Vec<String>,
+    /// Recordings too short for the window (named in the cautions).
+    pub uncovered: usize,
 }
 
 /// What the survey decides before any text: the axis, rate, spacing,
@@ -53,6 +55,9 @@ struct Plan<'a> {
     segments: bool,
     /// What would quietly spoil the analysis ([`cautions`]).
     cautions: Vec<String>,
+    /// The recordings much shorter than the rest, which the window was not
+    /// fitted to and which do not cover it.
+    uncovered: usize,
 }
 
 /// The spacing along the axis: one sample period of the slowest rate in
@@ -129,7 +134,7 @@ fn plan<'a>(s: &'a Survey, from: &'a Path) -> Result<Plan<'a>, String> {
     };
     let time = axis == "t_s";
     let (spacing, spacing_text, spacing_why) = spacing_of(s, axis, time);
-    let (extent, shortest_file) = s.shortest.get(axis).cloned().unwrap_or_default();
+    let ((extent, shortest_file), uncovered) = s.window_reach(axis);
     let too_short = || {
         format!(
             "{shortest_file}: the shortest complete recording spans only {} along {axis}: too short to analyse (at least 8 points of {spacing_text})",
@@ -153,6 +158,10 @@ fn plan<'a>(s: &'a Survey, from: &'a Path) -> Result<Plan<'a>, String> {
         return Err(too_short());
     }
     let segment = welch_segment(n, time, 1.0 / spacing);
+    let cautions = cautions::of_rates(s, time.then_some(spacing_text.as_str()))
+        .into_iter()
+        .chain(cautions::of_lengths(s, axis, &end_text, spacing))
+        .collect();
     // Log-Welch for other rigs' signals in time (vibration, sound) and for
     // long windows; the thesis's |DFT| for a short stroke resampled by position.
     let welch_active = (time || n > 4096) && segment >= 16;
@@ -177,9 +186,8 @@ fn plan<'a>(s: &'a Survey, from: &'a Path) -> Result<Plan<'a>, String> {
         magnitude_bins: (n / 2).min(128),
         min_count: s.labels.values().copied().min().unwrap_or(0),
         segments: s.varying_meta.iter().any(|k| k == "segment"),
-        cautions: cautions::of_rates(s, time.then_some(spacing_text.as_str()))
-            .into_iter()
-            .collect(),
+        cautions,
+        uncovered: uncovered.len(),
         spacing_text,
     })
 }
@@ -203,6 +211,7 @@ pub fn draft(s: &Survey, name: &str, from: &Path) -> Result<Drafted, String> {
     Ok(Drafted {
         text: doc.0,
         cautions: p.cautions,
+        uncovered: p.uncovered,
     })
 }
 
@@ -282,11 +291,16 @@ fn analysis_table(doc: &mut Doc, p: &Plan) {
         channel,
         advised("axis", format!("{axis:?}")),
         advised("window", format!("[0.0, {}]", p.end_text)).below(format!(
-            "The whole of the shortest complete recording ({}: {} {} along {axis}), {} points.",
+            "The whole of the shortest complete recording ({}: {} {} along {axis}), {} points{}.",
             p.shortest_file,
             shown(p.extent),
             p.unit,
-            p.n
+            p.n,
+            if p.uncovered > 0 {
+                "; the much shorter ones named in the Caution above do not cover it"
+            } else {
+                ""
+            },
         )),
         line("spacing", p.spacing_text.clone(), p.spacing_why.clone()),
         advised("detrend", "\"mean\""),

@@ -53,6 +53,46 @@ pub struct Survey {
     pub groups: BTreeMap<String, (usize, bool)>,
     /// The distinct sample rates (within 1 %), slowest first.
     pub rates: Vec<RateGroup>,
+    /// Per column that can be the axis (`t_s`, the positions): how far the
+    /// recordings reach along it.
+    pub reach: BTreeMap<String, Reach>,
+}
+
+/// How far the recordings reach along an axis: what a window can cover.
+#[derive(Debug, Clone, Default)]
+pub struct Reach {
+    /// The median travel.
+    pub median: f64,
+    /// The recordings under half the median travel (aborted or cut-short
+    /// trials), shortest first: file and travel.
+    pub short: Vec<(String, f64)>,
+    /// The shortest travel of the others, and its file.
+    pub typical: (f64, String),
+}
+
+/// A few recordings much shorter than the rest (at most a quarter of
+/// them) are taken for aborted trials: the window fits the others. More
+/// than that and the lengths simply vary: the window fits the shortest.
+fn few(short: usize, all: usize) -> bool {
+    short > 0 && short * 4 <= all
+}
+
+/// The [`Reach`] of recordings' travels along a column.
+pub(super) fn reach<'a>(travels: impl Iterator<Item = (f64, &'a String)>) -> Reach {
+    let mut all: Vec<(f64, &String)> = travels.collect();
+    all.sort_by(|a, b| a.0.total_cmp(&b.0).then_with(|| a.1.cmp(b.1)));
+    let median = all.get(all.len() / 2).map_or(0.0, |t| t.0);
+    let cut = all.partition_point(|t| t.0 < median / 2.0);
+    Reach {
+        median,
+        short: all[..cut]
+            .iter()
+            .map(|(t, f)| (f.to_string(), *t))
+            .collect(),
+        typical: all
+            .get(cut)
+            .map_or((0.0, String::new()), |(t, f)| (*t, f.to_string())),
+    }
 }
 
 /// The recordings that share a sample rate (within 1 % of the slowest of
@@ -68,6 +108,16 @@ pub struct RateGroup {
 }
 
 impl Survey {
+    /// What a window along `column` fits, and its file: the shortest
+    /// recording that is not one of a few much shorter ones ([`Reach`]).
+    /// The second value: those left uncovered.
+    pub fn window_reach(&self, column: &str) -> ((f64, String), &[(String, f64)]) {
+        match self.reach.get(column) {
+            Some(r) if few(r.short.len(), self.complete) => (r.typical.clone(), &r.short),
+            _ => (self.shortest.get(column).cloned().unwrap_or_default(), &[]),
+        }
+    }
+
     /// The rate a time axis is resampled at: the slowest, so that every
     /// point holds a sample of each recording.
     pub fn slowest_rate(&self) -> f64 {
@@ -301,6 +351,10 @@ fn sum_up(seen: &[Seen], incomplete: Vec<String>) -> Survey {
             .min_by(|a, b| a.0.total_cmp(&b.0))
             .map_or((0.0, String::new()), |(t, r)| (t, r.file.clone()));
         s.shortest.insert(c.clone(), shortest);
+        if c == "t_s" || POSITIONS.contains(&c.as_str()) {
+            let travels = seen.iter().zip(&at).map(|(r, &i)| (r.travel[i], &r.file));
+            s.reach.insert(c.clone(), reach(travels));
+        }
         let mut steps: Vec<f64> = seen.iter().zip(&at).map(|(r, &i)| r.step[i]).collect();
         steps.sort_by(f64::total_cmp);
         s.step.insert(c.clone(), steps[steps.len() / 2]);
@@ -388,10 +442,11 @@ const MAX_CHANNELS: usize = 4;
 
 impl Survey {
     /// A position axis when the probe travels (a stroke of 1 mm or more in
-    /// every recording): the one it travels most along, the thesis's way;
-    /// otherwise time.
+    /// every recording but a few much shorter ones, [`Reach`]): the one it
+    /// travels most along, the thesis's way; otherwise time.
     pub fn choice(&self) -> Choice {
-        let travel = |c: &str| self.shortest.get(c).map_or(0.0, |t| t.0);
+        // An aborted stroke or two do not make the probe stationary.
+        let travel = |c: &str| self.window_reach(c).0.0;
         let stroke = POSITIONS
             .iter()
             .filter(|c| self.columns.iter().any(|x| x == *c))
@@ -417,8 +472,13 @@ impl Survey {
                     axis: axis.to_string(),
                     signals: signal.into_iter().collect(),
                     why: format!(
-                        "the probe strokes along {axis} (at least {:.1} mm in every recording): resampled by position, as the thesis",
-                        travel(axis) * 1000.0
+                        "the probe strokes along {axis} (at least {:.1} mm in every recording{}): resampled by position, as the thesis",
+                        travel(axis) * 1000.0,
+                        if self.window_reach(axis).1.is_empty() {
+                            ""
+                        } else {
+                            " but the few much shorter ones"
+                        }
                     ),
                 }
             }

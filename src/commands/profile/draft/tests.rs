@@ -97,3 +97,24 @@ fn a_recording_too_short_is_refused_naming_it() {
     };
     assert!(e.contains("a/a_001.csv") && e.contains("too short"), "{e}");
 }
+
+#[test]
+fn recordings_of_widely_varying_length_fit_the_window_to_the_shortest_and_say_so() {
+    let mut s = survey_of(&["t_s", "mic"], &[("a", 4), ("b", 4)], 1000.0, 1.0);
+    let files: Vec<String> = (0..8).map(|i| format!("x/{i}.csv")).collect();
+    // Half the trials last 1 s, half 3 s: lengths that vary, not a few aborted trials.
+    let travels = (0..8).map(|i| (if i < 4 { 1.0 } else { 3.0 }, &files[i]));
+    s.reach
+        .insert("t_s".into(), super::super::survey::reach(travels));
+    let d = draft(&s, "varied", Path::new("rec")).unwrap();
+    assert!(d.text.contains("window = [0.0, 1.00]"), "{}", d.text);
+    assert_eq!(d.uncovered, 0);
+    assert_eq!(d.cautions.len(), 1, "{:?}", d.cautions);
+    assert!(
+        d.cautions[0].starts_with(
+            "4 of 8 recordings are under half the median length along t_s (3.0 s), e.g. x/0.csv (1.0 s): the window fits the shortest"
+        ),
+        "{:?}",
+        d.cautions
+    );
+}
