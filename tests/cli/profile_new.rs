@@ -333,3 +333,81 @@ fn an_aborted_trial_is_named_and_the_window_fits_the_others() {
     let r = run(&["evaluate", p(&rec), "-p", p(&out)]);
     assert_eq!(r.code, Some(0), "{r:?}");
 }
+
+#[test]
+fn overlapping_segments_are_left_out_between_training_and_test() {
+    let dir = tempfile::tempdir().unwrap();
+    let raw = dir.path().join("raw");
+    let mut files = Vec::new();
+    for (l, label) in ["a", "b"].iter().enumerate() {
+        fs::create_dir_all(raw.join(label)).unwrap();
+        let mut text = String::new();
+        for j in 0..6000 {
+            let v = (j as f64 * [0.4, 1.1][l]).sin() + ((j * 7919) % 13) as f64 / 26.0;
+            let _ = writeln!(text, "{v:.4}");
+        }
+        let f = raw.join(label).join("long.txt");
+        fs::write(&f, text).unwrap();
+        files.push(f);
+    }
+    let rec = dir.path().join("rec");
+    let mut args = vec![
+        "import",
+        "--rate",
+        "100",
+        "--split",
+        "2",
+        "--split-hop",
+        "1",
+    ];
+    args.extend(["--out", p(&rec)]);
+    args.extend(files.iter().map(|f| p(f)));
+    let r = run(&args);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let out = dir.path().join("overlap.toml");
+    let r = run(&["profile", "new", "--from", p(&rec), "--out", p(&out)]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let text = fs::read_to_string(&out).unwrap();
+    // 59 segments of 2 s every 1 s: the one after the training ones shares
+    // its first second with the last of them.
+    for line in [
+        "method = \"holdout\"\ntrain_per_class = 41\ntest_per_class = 17\ngap_per_class = 1\n",
+        "so gap_per_class = 1 leaves them out of both sides",
+        "neighbours sharing signal fall on both sides: this flatters",
+    ] {
+        assert!(text.contains(line), "{line:?} not in\n{text}");
+    }
+    let r = run(&["check", p(&out)]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let r = run(&["evaluate", p(&rec), "-p", p(&out)]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(
+        r.stdout
+            .contains("41 training and 17 test recordings per class, 1 left out between them"),
+        "{r:?}"
+    );
+    let json = crate::common::json_of(&["evaluate", p(&rec), "-p", p(&out), "--json"]);
+    let names = |part: &str| -> Vec<String> {
+        json[part]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|f| f.as_str().unwrap().to_string())
+            .collect()
+    };
+    let (train, test) = (names("train"), names("test"));
+    assert!(
+        train.iter().any(|f| f.ends_with("a/long-seg041.csv")),
+        "{train:?}"
+    );
+    assert!(
+        !train
+            .iter()
+            .chain(&test)
+            .any(|f| f.ends_with("-seg042.csv"))
+    );
+    assert!(
+        test.iter().any(|f| f.ends_with("a/long-seg043.csv")),
+        "{test:?}"
+    );
+}

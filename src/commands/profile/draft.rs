@@ -7,15 +7,17 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use super::cautions::{self, per_label};
-use super::survey::Survey;
+use super::survey::{self, Survey};
 use crate::profile::fitted::fitting_bands;
 use crate::profile::options::Group;
 use crate::profile::{Analysis, Classifier, Metric, SpectrumKind, Taper, check_options};
 
+mod evaluation;
 #[cfg(test)]
 mod tests;
 mod writer;
 
+use evaluation::{TimeSplit, evaluation_table, shared_caution, time_split};
 pub use writer::shown;
 use writer::{Alternatives, Doc, Line, OptionGroup, advised, ceil3, float, floor3, line, wrap};
 pub use writer::{apply_group, groups_of};
@@ -53,6 +55,8 @@ struct Plan<'a> {
     min_count: usize,
     /// The recordings are consecutive segments of longer ones (`import --split`).
     segments: bool,
+    /// The split in time offered (or chosen, for segments).
+    split: TimeSplit,
     /// What would quietly spoil the analysis ([`cautions`]).
     cautions: Vec<String>,
     /// The recordings much shorter than the rest, which the window was not
@@ -158,9 +162,13 @@ fn plan<'a>(s: &'a Survey, from: &'a Path) -> Result<Plan<'a>, String> {
         return Err(too_short());
     }
     let segment = welch_segment(n, time, 1.0 / spacing);
+    let min_count = s.labels.values().copied().min().unwrap_or(0);
+    let segments = s.varying_meta.iter().any(|k| k == "segment");
+    let split = time_split(&s.segments, min_count, segments);
     let cautions = cautions::of_rates(s, time.then_some(spacing_text.as_str()))
         .into_iter()
         .chain(cautions::of_lengths(s, axis, &end_text, spacing))
+        .chain((split.shared > 0).then(|| shared_caution(split.shared)))
         .collect();
     // Log-Welch for other rigs' signals in time (vibration, sound) and for
     // long windows; the thesis's |DFT| for a short stroke resampled by position.
@@ -184,8 +192,9 @@ fn plan<'a>(s: &'a Survey, from: &'a Path) -> Result<Plan<'a>, String> {
         segment,
         welch_active,
         magnitude_bins: (n / 2).min(128),
-        min_count: s.labels.values().copied().min().unwrap_or(0),
-        segments: s.varying_meta.iter().any(|k| k == "segment"),
+        min_count,
+        segments,
+        split,
         cautions,
         uncovered: uncovered.len(),
         spacing_text,
@@ -573,132 +582,4 @@ fn classifier_table(doc: &mut Doc, p: &Plan) {
         &[("k", why), ("metric", "the distance between spectra")],
         groups,
     );
-}
-
-/// The evaluation methods that can test every label, the first choice
-/// written out and the others as groups.
-fn evaluation_table(doc: &mut Doc, p: &Plan) {
-    let min = p.min_count;
-    let folds = min.clamp(2, 10);
-    let (train, test) = time_split(p);
-    let grouping = group_by_group(p);
-    let by_source = grouping
-        .as_ref()
-        .is_some_and(|g| g.keys.contains(&("group_by", "\"source\"".into())));
-    let loo = OptionGroup {
-        when: "each recording tested against all the others: few recordings per label".into(),
-        keys: vec![("method", "\"leave-one-out\"".into())],
-    };
-    let kfold = OptionGroup {
-        when: format!("stratified {folds}-fold cross-validation: several recordings per label"),
-        keys: vec![
-            ("method", "\"k-fold\"".into()),
-            ("folds", folds.to_string()),
-        ],
-    };
-    let holdout = OptionGroup {
-        when: format!(
-            "a fixed split in time: per label the first {train} recordings (file-name order) train and the next {test} test; for recordings made in order, the later ones drifting"
-        ),
-        keys: vec![
-            ("method", "\"holdout\"".into()),
-            ("train_per_class", train.to_string()),
-            ("test_per_class", test.to_string()),
-        ],
-    };
-    let (why, first, others) = if min < 2 {
-        (
-            format!(
-                "Only {min} recording of some label: nothing to test it against. Record more, or cut\n\
-                 long recordings into trials: `hapticlab import … --split SECONDS` (evaluate refuses this)."
-            ),
-            loo,
-            Vec::new(),
-        )
-    } else if p.segments {
-        (
-            format!(
-                "The recordings are consecutive segments of longer ones (`import --split`): neighbours\n\
-                 resemble each other, so the first {train} segments of each label train and the next {test} test.{}",
-                if by_source {
-                    "\nA label with several source files: the split runs through them in file-name order, one\n\
-                     source after another; the group_by group below keeps each source on one side instead."
-                } else {
-                    ""
-                }
-            ),
-            holdout,
-            vec![kfold, loo],
-        )
-    } else if min < 5 {
-        (
-            format!(
-                "Fewer than 5 recordings of some label ({min}): each is tested against all the others."
-            ),
-            loo,
-            vec![kfold, holdout],
-        )
-    } else {
-        (
-            format!(
-                "{min} or more recordings per label: stratified {folds}-fold cross-validation."
-            ),
-            kfold,
-            vec![loo, holdout],
-        )
-    };
-    doc.table("evaluation");
-    doc.comment(&why);
-    for (k, v) in &first.keys {
-        let _ = writeln!(doc.0, "{k} = {v}");
-    }
-    if !others.is_empty() {
-        doc.comment("(a method group below replaces every line above: comment them all out)");
-    }
-    doc.blank();
-    let mut groups = others;
-    groups.extend(grouping);
-    doc.groups(&groups);
-}
-
-/// The time split: half and half (the thesis's own split was 20 + 10 of
-/// 30); 70 / 30 for segments of long recordings, so more of each trains.
-fn time_split(p: &Plan) -> (usize, usize) {
-    let min = p.min_count;
-    let train = if p.segments {
-        (min * 7).div_ceil(10).min(min.saturating_sub(1)).max(1)
-    } else {
-        min.div_ceil(2)
-    };
-    (train, min.saturating_sub(train))
-}
-
-/// Leave-one-out keeping together the recordings that share a metadata
-/// value: offered for a key that groups recordings (some share a value)
-/// and gives every label at least two groups (so each can be tested);
-/// the source file first (segments of one recording).
-fn group_by_group(p: &Plan) -> Option<OptionGroup> {
-    // A segment's index or start is shared across recordings by position,
-    // not by what makes them alike.
-    let fits = |k: &&String| {
-        !k.starts_with("segment")
-            && p.s
-                .groups
-                .get(*k)
-                .is_some_and(|(fewest, shared)| *fewest >= 2 && *shared)
-    };
-    let key =
-        p.s.varying_meta
-            .iter()
-            .filter(fits)
-            .min_by_key(|k| k.as_str() != "source")?;
-    Some(OptionGroup {
-        when: format!(
-            "recordings sharing a {key} stay on one side of every split: trials or sessions that resemble each other"
-        ),
-        keys: vec![
-            ("method", "\"leave-one-out\"".into()),
-            ("group_by", format!("{key:?}")),
-        ],
-    })
 }

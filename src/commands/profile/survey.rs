@@ -56,6 +56,40 @@ pub struct Survey {
     /// Per column that can be the axis (`t_s`, the positions): how far the
     /// recordings reach along it.
     pub reach: BTreeMap<String, Reach>,
+    /// Per label, in file-name order (the order of a time split): where
+    /// each recording lies in its source, when it is a segment of a long
+    /// one (`import --split`); empty when none is.
+    pub segments: BTreeMap<String, Vec<Option<Segment>>>,
+}
+
+/// Where a segment of a long recording lies in it, from the metadata
+/// `import --split` writes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Segment {
+    pub source: String,
+    /// Seconds from the source's first sample.
+    pub start: f64,
+    pub length: f64,
+}
+
+impl Segment {
+    /// Whether the two share signal: the same source, overlapping in time
+    /// (segments that only meet end to start do not).
+    pub fn overlaps(&self, other: &Segment) -> bool {
+        let touch = 1e-9 * self.length.max(other.length);
+        self.source == other.source
+            && self.start < other.start + other.length - touch
+            && other.start < self.start + self.length - touch
+    }
+
+    fn of(meta: &[(String, String)]) -> Option<Segment> {
+        let get = |key: &str| meta.iter().find(|(k, _)| k == key).map(|(_, v)| v);
+        Some(Segment {
+            source: get("source")?.clone(),
+            start: get("segment_start_s")?.parse().ok()?,
+            length: get("segment_length_s")?.parse().ok()?,
+        })
+    }
 }
 
 /// How far the recordings reach along an axis: what a window can cover.
@@ -337,6 +371,12 @@ fn sum_up(seen: &[Seen], incomplete: Vec<String>) -> Survey {
     };
     for r in seen {
         *s.labels.entry(r.label.clone()).or_default() += 1;
+    }
+    let segments: Vec<Option<Segment>> = seen.iter().map(|r| Segment::of(&r.meta)).collect();
+    if segments.iter().any(Option::is_some) {
+        for (r, segment) in seen.iter().zip(segments) {
+            s.segments.entry(r.label.clone()).or_default().push(segment);
+        }
     }
     let mut rates: Vec<f64> = seen.iter().filter_map(|r| r.rate_hz).collect();
     rates.sort_by(f64::total_cmp);

@@ -1,6 +1,9 @@
 //! Drafts of every kind load, and so does each of their option groups in place.
 
+use std::collections::BTreeMap;
+
 use super::*;
+use crate::commands::profile::survey::Segment;
 use crate::profile::LoadedProfile;
 
 fn survey_of(columns: &[&str], labels: &[(&str, usize)], rate: f64, extent: f64) -> Survey {
@@ -117,4 +120,56 @@ fn recordings_of_widely_varying_length_fit_the_window_to_the_shortest_and_say_so
         "{:?}",
         d.cautions
     );
+}
+
+/// `per` segments of `length` s every `hop` s of one source per label.
+fn segments(per: usize, length: f64, hop: f64) -> BTreeMap<String, Vec<Option<Segment>>> {
+    ["a", "b"]
+        .iter()
+        .map(|l| {
+            let list = (0..per)
+                .map(|i| {
+                    Some(Segment {
+                        source: format!("{l}.csv"),
+                        start: i as f64 * hop,
+                        length,
+                    })
+                })
+                .collect();
+            (l.to_string(), list)
+        })
+        .collect()
+}
+
+#[test]
+fn the_time_split_leaves_out_the_segments_that_overlap_its_training_ones() {
+    let split = |per, length, hop| time_split(&segments(per, length, hop), per, true);
+    // No overlap: 70 / 30, nothing left out.
+    let s = split(30, 2.0, 2.0);
+    assert_eq!((s.train, s.gap, s.test, s.overlapping), (21, 0, 9, false));
+    // 2 s every 0.5 s: the three after the training ones share signal.
+    let s = split(40, 2.0, 0.5);
+    assert_eq!((s.train, s.gap, s.test, s.shared), (26, 3, 11, 0));
+    // Two segments a label: no room for a gap; both test ones overlap.
+    let s = split(2, 2.0, 1.0);
+    assert_eq!((s.train, s.gap, s.test, s.shared), (1, 0, 1, 2));
+    let d = draft(&segmented_survey(2), "few", Path::new("rec")).unwrap();
+    assert!(
+        d.cautions[0].starts_with("2 test segment(s) of the time split share signal"),
+        "{:?}",
+        d.cautions
+    );
+    assert!(
+        d.text.contains("# Caution: 2 test segment(s)"),
+        "{}",
+        d.text
+    );
+}
+
+/// A survey of `per` overlapping segments (2 s every 1 s) per label.
+fn segmented_survey(per: usize) -> Survey {
+    let mut s = survey_of(&["t_s", "acc"], &[("a", per), ("b", per)], 100.0, 2.0);
+    s.varying_meta = vec!["segment".into(), "segment_start_s".into()];
+    s.segments = segments(per, 2.0, 1.0);
+    s
 }
