@@ -136,11 +136,20 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
     digest.iter().map(|b| format!("{b:02x}")).collect()
 }
 
+/// Where the built-in thesis profile says it came from.
+const BUILT_IN: &str = "<built-in thesis profile>";
+
 impl LoadedProfile {
     /// The built-in thesis profile.
     pub fn thesis() -> LoadedProfile {
-        Self::from_str(THESIS_PROFILE, "<built-in thesis profile>", Path::new("."))
+        Self::from_str(THESIS_PROFILE, BUILT_IN, Path::new("."))
             .expect("the built-in thesis profile is valid")
+    }
+
+    /// Whether this is the built-in thesis profile (what a command uses
+    /// without `-p`), rather than a file.
+    pub fn is_built_in(&self) -> bool {
+        self.origin == BUILT_IN
     }
 
     /// Load a profile file, or the built-in one for the name `thesis` when no such file exists.

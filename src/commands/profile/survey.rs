@@ -170,8 +170,9 @@ pub fn survey(dir: &Path) -> Result<Survey, Failure> {
     })?;
     if files.is_empty() {
         return Err(bad(format!(
-            "{}: no recordings (*.csv, *.csv.gz) to write a profile from",
-            dir.display()
+            "{}: no recordings (*.csv, *.csv.gz) to write a profile from; {}",
+            dir.display(),
+            crate::support::IMPORT_HINT
         )));
     }
     let pb = progress_bar(files.len() as u64, "reading");
@@ -234,6 +235,10 @@ fn look_at(file: &Path) -> Result<Option<Seen>, Failure> {
                 unreadable: true,
             }]);
             return Ok(None);
+        }
+        // Another rig's file: what turns it into a recording.
+        Err(e) if e.is_not_a_recording() => {
+            return Err(bad(format!("{e}; {}", crate::support::IMPORT_HINT)));
         }
         Err(e) => return Err(if e.is_bad_input() { bad(e) } else { runtime(e) }),
     };
