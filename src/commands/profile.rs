@@ -1,9 +1,11 @@
 //! `hapticlab profile new --from DIR --out P.toml`: an analysis-only
 //! profile written for a folder of recordings — the channels, the rate, the
-//! axis and spacing, a window that fits the shortest complete recording,
-//! the labels with their counts — with the analysis, classifier and
-//! evaluation choices as commented option groups, each saying when to use
-//! it. The survey of the folder is [`survey()`]; the text is [`draft()`].
+//! axis and spacing, a window that fits the shortest complete recording
+//! (but a few aborted trials), the labels with their counts — with the
+//! analysis, classifier and evaluation choices as commented option groups,
+//! each saying when to use it. The survey of the folder is [`survey()`];
+//! the text is [`draft()`]; what would quietly spoil the analysis is said
+//! on standard error and in the profile ([`cautions`]).
 //!
 //! Every option group is written so that putting it in place of the lines
 //! it replaces ([`apply_group`]) still gives a valid profile; the tests

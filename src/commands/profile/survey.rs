@@ -1,7 +1,9 @@
 //! The survey behind `profile new`: every recording of a folder read (on
 //! every core) and summed up — labels and counts, the columns all share,
-//! the rate, each column's shortest travel, step and spread, the metadata
-//! that varies — and the axis and signal columns chosen from that.
+//! the rate, each column's shortest travel, step and spread, how far the
+//! recordings reach along an axis, the metadata that varies, where
+//! segments of long recordings lie — and the axis and signal columns
+//! chosen from that.
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
