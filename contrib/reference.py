@@ -41,8 +41,9 @@ a tie going to the class with more neighbour votes summed over the windows,
 then to the first label.
 
 Evaluation: holdout (per class, the first train_per_class recordings in
-file-name order train, the next test_per_class test), leave-one-out (each
-recording against all others), or stratified k-fold (scikit-learn's folds).
+file-name order train, the next gap_per_class are left out, the next
+test_per_class test), leave-one-out (each recording against all others), or
+stratified k-fold (scikit-learn's folds).
 
 Where hapticlab may differ:
 - features agree to float rounding (about 1e-12 relative; `features --out`
@@ -297,13 +298,15 @@ def main():
         how = "leave-one-out"
     else:
         ntr, nte = ev["train_per_class"], ev["test_per_class"]
+        gap = ev.get("gap_per_class", 0)
         train, test = [], []
         for label in sorted(set(labels)):
             mine = idx[y == label]
             train += list(mine[:ntr])
-            test += list(mine[ntr : ntr + nte])
+            test += list(mine[ntr + gap : ntr + gap + nte])
         splits = [(np.array(train), np.array(test))]
-        how = f"holdout, the first {ntr} of each label train and the next {nte} test"
+        left = f", the next {gap} left out" if gap else ""
+        how = f"holdout, the first {ntr} of each label train{left} and the next {nte} test"
     right = total = 0
     for tr, te in splits:
         smallest = min(np.isin(rec, tr[y[tr] == l]).sum() for l in set(y[tr]))

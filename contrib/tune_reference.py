@@ -221,8 +221,9 @@ def main():
     train, test = [], []
     for label in sorted(set(y)):
         idx = [i for i in range(len(y)) if y[i] == label]
+        first = ev["train_per_class"] + ev.get("gap_per_class", 0)
         train += idx[:ev["train_per_class"]]
-        test += idx[ev["train_per_class"]:ev["train_per_class"] + ev["test_per_class"]]
+        test += idx[first:first + ev["test_per_class"]]
     classifier = dict(k=[1, 3, 5, 9], metric=["euclidean", "manhattan", "cosine"],
                       weights=["uniform", "distance"], standardize=[False, True])
     grid = [{**f, **classifier} for f in feature_grid(report["feature_settings_scored"])]

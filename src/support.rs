@@ -95,6 +95,45 @@ pub fn load_profile(arg: &ProfileArg) -> Result<LoadedProfile, Failure> {
     LoadedProfile::load(&arg.profile).map_err(bad)
 }
 
+/// When the built-in thesis profile (no `-p`) meets recordings that lack
+/// its columns, they are another rig's: the message names the columns they
+/// have and how to give their profile or make one from `paths`. `None`
+/// for any other profile or error.
+pub fn their_profile(
+    lp: &LoadedProfile,
+    paths: &[PathBuf],
+    e: &dataset::DatasetError,
+) -> Option<String> {
+    let dataset::DatasetError::MissingColumn { file, column, has } = e else {
+        return None;
+    };
+    if !lp.is_built_in() {
+        return None;
+    }
+    let a = &lp.profile.analysis;
+    Some(format!(
+        "{file}: no column `{column}`: the recordings have columns {has}, and the built-in thesis profile \
+         (used when no -p is given) analyses {} along {} of the thesis's Falcon scans; give their profile \
+         with -p P.toml, or make one: hapticlab profile new --from {} --out P.toml",
+        a.channel,
+        a.axis,
+        folder_of(paths)
+    ))
+}
+
+/// The folder to name in a suggested command: the one path given, else DIR.
+pub fn folder_of(paths: &[PathBuf]) -> String {
+    match paths {
+        [one] => one.display().to_string(),
+        _ => "DIR".into(),
+    }
+}
+
+/// How other rigs' files become recordings, for a message about a file
+/// that is not one.
+pub const IMPORT_HINT: &str = "convert other rigs' files first: hapticlab import FILE... --out DIR \
+     (CSV, headerless text, WAV, NumPy .npy/.npz, MATLAB .mat v5; each labelled by its folder, or --label)";
+
 /// A progress bar on a terminal; nothing when standard error is piped.
 pub fn progress_bar(total: u64, what: &str) -> ProgressBar {
     if !std::io::stderr().is_terminal() {
@@ -127,6 +166,28 @@ pub fn load_examples_on(
     analysis: &crate::profile::Analysis,
     threads: usize,
 ) -> Result<Vec<TrainingExample>, Failure> {
+    read_examples(paths, analysis, threads, &|_| None)
+}
+
+/// [`load_examples`] under `lp`'s analysis, where recordings without the
+/// built-in profile's columns say whose profile to give ([`their_profile`]).
+pub fn load_profile_examples(
+    lp: &LoadedProfile,
+    paths: &[PathBuf],
+) -> Result<Vec<TrainingExample>, Failure> {
+    read_examples(paths, &lp.profile.analysis, dataset::cores(), &|e| {
+        their_profile(lp, paths, e)
+    })
+}
+
+/// [`load_examples_on`], a failure's message replaced by `explain`'s when
+/// it has one.
+fn read_examples(
+    paths: &[PathBuf],
+    analysis: &crate::profile::Analysis,
+    threads: usize,
+    explain: &dyn Fn(&dataset::DatasetError) -> Option<String>,
+) -> Result<Vec<TrainingExample>, Failure> {
     let files = find_recordings(paths)?;
     let pb = progress_bar(files.len() as u64, "reading");
     let options = dataset::Options {
@@ -135,7 +196,10 @@ pub fn load_examples_on(
     };
     let loaded = dataset::load(&files, analysis, options, &|| pb.inc(1));
     pb.finish_and_clear();
-    let loaded = loaded?;
+    let loaded = loaded.map_err(|e| match explain(&e) {
+        Some(m) => bad(m),
+        None => e.into(),
+    })?;
     warn_skipped(&loaded.skipped);
     let examples = loaded.into_examples();
     if examples.is_empty() {

@@ -43,13 +43,16 @@ pub enum EvaluateError {
     NoExamples,
     #[error(
         "class {label:?} has {have} example(s) but the split needs {needed} \
-         ({train} to train and {test} to test)",
-        needed = train + test
+         ({train} to train{between} and {test} to test)",
+        needed = train + gap + test,
+        between = if *gap > 0 { format!(", {gap} left out between") } else { String::new() }
     )]
     NotEnough {
         label: String,
         have: usize,
         train: usize,
+        /// Left out between the training and the test ones (`gap_per_class`).
+        gap: usize,
         test: usize,
     },
     /// Every test recording would be called the one label there is: a
@@ -119,8 +122,9 @@ pub fn check_two_labels(examples: &[TrainingExample]) -> Result<(), EvaluateErro
 /// Split the examples per class (label): in the order given (callers sort
 /// by file name), or shuffled when `shuffle_seed` is set (each class by its
 /// own ChaCha8 generator seeded with the seed and the label), the first
-/// `train_per_class` go to training and the next `test_per_class` to test;
-/// any more are left out. Classes come out in label order.
+/// `train_per_class` go to training, the next `gap_per_class` are left out
+/// and the next `test_per_class` go to test; any more are left out. Classes
+/// come out in label order.
 pub fn split(examples: Vec<TrainingExample>, eval: &Evaluation) -> Result<Split, EvaluateError> {
     if examples.is_empty() {
         return Err(EvaluateError::NoExamples);
@@ -129,17 +133,22 @@ pub fn split(examples: Vec<TrainingExample>, eval: &Evaluation) -> Result<Split,
     for ex in examples {
         by_class.entry(ex.label.clone()).or_default().push(ex);
     }
-    let (n_train, n_test) = (eval.train_per_class, eval.test_per_class);
+    let (n_train, gap, n_test) = (
+        eval.train_per_class,
+        eval.gap_per_class,
+        eval.test_per_class,
+    );
     let mut out = Split {
         train: Vec::with_capacity(n_train * by_class.len()),
         test: Vec::with_capacity(n_test * by_class.len()),
     };
     for (label, mut class) in by_class {
-        if class.len() < n_train + n_test {
+        if class.len() < n_train + gap + n_test {
             return Err(EvaluateError::NotEnough {
                 label,
                 have: class.len(),
                 train: n_train,
+                gap,
                 test: n_test,
             });
         }
@@ -148,7 +157,7 @@ pub fn split(examples: Vec<TrainingExample>, eval: &Evaluation) -> Result<Split,
         }
         let mut rest = class.into_iter();
         out.train.extend(rest.by_ref().take(n_train));
-        out.test.extend(rest.take(n_test));
+        out.test.extend(rest.skip(gap).take(n_test));
     }
     Ok(out)
 }

@@ -136,11 +136,20 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
     digest.iter().map(|b| format!("{b:02x}")).collect()
 }
 
+/// Where the built-in thesis profile says it came from.
+const BUILT_IN: &str = "<built-in thesis profile>";
+
 impl LoadedProfile {
     /// The built-in thesis profile.
     pub fn thesis() -> LoadedProfile {
-        Self::from_str(THESIS_PROFILE, "<built-in thesis profile>", Path::new("."))
+        Self::from_str(THESIS_PROFILE, BUILT_IN, Path::new("."))
             .expect("the built-in thesis profile is valid")
+    }
+
+    /// Whether this is the built-in thesis profile (what a command uses
+    /// without `-p`), rather than a file.
+    pub fn is_built_in(&self) -> bool {
+        self.origin == BUILT_IN
     }
 
     /// Load a profile file, or the built-in one for the name `thesis` when no such file exists.
@@ -188,12 +197,22 @@ impl LoadedProfile {
                 Some(span) => line_col(text, span.start),
                 None => (None, None),
             };
+            let reason = e.message().trim().to_string();
+            // TOML's "duplicate key" names no key: read it from the line.
+            let duplicate = e
+                .span()
+                .filter(|_| reason.starts_with("duplicate key"))
+                .and_then(|span| locate::duplicate_key(text, span.start));
+            let (key, reason) = match duplicate {
+                Some((key, reason)) => (Some(key), reason),
+                None => (None, reason),
+            };
             ProfileError {
                 origin: origin.to_string(),
                 line,
                 column,
-                key: None,
-                reason: e.message().trim().to_string(),
+                key,
+                reason,
             }
         })?;
         if let Some(v) = doc.as_ref().and_then(one_feature_choice) {
@@ -466,5 +485,19 @@ mod tests {
         assert_eq!(p.profile.classifier.k, 10);
         assert_eq!(p.profile.textures.len(), 4);
         assert_eq!(p.sha256.len(), 64);
+    }
+
+    #[test]
+    fn a_table_written_twice_is_named_with_its_first_header() {
+        let text = THESIS_PROFILE.replace("[evaluation]\n", "[evaluation]\n[evaluation]\n");
+        let e = LoadedProfile::from_str(&text, "p.toml", Path::new(".")).unwrap_err();
+        let first = text.lines().position(|l| l == "[evaluation]").unwrap() + 1;
+        assert_eq!(e.key.as_deref(), Some("evaluation"), "{e}");
+        assert!(
+            e.to_string().contains(&format!(
+                "the table `[evaluation]` is written twice (first at line {first})"
+            )),
+            "{e}"
+        );
     }
 }

@@ -69,6 +69,13 @@ pub enum RecordingError {
 }
 
 impl RecordingError {
+    /// True when the file is no hapticlab recording at all (its first line
+    /// is not the format line, or it is empty): another rig's file, for
+    /// `hapticlab import`.
+    pub fn is_not_a_recording(&self) -> bool {
+        matches!(self, Self::Malformed { line: 1, reason, .. } if reason.starts_with("not a hapticlab recording"))
+    }
+
     /// True when the recording itself is at fault (exit code 2), or a path
     /// that does not exist was named (an argument's fault: exit code 2 as
     /// for every other command); false for another I/O failure or a misuse

@@ -20,7 +20,10 @@ use crate::evaluate::plan::Overrides;
 use crate::evaluate::request::{self, Evaluation, Outcome, Progress, Request, Source};
 use crate::evaluate::sweep::{Sweep, Swept};
 use crate::support::evaluation_text::{header, source_text, table};
-use crate::support::{Failure, ProfileArg, bad, load_profile, progress_bar, runtime, warn_skipped};
+use crate::support::{
+    Failure, IMPORT_HINT, ProfileArg, bad, load_profile, progress_bar, runtime, their_profile,
+    warn_skipped,
+};
 
 #[derive(Debug, Args)]
 pub struct EvaluateArgs {
@@ -156,7 +159,7 @@ pub fn run(a: EvaluateArgs) -> Result<(), Failure> {
     let bar = Bar::default();
     let ev = request::run(&lp, &req, &bar);
     bar.end();
-    let ev = ev?;
+    let ev = ev.map_err(|e| with_next_step(e, &lp, &a.paths))?;
     warn_skipped(&ev.skipped);
     if let Some(note) = ev.outcome.k_notice() {
         crate::errln!("note: {note}");
@@ -178,6 +181,37 @@ pub fn run(a: EvaluateArgs) -> Result<(), Failure> {
         crate::outp!("{}", table(&ev.outcome));
     }
     Ok(())
+}
+
+/// An evaluation's error, with what to do where its message leaves the
+/// user guessing: a recording that does not cover the window (a trial cut
+/// short, which `profile new` names) is refused rather than analysed as
+/// far as it goes; recordings without the built-in profile's columns need
+/// their own profile; a file that is no recording needs importing.
+fn with_next_step(
+    e: crate::evaluate::EvaluateError,
+    lp: &crate::profile::LoadedProfile,
+    paths: &[PathBuf],
+) -> Failure {
+    use crate::analysis::AnalysisError;
+    use crate::dataset::DatasetError;
+    use crate::evaluate::EvaluateError;
+    let EvaluateError::Dataset(d) = &e else {
+        return e.into();
+    };
+    if let Some(m) = their_profile(lp, paths, d) {
+        return bad(m);
+    }
+    match d {
+        DatasetError::Analysis {
+            source: AnalysisError::WindowNotCovered { .. },
+            ..
+        } => bad(format!(
+            "{e}: remove the recording from the folder, or narrow the profile's window to what it covers"
+        )),
+        DatasetError::Recording(r) if r.is_not_a_recording() => bad(format!("{e}; {IMPORT_HINT}")),
+        _ => e.into(),
+    }
 }
 
 /// A sweep's table (or JSON), then the verdict on the exit code: 0 when at

@@ -8,7 +8,7 @@ use clap::Args;
 
 use crate::dataset;
 use crate::support::{
-    Failure, ProfileArg, check_output, inputs_of, load_examples, load_profile, runtime,
+    Failure, ProfileArg, check_output, inputs_of, load_profile, load_profile_examples, runtime,
     write_atomically,
 };
 
@@ -38,7 +38,7 @@ fn features(profile: &ProfileArg, paths: &[PathBuf], out: Option<&Path>) -> Resu
         }
         None => Vec::new(),
     };
-    let examples = load_examples(paths, &lp.profile.analysis)?;
+    let examples = load_profile_examples(&lp, paths)?;
     let n = lp.profile.analysis.feature_count();
     // One row per sub-window, with its index, when `windows` is set.
     let windows = lp

@@ -21,7 +21,7 @@ use serde::Serialize;
 
 use crate::classify::{Scaling, TrainingExample};
 use crate::dataset::{self, Skipped, Unusable, named_once};
-use crate::support::{Failure, ProfileArg, load_profile};
+use crate::support::{Failure, ProfileArg, folder_of, load_profile};
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Outlier {
@@ -197,8 +197,15 @@ impl Inspection {
         for (f, e) in &self.unreadable {
             s.push_str(&format!("unreadable: {}\n", named_once(f, e)));
         }
-        for (f, e) in &self.unusable {
-            s.push_str(&format!("unusable: {}\n", named_once(f, e)));
+        for (reason, files) in alike(&self.unusable) {
+            match files[..] {
+                [f] => s.push_str(&format!("unusable: {}\n", named_once(f, reason))),
+                _ => s.push_str(&format!(
+                    "unusable: {} recordings: {reason} ({})\n",
+                    files.len(),
+                    some_of(&files)
+                )),
+            }
         }
         if self.outliers.is_empty() {
             s.push_str(&format!(
@@ -218,6 +225,33 @@ impl Inspection {
             }
         }
         s
+    }
+}
+
+/// The unusable recordings grouped by their reason, in the order first
+/// met: recordings under the wrong profile all give the same reason, and
+/// one line says it for all.
+fn alike(unusable: &[(String, String)]) -> Vec<(&str, Vec<&str>)> {
+    let mut out: Vec<(&str, Vec<&str>)> = Vec::new();
+    for (f, e) in unusable {
+        let reason = e
+            .strip_prefix(f.as_str())
+            .and_then(|r| r.strip_prefix(": "))
+            .unwrap_or(e);
+        match out.iter_mut().find(|(r, _)| *r == reason) {
+            Some((_, files)) => files.push(f),
+            None => out.push((reason, vec![f])),
+        }
+    }
+    out
+}
+
+/// The first three files, and how many more.
+fn some_of(files: &[&str]) -> String {
+    let shown = files[..files.len().min(3)].join(", ");
+    match files.len() {
+        n if n > 3 => format!("{shown} and {} more", n - 3),
+        _ => shown,
     }
 }
 
@@ -293,6 +327,16 @@ pub fn run(a: InspectArgs) -> Result<(), Failure> {
         );
     } else {
         crate::outp!("{}", report.text());
+    }
+    if report.classes.is_empty() && !report.unusable.is_empty() && lp.is_built_in() {
+        let a = &lp.profile.analysis;
+        crate::errln!(
+            "warning: none of the {} recordings could be analysed by the built-in thesis profile (used when no -p is given; it analyses {} along {} of the thesis's Falcon scans): give their profile with -p P.toml, or make one: hapticlab profile new --from {} --out P.toml",
+            report.files,
+            a.channel,
+            a.axis,
+            folder_of(paths)
+        );
     }
     Ok(())
 }

@@ -1,9 +1,11 @@
 //! `hapticlab profile new --from DIR --out P.toml`: an analysis-only
 //! profile written for a folder of recordings — the channels, the rate, the
-//! axis and spacing, a window that fits the shortest complete recording,
-//! the labels with their counts — with the analysis, classifier and
-//! evaluation choices as commented option groups, each saying when to use
-//! it. The survey of the folder is [`survey()`]; the text is [`draft()`].
+//! axis and spacing, a window that fits the shortest complete recording
+//! (but a few aborted trials), the labels with their counts — with the
+//! analysis, classifier and evaluation choices as commented option groups,
+//! each saying when to use it. The survey of the folder is [`survey()`];
+//! the text is [`draft()`]; what would quietly spoil the analysis is said
+//! on standard error and in the profile ([`cautions`]).
 //!
 //! Every option group is written so that putting it in place of the lines
 //! it replaces ([`apply_group`]) still gives a valid profile; the tests
@@ -16,10 +18,12 @@ use clap::{Args, Subcommand};
 use crate::profile::LoadedProfile;
 use crate::support::{Failure, bad, check_output, runtime, write_atomically};
 
+pub mod cautions;
 pub mod draft;
 pub mod survey;
 
-pub use draft::{apply_group, draft, groups_of};
+use cautions::rate_text;
+pub use draft::{Drafted, apply_group, draft, groups_of};
 pub use survey::{Survey, survey};
 
 #[derive(Debug, Args)]
@@ -70,25 +74,41 @@ fn new(a: &NewArgs) -> Result<(), Failure> {
         .out
         .file_stem()
         .map_or("recordings".into(), |n| n.to_string_lossy().into_owned());
-    let text = draft(&s, &name, &a.from).map_err(bad)?;
+    let Drafted {
+        text,
+        cautions,
+        uncovered,
+    } = draft(&s, &name, &a.from).map_err(bad)?;
     // What is written must load: a profile that does not is this command's fault.
     let base = a.out.parent().unwrap_or(Path::new("."));
     LoadedProfile::from_str(&text, &a.out.display().to_string(), base)
         .map_err(|e| runtime(format!("the profile drafted is invalid (a bug): {e}")))?;
     write_atomically(&a.out, &[], text.as_bytes())?;
+    for c in &cautions {
+        crate::errln!("warning: {}: {c}", a.from.display());
+    }
+    let axis = s.choice().axis;
+    // Along time, the rate the analysis resamples at; along a position,
+    // the recordings' own.
+    let rate = if axis == "t_s" {
+        s.slowest_rate()
+    } else {
+        s.rate_hz
+    };
     crate::outln!(
-        "wrote {}: analysis only, {} along {} at {}, {} label(s) from {} complete recording(s){}",
+        "wrote {}: analysis only, {} along {} at {}{}, {} label(s) from {} complete recording(s){}",
         a.out.display(),
-        s.channels(&s.choice().axis).join(", "),
-        s.choice().axis,
-        rate_text(s.rate_hz),
+        s.channels(&axis).join(", "),
+        axis,
+        rate_text(rate),
+        if axis == "t_s" && s.rates.len() > 1 {
+            " (the slowest of their rates: see the warning)"
+        } else {
+            ""
+        },
         s.labels.len(),
         s.complete,
-        if s.incomplete.is_empty() {
-            String::new()
-        } else {
-            format!(" ({} incomplete left out)", s.incomplete.len())
-        }
+        asides(s.incomplete.len(), uncovered)
     );
     crate::outln!(
         "next: hapticlab check {0} && hapticlab evaluate {1} -p {0}",
@@ -98,10 +118,21 @@ fn new(a: &NewArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-fn rate_text(rate_hz: f64) -> String {
-    if rate_hz >= 1000.0 {
-        format!("{} kHz", rate_hz / 1000.0)
+/// What the summary line adds about the recordings: the incomplete ones
+/// left out, the complete ones too short for the window.
+fn asides(incomplete: usize, uncovered: usize) -> String {
+    let mut said = Vec::new();
+    if uncovered > 0 {
+        said.push(format!(
+            "{uncovered} of them too short for the window: see the warning"
+        ));
+    }
+    if incomplete > 0 {
+        said.push(format!("{incomplete} incomplete left out"));
+    }
+    if said.is_empty() {
+        String::new()
     } else {
-        format!("{rate_hz} Hz")
+        format!(" ({})", said.join("; "))
     }
 }

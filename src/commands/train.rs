@@ -7,7 +7,8 @@ use clap::Args;
 
 use crate::classify::{Model, plural};
 use crate::support::{
-    Failure, ProfileArg, bad, check_output, inputs_of, load_examples, load_profile, output_failure,
+    Failure, ProfileArg, bad, check_output, inputs_of, load_profile, load_profile_examples,
+    output_failure,
 };
 
 #[derive(Debug, Args)]
@@ -29,7 +30,7 @@ fn train(profile: &ProfileArg, paths: &[PathBuf], out: &Path) -> Result<(), Fail
     let lp = load_profile(profile)?;
     let inputs = inputs_of(profile, paths)?;
     check_output(out, &inputs)?;
-    let examples = load_examples(paths, &lp.profile.analysis)?;
+    let examples = load_profile_examples(&lp, paths)?;
     // With sub-windows, a recording gives several examples, consecutive.
     let recordings = examples
         .iter()

@@ -62,11 +62,16 @@ pub fn header(lp: &LoadedProfile, ev: &Evaluation) -> String {
             String::new()
         };
         return format!(
-            "profile {}: k-NN k = {}, {} training and {} test recordings per class{}{voted}",
+            "profile {}: k-NN k = {}, {} training and {} test recordings per class{}{}{voted}",
             p.name,
             k_text(lp, ev),
             e.train_per_class,
             e.test_per_class,
+            if e.gap_per_class > 0 {
+                format!(", {} left out between them", e.gap_per_class)
+            } else {
+                String::new()
+            },
             ev.plan
                 .holdout_shuffle
                 .map_or(" (file-name order)".into(), |s| format!(

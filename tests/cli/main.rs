@@ -21,6 +21,7 @@ mod import;
 mod import_formats;
 mod import_refusals;
 mod import_split;
+mod next_steps;
 mod one_answer;
 mod plot;
 mod profile_new;

@@ -44,6 +44,29 @@ fn split_takes_each_class_in_the_given_order() {
 }
 
 #[test]
+fn a_gap_leaves_recordings_out_between_training_and_test() {
+    let gapped = Evaluation {
+        gap_per_class: 1,
+        ..eval(2, 2, None)
+    };
+    let s = split(recordings(&["S1", "S2"], 5), &gapped).unwrap();
+    assert_eq!(
+        files(&s.train),
+        ["S1/00.csv", "S1/01.csv", "S2/00.csv", "S2/01.csv"]
+    );
+    assert_eq!(
+        files(&s.test),
+        ["S1/03.csv", "S1/04.csv", "S2/03.csv", "S2/04.csv"]
+    );
+    let e = split(recordings(&["S1", "S2"], 4), &gapped).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("needs 5 (2 to train, 1 left out between and 2 to test)"),
+        "{e}"
+    );
+}
+
+#[test]
 fn a_seeded_shuffle_is_repeatable_and_depends_on_the_seed() {
     let all = recordings(&["S1", "S2", "S3"], 30);
     let a = split(all.clone(), &eval(20, 10, Some(7))).unwrap();

@@ -29,6 +29,12 @@ pub struct Evaluation {
     pub train_per_class: usize,
     #[serde(default)]
     pub test_per_class: usize,
+    /// Holdout only: recordings of each class left out between the
+    /// training and the test ones (as scikit-learn's `TimeSeriesSplit`'s
+    /// `gap`), so overlapping segments of one long recording (`import
+    /// --split-hop` below `--split`) share no signal across the split.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub gap_per_class: usize,
     /// When set, each class's recordings are shuffled with this seed before
     /// the split; otherwise they are taken in file-name order.
     #[serde(default)]
@@ -49,6 +55,7 @@ impl Default for Evaluation {
         Evaluation {
             train_per_class: 20,
             test_per_class: 10,
+            gap_per_class: 0,
             shuffle_seed: None,
             method: SplitMethod::Holdout,
             folds: None,
@@ -75,6 +82,12 @@ pub(super) fn validate(
             return bad("evaluation.folds", "is only used with method = \"k-fold\"");
         }
         _ => {}
+    }
+    if e.gap_per_class > 0 && e.method != SplitMethod::Holdout {
+        return bad(
+            "evaluation.gap_per_class",
+            "is only used with method = \"holdout\" (the recordings left out between its training and test ones)",
+        );
     }
     if e.group_by.as_deref() == Some("") {
         return bad("evaluation.group_by", "must name a metadata key");
@@ -119,6 +132,16 @@ mod tests {
         let err = format!("{:?}", check("test_per_class = 10").unwrap_err());
         assert!(err.contains("train_per_class"), "{err}");
         assert!(check("method = \"leave-one-out\"\nfolds = 3").is_err());
+    }
+
+    #[test]
+    fn a_gap_is_only_for_the_holdout() {
+        assert!(check("train_per_class = 5\ntest_per_class = 4\ngap_per_class = 1").is_ok());
+        let err = format!(
+            "{:?}",
+            check("method = \"k-fold\"\ngap_per_class = 1").unwrap_err()
+        );
+        assert!(err.contains("evaluation.gap_per_class"), "{err}");
     }
 
     #[test]

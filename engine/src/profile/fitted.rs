@@ -30,18 +30,34 @@ pub fn ceil3(x: f64) -> (f64, String) {
     round3(x, f64::ceil)
 }
 
-fn round3(x: f64, how: fn(f64) -> f64) -> (f64, String) {
+/// `x` rounded to `digits` significant digits (`999.9999999999998` to 6
+/// gives `1000.0`); `x` itself when it is not a positive finite number.
+pub fn significant(x: f64, digits: u32) -> f64 {
+    rounded(x, digits, f64::round).0
+}
+
+/// `x` rounded by `how` to `digits` significant digits, and the power of
+/// ten of its last digit.
+fn rounded(x: f64, digits: u32, how: fn(f64) -> f64) -> (f64, i32) {
     if !(x.is_finite() && x > 0.0) {
-        return (x, float(x));
+        return (x, 0);
     }
-    let e = x.log10().floor() as i32 - 2;
+    let e = x.log10().floor() as i32 + 1 - digits.max(1) as i32;
     // Scaled by an exact power of ten (10^-e is exact, 10^e below 1 is
-    // not), so a value written with three digits stays itself.
+    // not), so a value written with that many digits stays itself.
     let v = if e < 0 {
         how(x * 10f64.powi(-e)) / 10f64.powi(-e)
     } else {
         how(x / 10f64.powi(e)) * 10f64.powi(e)
     };
+    (v, e)
+}
+
+fn round3(x: f64, how: fn(f64) -> f64) -> (f64, String) {
+    if !(x.is_finite() && x > 0.0) {
+        return (x, float(x));
+    }
+    let (v, e) = rounded(x, 3, how);
     let decimals = (-e).max(0) as usize;
     let text = format!("{v:.decimals$}");
     let v: f64 = text.parse().unwrap_or(v);

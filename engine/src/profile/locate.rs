@@ -138,6 +138,48 @@ pub fn locate_key(text: &str, key: &str) -> (Option<usize>, Option<usize>) {
     fallback
 }
 
+/// A duplicate key that TOML's parser reports at `offset` (its second
+/// writing), said in full: the parser's message names no key, so the key
+/// is read from the text there (dotted with its table) and quoted with
+/// where it was first written. `None` when the text there is no key line.
+pub fn duplicate_key(text: &str, offset: usize) -> Option<(String, String)> {
+    let start = text.get(..offset)?.rfind('\n').map_or(0, |i| i + 1);
+    let line = text[start..].lines().next()?.trim();
+    let table = text[..start]
+        .lines()
+        .rev()
+        .map(str::trim)
+        .find(|l| l.starts_with('['))
+        .map(|l| l.trim_matches(['[', ']']).trim());
+    if line.starts_with('[') {
+        // A table written twice: point at its first header.
+        let first = text.lines().position(|l| l.trim() == line)? + 1;
+        return Some((
+            line.trim_matches(['[', ']']).trim().to_string(),
+            format!(
+                "the table `{line}` is written twice (first at line {first}); merge them into one"
+            ),
+        ));
+    }
+    let (key, _) = line.split_once('=')?;
+    let key = key.trim().trim_matches('"');
+    let (dotted, place) = match table {
+        Some(t) if !t.is_empty() => (format!("{t}.{key}"), format!("[{t}]")),
+        _ => (key.to_string(), "the top of the file".to_string()),
+    };
+    let first = match locate_key(text, &dotted) {
+        (Some(l), _) if l != line_col(text, offset).0.unwrap_or(0) => {
+            let earlier = text.lines().nth(l - 1).unwrap_or("").trim();
+            format!(" (first as `{earlier}` at line {l})")
+        }
+        _ => String::new(),
+    };
+    Some((
+        dotted,
+        format!("duplicate key: `{line}` is a second `{key}` in {place}{first}; keep one of them"),
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -6,17 +6,30 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::survey::Survey;
+use super::cautions::{self, per_label};
+use super::survey::{self, Survey};
 use crate::profile::fitted::fitting_bands;
 use crate::profile::options::Group;
 use crate::profile::{Analysis, Classifier, Metric, SpectrumKind, Taper, check_options};
 
+mod evaluation;
 #[cfg(test)]
 mod tests;
 mod writer;
 
-use writer::{Alternatives, Doc, Line, OptionGroup, advised, ceil3, float, floor3, line};
+use evaluation::{TimeSplit, evaluation_table, shared_caution, time_split};
+pub use writer::shown;
+use writer::{Alternatives, Doc, Line, OptionGroup, advised, ceil3, float, floor3, line, wrap};
 pub use writer::{apply_group, groups_of};
+
+/// A drafted profile's text, and the cautions its comments hold, for the
+/// command to say on standard error too.
+pub struct Drafted {
+    pub text: String,
+    pub cautions: Vec<String>,
+    /// Recordings too short for the window (named in the cautions).
+    pub uncovered: usize,
+}
 
 /// What the survey decides before any text: the axis, rate, spacing,
 /// window and spectrum sizes every section derives from.
@@ -42,6 +55,13 @@ struct Plan<'a> {
     min_count: usize,
     /// The recordings are consecutive segments of longer ones (`import --split`).
     segments: bool,
+    /// The split in time offered (or chosen, for segments).
+    split: TimeSplit,
+    /// What would quietly spoil the analysis ([`cautions`]).
+    cautions: Vec<String>,
+    /// The recordings much shorter than the rest, which the window was not
+    /// fitted to and which do not cover it.
+    uncovered: usize,
 }
 
 /// The spacing along the axis: one sample period of the slowest rate in
@@ -49,14 +69,14 @@ struct Plan<'a> {
 /// 0.3 mm or ten steps along a position axis. (value, text, why).
 fn spacing_of(s: &Survey, axis: &str, time: bool) -> (f64, String, String) {
     if time {
-        let slowest = s.rates.first().map_or(s.rate_hz, |r| r.0);
+        let slowest = s.slowest_rate();
         let why = if s.rates.len() > 1 {
             format!(
                 "one sample period of the slowest rate, 1 / {} Hz: the recordings' rates differ (see above), and every point must hold a sample of each",
-                float(slowest)
+                shown(slowest)
             )
         } else {
-            format!("one sample period, 1 / {} Hz", float(slowest))
+            format!("one sample period, 1 / {} Hz", shown(slowest))
         };
         return (1.0 / slowest, float(1.0 / slowest), why);
     }
@@ -118,10 +138,11 @@ fn plan<'a>(s: &'a Survey, from: &'a Path) -> Result<Plan<'a>, String> {
     };
     let time = axis == "t_s";
     let (spacing, spacing_text, spacing_why) = spacing_of(s, axis, time);
-    let (extent, shortest_file) = s.shortest.get(axis).cloned().unwrap_or_default();
+    let ((extent, shortest_file), uncovered) = s.window_reach(axis);
     let too_short = || {
         format!(
-            "{shortest_file}: the shortest complete recording spans only {extent} along {axis}: too short to analyse (at least 8 points of {spacing_text})"
+            "{shortest_file}: the shortest complete recording spans only {} along {axis}: too short to analyse (at least 8 points of {spacing_text})",
+            shown(extent)
         )
     };
     if !(extent.is_finite() && extent >= 8.0 * spacing) {
@@ -141,6 +162,14 @@ fn plan<'a>(s: &'a Survey, from: &'a Path) -> Result<Plan<'a>, String> {
         return Err(too_short());
     }
     let segment = welch_segment(n, time, 1.0 / spacing);
+    let min_count = s.labels.values().copied().min().unwrap_or(0);
+    let segments = s.varying_meta.iter().any(|k| k == "segment");
+    let split = time_split(&s.segments, min_count, segments);
+    let cautions = cautions::of_rates(s, time.then_some(spacing_text.as_str()))
+        .into_iter()
+        .chain(cautions::of_lengths(s, axis, &end_text, spacing))
+        .chain((split.shared > 0).then(|| shared_caution(split.shared)))
+        .collect();
     // Log-Welch for other rigs' signals in time (vibration, sound) and for
     // long windows; the thesis's |DFT| for a short stroke resampled by position.
     let welch_active = (time || n > 4096) && segment >= 16;
@@ -154,7 +183,6 @@ fn plan<'a>(s: &'a Survey, from: &'a Path) -> Result<Plan<'a>, String> {
         more: more.to_vec(),
         time,
         unit: if time { "s" } else { "m" },
-        spacing_text,
         spacing_why,
         extent,
         shortest_file,
@@ -164,13 +192,17 @@ fn plan<'a>(s: &'a Survey, from: &'a Path) -> Result<Plan<'a>, String> {
         segment,
         welch_active,
         magnitude_bins: (n / 2).min(128),
-        min_count: s.labels.values().copied().min().unwrap_or(0),
-        segments: s.varying_meta.iter().any(|k| k == "segment"),
+        min_count,
+        segments,
+        split,
+        cautions,
+        uncovered: uncovered.len(),
+        spacing_text,
     })
 }
 
 /// The profile's text for the survey `s` of `from`.
-pub fn draft(s: &Survey, name: &str, from: &Path) -> Result<String, String> {
+pub fn draft(s: &Survey, name: &str, from: &Path) -> Result<Drafted, String> {
     let p = plan(s, from)?;
     let mut doc = Doc::default();
     header(&mut doc, &p);
@@ -185,7 +217,11 @@ pub fn draft(s: &Survey, name: &str, from: &Path) -> Result<String, String> {
     analysis_table(&mut doc, &p);
     classifier_table(&mut doc, &p);
     evaluation_table(&mut doc, &p);
-    Ok(doc.0)
+    Ok(Drafted {
+        text: doc.0,
+        cautions: p.cautions,
+        uncovered: p.uncovered,
+    })
 }
 
 /// What was found, and how to use the option groups.
@@ -205,13 +241,22 @@ fn header(doc: &mut Doc, p: &Plan) {
         "Found: {} complete recording(s){left_out}; columns {}; about {} samples a second.",
         s.complete,
         s.columns.join(", "),
-        float(s.rate_hz)
+        shown(s.rate_hz)
     ));
     if s.rates.len() > 1 {
-        doc.comment("The recordings' rates differ (rate: recordings, e.g.):");
-        for (hz, count, file) in &s.rates {
-            doc.comment(&format!("  {} Hz: {count}, e.g. {file}", float(*hz)));
+        doc.comment("The recordings' rates differ (rate: recordings (per label), e.g.):");
+        for r in &s.rates {
+            doc.comment(&format!(
+                "  {} Hz: {} ({}), e.g. {}",
+                shown(r.hz),
+                r.count,
+                per_label(&r.labels),
+                r.file
+            ));
         }
+    }
+    for caution in &p.cautions {
+        doc.comment(&format!("Caution: {}.", wrap(caution, 90)));
     }
     doc.comment("Labels and recordings per label:");
     for (label, count) in &s.labels {
@@ -255,11 +300,16 @@ fn analysis_table(doc: &mut Doc, p: &Plan) {
         channel,
         advised("axis", format!("{axis:?}")),
         advised("window", format!("[0.0, {}]", p.end_text)).below(format!(
-            "The whole of the shortest complete recording ({}: {} {} along {axis}), {} points.",
+            "The whole of the shortest complete recording ({}: {} {} along {axis}), {} points{}.",
             p.shortest_file,
-            float(p.extent),
+            shown(p.extent),
             p.unit,
-            p.n
+            p.n,
+            if p.uncovered > 0 {
+                "; the much shorter ones named in the Caution above do not cover it"
+            } else {
+                ""
+            },
         )),
         line("spacing", p.spacing_text.clone(), p.spacing_why.clone()),
         advised("detrend", "\"mean\""),
@@ -532,132 +582,4 @@ fn classifier_table(doc: &mut Doc, p: &Plan) {
         &[("k", why), ("metric", "the distance between spectra")],
         groups,
     );
-}
-
-/// The evaluation methods that can test every label, the first choice
-/// written out and the others as groups.
-fn evaluation_table(doc: &mut Doc, p: &Plan) {
-    let min = p.min_count;
-    let folds = min.clamp(2, 10);
-    let (train, test) = time_split(p);
-    let grouping = group_by_group(p);
-    let by_source = grouping
-        .as_ref()
-        .is_some_and(|g| g.keys.contains(&("group_by", "\"source\"".into())));
-    let loo = OptionGroup {
-        when: "each recording tested against all the others: few recordings per label".into(),
-        keys: vec![("method", "\"leave-one-out\"".into())],
-    };
-    let kfold = OptionGroup {
-        when: format!("stratified {folds}-fold cross-validation: several recordings per label"),
-        keys: vec![
-            ("method", "\"k-fold\"".into()),
-            ("folds", folds.to_string()),
-        ],
-    };
-    let holdout = OptionGroup {
-        when: format!(
-            "a fixed split in time: per label the first {train} recordings (file-name order) train and the next {test} test; for recordings made in order, the later ones drifting"
-        ),
-        keys: vec![
-            ("method", "\"holdout\"".into()),
-            ("train_per_class", train.to_string()),
-            ("test_per_class", test.to_string()),
-        ],
-    };
-    let (why, first, others) = if min < 2 {
-        (
-            format!(
-                "Only {min} recording of some label: nothing to test it against. Record more, or cut\n\
-                 long recordings into trials: `hapticlab import … --split SECONDS` (evaluate refuses this)."
-            ),
-            loo,
-            Vec::new(),
-        )
-    } else if p.segments {
-        (
-            format!(
-                "The recordings are consecutive segments of longer ones (`import --split`): neighbours\n\
-                 resemble each other, so the first {train} segments of each label train and the next {test} test.{}",
-                if by_source {
-                    "\nA label with several source files: the split runs through them in file-name order, one\n\
-                     source after another; the group_by group below keeps each source on one side instead."
-                } else {
-                    ""
-                }
-            ),
-            holdout,
-            vec![kfold, loo],
-        )
-    } else if min < 5 {
-        (
-            format!(
-                "Fewer than 5 recordings of some label ({min}): each is tested against all the others."
-            ),
-            loo,
-            vec![kfold, holdout],
-        )
-    } else {
-        (
-            format!(
-                "{min} or more recordings per label: stratified {folds}-fold cross-validation."
-            ),
-            kfold,
-            vec![loo, holdout],
-        )
-    };
-    doc.table("evaluation");
-    doc.comment(&why);
-    for (k, v) in &first.keys {
-        let _ = writeln!(doc.0, "{k} = {v}");
-    }
-    if !others.is_empty() {
-        doc.comment("(a method group below replaces every line above: comment them all out)");
-    }
-    doc.blank();
-    let mut groups = others;
-    groups.extend(grouping);
-    doc.groups(&groups);
-}
-
-/// The time split: half and half (the thesis's own split was 20 + 10 of
-/// 30); 70 / 30 for segments of long recordings, so more of each trains.
-fn time_split(p: &Plan) -> (usize, usize) {
-    let min = p.min_count;
-    let train = if p.segments {
-        (min * 7).div_ceil(10).min(min.saturating_sub(1)).max(1)
-    } else {
-        min.div_ceil(2)
-    };
-    (train, min.saturating_sub(train))
-}
-
-/// Leave-one-out keeping together the recordings that share a metadata
-/// value: offered for a key that groups recordings (some share a value)
-/// and gives every label at least two groups (so each can be tested);
-/// the source file first (segments of one recording).
-fn group_by_group(p: &Plan) -> Option<OptionGroup> {
-    // A segment's index or start is shared across recordings by position,
-    // not by what makes them alike.
-    let fits = |k: &&String| {
-        !k.starts_with("segment")
-            && p.s
-                .groups
-                .get(*k)
-                .is_some_and(|(fewest, shared)| *fewest >= 2 && *shared)
-    };
-    let key =
-        p.s.varying_meta
-            .iter()
-            .filter(fits)
-            .min_by_key(|k| k.as_str() != "source")?;
-    Some(OptionGroup {
-        when: format!(
-            "recordings sharing a {key} stay on one side of every split: trials or sessions that resemble each other"
-        ),
-        keys: vec![
-            ("method", "\"leave-one-out\"".into()),
-            ("group_by", format!("{key:?}")),
-        ],
-    })
 }

@@ -1,7 +1,9 @@
 //! The survey behind `profile new`: every recording of a folder read (on
 //! every core) and summed up — labels and counts, the columns all share,
-//! the rate, each column's shortest travel, step and spread, the metadata
-//! that varies — and the axis and signal columns chosen from that.
+//! the rate, each column's shortest travel, step and spread, how far the
+//! recordings reach along an axis, the metadata that varies, where
+//! segments of long recordings lie — and the axis and signal columns
+//! chosen from that.
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -51,9 +53,112 @@ pub struct Survey {
     /// Per varying key: the fewest distinct values any label has, and
     /// whether some value is shared by two recordings (so the key groups).
     pub groups: BTreeMap<String, (usize, bool)>,
-    /// The distinct sample rates (within 1 %), slowest first: the rate, how
-    /// many recordings have it, and one of them.
-    pub rates: Vec<(f64, usize, String)>,
+    /// The distinct sample rates (within 1 %), slowest first.
+    pub rates: Vec<RateGroup>,
+    /// Per column that can be the axis (`t_s`, the positions): how far the
+    /// recordings reach along it.
+    pub reach: BTreeMap<String, Reach>,
+    /// Per label, in file-name order (the order of a time split): where
+    /// each recording lies in its source, when it is a segment of a long
+    /// one (`import --split`); empty when none is.
+    pub segments: BTreeMap<String, Vec<Option<Segment>>>,
+}
+
+/// Where a segment of a long recording lies in it, from the metadata
+/// `import --split` writes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Segment {
+    pub source: String,
+    /// Seconds from the source's first sample.
+    pub start: f64,
+    pub length: f64,
+}
+
+impl Segment {
+    /// Whether the two share signal: the same source, overlapping in time
+    /// (segments that only meet end to start do not).
+    pub fn overlaps(&self, other: &Segment) -> bool {
+        let touch = 1e-9 * self.length.max(other.length);
+        self.source == other.source
+            && self.start < other.start + other.length - touch
+            && other.start < self.start + self.length - touch
+    }
+
+    fn of(meta: &[(String, String)]) -> Option<Segment> {
+        let get = |key: &str| meta.iter().find(|(k, _)| k == key).map(|(_, v)| v);
+        Some(Segment {
+            source: get("source")?.clone(),
+            start: get("segment_start_s")?.parse().ok()?,
+            length: get("segment_length_s")?.parse().ok()?,
+        })
+    }
+}
+
+/// How far the recordings reach along an axis: what a window can cover.
+#[derive(Debug, Clone, Default)]
+pub struct Reach {
+    /// The median travel.
+    pub median: f64,
+    /// The recordings under half the median travel (aborted or cut-short
+    /// trials), shortest first: file and travel.
+    pub short: Vec<(String, f64)>,
+    /// The shortest travel of the others, and its file.
+    pub typical: (f64, String),
+}
+
+/// A few recordings much shorter than the rest (at most a quarter of
+/// them) are taken for aborted trials: the window fits the others. More
+/// than that and the lengths simply vary: the window fits the shortest.
+fn few(short: usize, all: usize) -> bool {
+    short > 0 && short * 4 <= all
+}
+
+/// The [`Reach`] of recordings' travels along a column.
+pub(super) fn reach<'a>(travels: impl Iterator<Item = (f64, &'a String)>) -> Reach {
+    let mut all: Vec<(f64, &String)> = travels.collect();
+    all.sort_by(|a, b| a.0.total_cmp(&b.0).then_with(|| a.1.cmp(b.1)));
+    let median = all.get(all.len() / 2).map_or(0.0, |t| t.0);
+    let cut = all.partition_point(|t| t.0 < median / 2.0);
+    Reach {
+        median,
+        short: all[..cut]
+            .iter()
+            .map(|(t, f)| (f.to_string(), *t))
+            .collect(),
+        typical: all
+            .get(cut)
+            .map_or((0.0, String::new()), |(t, f)| (*t, f.to_string())),
+    }
+}
+
+/// The recordings that share a sample rate (within 1 % of the slowest of
+/// them).
+#[derive(Debug, Clone)]
+pub struct RateGroup {
+    pub hz: f64,
+    pub count: usize,
+    /// One of them.
+    pub file: String,
+    /// How many of them each label has.
+    pub labels: BTreeMap<String, usize>,
+}
+
+impl Survey {
+    /// What a window along `column` fits, and its file: the shortest
+    /// recording that is not one of a few much shorter ones ([`Reach`]).
+    /// The second value: those left uncovered.
+    pub fn window_reach(&self, column: &str) -> ((f64, String), &[(String, f64)]) {
+        match self.reach.get(column) {
+            Some(r) if few(r.short.len(), self.complete) => (r.typical.clone(), &r.short),
+            _ => (self.shortest.get(column).cloned().unwrap_or_default(), &[]),
+        }
+    }
+
+    /// The rate a time axis is resampled at: the slowest, so that every
+    /// point holds a sample of each recording.
+    pub fn slowest_rate(&self) -> f64 {
+        self.rates.first().map_or(self.rate_hz, |r| r.hz)
+    }
 }
 
 /// Read every recording under `dir` (on every core) and sum them up.
@@ -67,8 +172,9 @@ pub fn survey(dir: &Path) -> Result<Survey, Failure> {
     })?;
     if files.is_empty() {
         return Err(bad(format!(
-            "{}: no recordings (*.csv, *.csv.gz) to write a profile from",
-            dir.display()
+            "{}: no recordings (*.csv, *.csv.gz) to write a profile from; {}",
+            dir.display(),
+            crate::support::IMPORT_HINT
         )));
     }
     let pb = progress_bar(files.len() as u64, "reading");
@@ -132,6 +238,10 @@ fn look_at(file: &Path) -> Result<Option<Seen>, Failure> {
             }]);
             return Ok(None);
         }
+        // Another rig's file: what turns it into a recording.
+        Err(e) if e.is_not_a_recording() => {
+            return Err(bad(format!("{e}; {}", crate::support::IMPORT_HINT)));
+        }
         Err(e) => return Err(if e.is_bad_input() { bad(e) } else { runtime(e) }),
     };
     if !rec.is_complete() || rec.len() < 2 {
@@ -155,20 +265,24 @@ fn summarise(rec: &Recording, file: &Path, label: String) -> Seen {
         let mean = v.iter().sum::<f64>() / n as f64;
         spread.push((v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64).sqrt());
     }
-    let t_step = rec
-        .columns
-        .iter()
-        .position(|c| c == "t_s")
-        .map(|i| step[i])
-        .filter(|s| *s > 0.0);
+    let time = rec.columns.iter().position(|c| c == "t_s");
+    let t_step = time.map(|i| step[i]).filter(|s| *s > 0.0);
+    // The rate said in the metadata is exact but for float noise; one
+    // measured from `t_s` is as good as the samples' timing.
+    let rate_hz = match rec
+        .meta_f64("rate_hz")
+        .filter(|r| r.is_finite() && *r > 0.0)
+    {
+        Some(r) => Some(tidy_rate(r, FLOAT_NOISE)),
+        None => {
+            t_step.map(|s| tidy_rate(1.0 / s, time.map_or(FLOAT_NOISE, |i| timing(&rec.data[i]))))
+        }
+    };
     Seen {
         file: file.display().to_string(),
         label,
         columns: rec.columns.clone(),
-        rate_hz: rec
-            .meta_f64("rate_hz")
-            .filter(|r| r.is_finite() && *r > 0.0)
-            .or(t_step.map(|s| 1.0 / s)),
+        rate_hz,
         travel,
         step,
         spread,
@@ -178,6 +292,39 @@ fn summarise(rec: &Recording, file: &Path, label: String) -> Seen {
             .map(|(k, v)| (k.clone(), dataset::meta_text(v)))
             .collect(),
     }
+}
+
+/// The relative error of a rate that is only float noise (a sum of many
+/// sample times, or a rate written by a program as 999.9999999999998).
+const FLOAT_NOISE: f64 = 1e-9;
+
+/// The relative uncertainty of the mean sample period of `t`: twice the
+/// standard error of the periods (their jitter over the root of their
+/// number), at least [`FLOAT_NOISE`].
+fn timing(t: &[f64]) -> f64 {
+    let n = t.len().saturating_sub(1);
+    if n < 2 {
+        return FLOAT_NOISE;
+    }
+    let mean = (t[n] - t[0]) / n as f64;
+    let var = t
+        .windows(2)
+        .map(|w| (w[1] - w[0] - mean).powi(2))
+        .sum::<f64>()
+        / (n - 1) as f64;
+    (2.0 * var.sqrt() / (mean.abs() * (n as f64).sqrt())).max(FLOAT_NOISE)
+}
+
+/// `rate` to the fewest significant digits (up to 6) that agree with it
+/// within `tolerance` (relative): 1999 periods written as 0.001 s give
+/// 1000 Hz, not 999.9999999999998, whose period (the spacing) would be
+/// 0.001000000000000001. A rate the samples pin down more finely than 6
+/// digits allow stays as measured.
+pub fn tidy_rate(rate: f64, tolerance: f64) -> f64 {
+    (1..=6)
+        .map(|d| crate::profile::fitted::significant(rate, d))
+        .find(|r| ((r - rate) / rate).abs() <= tolerance)
+        .unwrap_or(rate)
 }
 
 /// Keys every hapticlab recording carries that say nothing about grouping.
@@ -232,6 +379,12 @@ fn sum_up(seen: &[Seen], incomplete: Vec<String>) -> Survey {
     for r in seen {
         *s.labels.entry(r.label.clone()).or_default() += 1;
     }
+    let segments: Vec<Option<Segment>> = seen.iter().map(|r| Segment::of(&r.meta)).collect();
+    if segments.iter().any(Option::is_some) {
+        for (r, segment) in seen.iter().zip(segments) {
+            s.segments.entry(r.label.clone()).or_default().push(segment);
+        }
+    }
     let mut rates: Vec<f64> = seen.iter().filter_map(|r| r.rate_hz).collect();
     rates.sort_by(f64::total_cmp);
     s.rate_hz = rates.get(rates.len() / 2).copied().unwrap_or(1000.0);
@@ -245,6 +398,10 @@ fn sum_up(seen: &[Seen], incomplete: Vec<String>) -> Survey {
             .min_by(|a, b| a.0.total_cmp(&b.0))
             .map_or((0.0, String::new()), |(t, r)| (t, r.file.clone()));
         s.shortest.insert(c.clone(), shortest);
+        if c == "t_s" || POSITIONS.contains(&c.as_str()) {
+            let travels = seen.iter().zip(&at).map(|(r, &i)| (r.travel[i], &r.file));
+            s.reach.insert(c.clone(), reach(travels));
+        }
         let mut steps: Vec<f64> = seen.iter().zip(&at).map(|(r, &i)| r.step[i]).collect();
         steps.sort_by(f64::total_cmp);
         s.step.insert(c.clone(), steps[steps.len() / 2]);
@@ -294,17 +451,25 @@ fn grouping(seen: &[Seen], key: &str) -> (usize, bool) {
 }
 
 /// The recordings' rates, those within 1 % of each other counted as one.
-fn distinct_rates(seen: &[Seen]) -> Vec<(f64, usize, String)> {
-    let mut rated: Vec<(f64, &str)> = seen
+fn distinct_rates(seen: &[Seen]) -> Vec<RateGroup> {
+    let mut rated: Vec<(f64, &Seen)> = seen
         .iter()
-        .filter_map(|r| r.rate_hz.map(|h| (h, r.file.as_str())))
+        .filter_map(|r| r.rate_hz.map(|h| (h, r)))
         .collect();
     rated.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut out: Vec<(f64, usize, String)> = Vec::new();
-    for (hz, file) in rated {
+    let mut out: Vec<RateGroup> = Vec::new();
+    for (hz, r) in rated {
         match out.last_mut() {
-            Some(last) if hz <= last.0 * 1.01 => last.1 += 1,
-            _ => out.push((hz, 1, file.to_string())),
+            Some(last) if hz <= last.hz * 1.01 => last.count += 1,
+            _ => out.push(RateGroup {
+                hz,
+                count: 1,
+                file: r.file.clone(),
+                labels: BTreeMap::new(),
+            }),
+        }
+        if let Some(last) = out.last_mut() {
+            *last.labels.entry(r.label.clone()).or_default() += 1;
         }
     }
     out
@@ -324,10 +489,11 @@ const MAX_CHANNELS: usize = 4;
 
 impl Survey {
     /// A position axis when the probe travels (a stroke of 1 mm or more in
-    /// every recording): the one it travels most along, the thesis's way;
-    /// otherwise time.
+    /// every recording but a few much shorter ones, [`Reach`]): the one it
+    /// travels most along, the thesis's way; otherwise time.
     pub fn choice(&self) -> Choice {
-        let travel = |c: &str| self.shortest.get(c).map_or(0.0, |t| t.0);
+        // An aborted stroke or two do not make the probe stationary.
+        let travel = |c: &str| self.window_reach(c).0.0;
         let stroke = POSITIONS
             .iter()
             .filter(|c| self.columns.iter().any(|x| x == *c))
@@ -353,8 +519,13 @@ impl Survey {
                     axis: axis.to_string(),
                     signals: signal.into_iter().collect(),
                     why: format!(
-                        "the probe strokes along {axis} (at least {:.1} mm in every recording): resampled by position, as the thesis",
-                        travel(axis) * 1000.0
+                        "the probe strokes along {axis} (at least {:.1} mm in every recording{}): resampled by position, as the thesis",
+                        travel(axis) * 1000.0,
+                        if self.window_reach(axis).1.is_empty() {
+                            ""
+                        } else {
+                            " but the few much shorter ones"
+                        }
                     ),
                 }
             }
@@ -380,5 +551,27 @@ impl Survey {
         } else {
             Vec::new()
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_rate_is_rounded_only_as_far_as_the_sample_times_allow() {
+        // Float noise rounds away; a rate written to 3 digits stays.
+        assert_eq!(tidy_rate(999.999_999_999_999_8, FLOAT_NOISE), 1000.0);
+        assert_eq!(tidy_rate(44_100.000_000_01, FLOAT_NOISE), 44_100.0);
+        // A clock 0.04 % slow, timed exactly, is not 1 kHz.
+        let slow: Vec<f64> = (0..2000).map(|i| i as f64 / 999.6).collect();
+        assert_eq!(tidy_rate(999.6, timing(&slow)), 999.6);
+        // 1 kHz with 50 µs of jitter on each sample: 1000 Hz is within it.
+        let jittered: Vec<f64> = (0..2000)
+            .map(|i| i as f64 * 0.001 + 5e-5 * ((i * 7919 % 13) as f64 / 6.0 - 1.0))
+            .collect();
+        let measured = 1999.0 / (jittered[1999] - jittered[0]);
+        assert_ne!(measured, 1000.0);
+        assert_eq!(tidy_rate(measured, timing(&jittered)), 1000.0);
     }
 }

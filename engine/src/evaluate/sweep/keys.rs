@@ -314,7 +314,14 @@ fn known_field(table: &str, field: &str) -> bool {
         // The one list of options.
         "analysis" => crate::profile::options::option(field).is_some(),
         "classifier" => crate::profile::options::classifier_option(field).is_some(),
-        "evaluation" => ["shuffle_seed", "method", "folds", "group_by"].contains(&field),
+        "evaluation" => [
+            "shuffle_seed",
+            "method",
+            "folds",
+            "group_by",
+            "gap_per_class",
+        ]
+        .contains(&field),
         "path" => ["transit_speed_m_per_s"].contains(&field),
         _ => false,
     }

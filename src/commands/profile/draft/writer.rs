@@ -11,7 +11,33 @@ use std::fmt::Write as _;
 
 use crate::profile::Classifier;
 pub use crate::profile::fitted::{ceil3, float, floor3};
+
+/// A measured number for people, in a comment: six significant digits at
+/// most (`1.999`, not the `1.9989999999999988` a difference of sample
+/// times gives), written as TOML would (`1000.0`).
+pub fn shown(x: f64) -> String {
+    float(crate::profile::fitted::significant(x, 6))
+}
 use crate::profile::options::{ANALYSIS_OPTIONS, CLASSIFIER_OPTIONS, Group, in_group, option};
+
+/// `text` broken at spaces into lines of at most `width` characters (a
+/// word longer than that stands alone), for a comment.
+pub fn wrap(text: &str, width: usize) -> String {
+    let mut out = String::new();
+    let mut line = 0;
+    for word in text.split(' ').filter(|w| !w.is_empty()) {
+        if line > 0 && line + 1 + word.chars().count() > width {
+            out.push('\n');
+            line = 0;
+        } else if line > 0 {
+            out.push(' ');
+            line += 1;
+        }
+        out.push_str(word);
+        line += word.chars().count();
+    }
+    out
+}
 
 /// One `key = value` line, with why it was chosen (a trailing comment;
 /// `None`: an `[analysis]` option's advice) and a comment above it.
