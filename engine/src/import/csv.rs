@@ -10,7 +10,7 @@ use crate::recording::{Digits, time_decimals};
 /// Column names that say a column holds the sample times (compared
 /// without case): under `--rate` such a column would be kept as a
 /// channel, analysed as a signal, and chosen by `profile new`.
-const TIME_NAMES: [&str; 18] = [
+pub(super) const TIME_NAMES: [&str; 18] = [
     "t",
     "t_s",
     "ts",

@@ -5,7 +5,8 @@
 //! 2-D array's channels are its columns (samples × channels), or its rows
 //! when `--names` counts them, or when there are fewer rows than columns.
 //! An `.npz` of several arrays takes each 1-D array as a channel named by
-//! it; a scalar (0-d) array becomes metadata.
+//! it; a scalar (0-d) array becomes metadata; an array named like sample
+//! times (`t`, `time`, `time_s`…) is left out, checked against `--rate`.
 
 use std::io::Read as _;
 
@@ -217,8 +218,8 @@ const RATE_NAMES: [&str; 12] = [
 /// `--names`; every channel the same length. `meta` holds the file's
 /// scalars; those a `--meta` key could be are kept as metadata.
 pub(super) fn signal(
-    channels: Vec<(String, Vec<f64>)>,
-    digits: Vec<Digits>,
+    mut channels: Vec<(String, Vec<f64>)>,
+    mut digits: Vec<Digits>,
     mut meta: Vec<(String, toml::Value)>,
     args: &Request,
     origin: &str,
@@ -240,6 +241,7 @@ pub(super) fn signal(
         }));
     };
     meta.retain(|(k, _)| scalar_key(k));
+    leave_out_times(&mut channels, &mut digits, rate, origin, what)?;
     let n = channels.first().map_or(0, |c| c.1.len());
     if n == 0 {
         return Err(bad(format!("{origin}: no samples")));
@@ -274,6 +276,54 @@ pub(super) fn signal(
         time_digits: Digits::Decimals(time_decimals(rate)),
         channel_digits: digits,
     })
+}
+
+/// The named arrays without one that holds the sample times (named `t`,
+/// `time`, `time_s`… as a CSV's time column): kept, it would be analysed
+/// as a signal. Its spacing must agree with `--rate` within 0.5 %, or
+/// the import is refused naming both.
+fn leave_out_times(
+    channels: &mut Vec<(String, Vec<f64>)>,
+    digits: &mut Vec<Digits>,
+    rate: f64,
+    origin: &str,
+    what: &str,
+) -> Result<(), ImportError> {
+    let Some(i) = channels.iter().position(|(name, _)| {
+        super::csv::TIME_NAMES
+            .iter()
+            .any(|t| name.eq_ignore_ascii_case(t))
+    }) else {
+        return Ok(());
+    };
+    let (name, times) = channels.remove(i);
+    digits.remove(i);
+    if channels.is_empty() {
+        return Err(bad(format!(
+            "{origin}: {what} holds only `{name}`, which looks like sample times: \
+             save the signal beside it"
+        )));
+    }
+    if times.len() > 1 {
+        let period = (times[times.len() - 1] - times[0]) / (times.len() - 1) as f64;
+        if !(period.is_finite() && period > 0.0 && (period * rate - 1.0).abs() <= 0.005) {
+            let said = if period.is_finite() && period > 0.0 {
+                format!(
+                    "a sample every {} s, {} Hz",
+                    super::plain(period),
+                    super::plain(1.0 / period)
+                )
+            } else {
+                "no steady sample period".to_string()
+            };
+            return Err(bad(format!(
+                "{origin}: `{name}` looks like sample times ({said}) but --rate says {} Hz: \
+                 give the rate the times were taken at (the array is left out either way)",
+                super::plain(rate)
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// A `.npy` file's recording.
@@ -391,4 +441,43 @@ fn unzip(b: &[u8], origin: &str) -> Result<Vec<(String, Vec<u8>)>, ImportError> 
         return Err(err("no arrays"));
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn signal_of(arrays: &[(&str, Vec<f64>)], rate: f64) -> Result<Imported, ImportError> {
+        let channels: Vec<(String, Vec<f64>)> = arrays
+            .iter()
+            .map(|(n, v)| (n.to_string(), v.clone()))
+            .collect();
+        let digits = vec![Digits::Shortest; channels.len()];
+        let args = Request {
+            rate: Some(rate),
+            ..Request::default()
+        };
+        signal(channels, digits, Vec::new(), &args, "x.npz", "an .npz file")
+    }
+
+    #[test]
+    fn an_array_of_sample_times_is_left_out_and_checked_against_the_rate() {
+        let t: Vec<f64> = (0..100).map(|i| i as f64 * 0.001).collect();
+        let acc: Vec<f64> = (0..100).map(|i| (i % 7) as f64).collect();
+        let r = signal_of(&[("t", t.clone()), ("acc", acc.clone())], 1000.0).unwrap();
+        assert_eq!(
+            (r.names, r.channels),
+            (vec!["acc".to_string()], vec![acc.clone()])
+        );
+        let e = signal_of(&[("Time", t.clone()), ("acc", acc)], 500.0)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("`Time` looks like sample times (a sample every 0.001 s, 1000 Hz)")
+                && e.contains("--rate says 500 Hz"),
+            "{e}"
+        );
+        let e = signal_of(&[("t", t)], 1000.0).unwrap_err().to_string();
+        assert!(e.contains("holds only `t`"), "{e}");
+    }
 }

@@ -148,6 +148,61 @@ fn place_one(s: &Staged, force: bool) -> Result<(), ImportError> {
     Ok(())
 }
 
+/// After `--force --split`: the trials an earlier import cut from inputs
+/// of the same names and this one did not write again (an earlier, shorter
+/// `--split` left `long-seg016` … `long-seg030` where this one wrote 15),
+/// removed so the folder holds one cut of each input, not two mixed. Only
+/// names of the form `<stem>-seg<digits>.csv` (or `.csv.gz`) beside a trial
+/// this run placed are touched. Returns the ones removed.
+pub(super) fn remove_stale_trials(placed: &[PathBuf]) -> Vec<PathBuf> {
+    use std::collections::{BTreeSet, HashSet};
+    let ours: HashSet<&PathBuf> = placed.iter().collect();
+    // (folder, stem) of each trial placed.
+    let mut cuts = BTreeSet::new();
+    for p in placed {
+        if let (Some(dir), Some((stem, _))) = (p.parent(), p.file_name().and_then(trial_of)) {
+            cuts.insert((dir.to_path_buf(), stem.to_string()));
+        }
+    }
+    let mut removed = Vec::new();
+    for (dir, stem) in cuts {
+        let Ok(entries) = std::fs::read_dir(&dir) else {
+            continue;
+        };
+        let mut stale: Vec<PathBuf> = entries
+            .flatten()
+            .map(|e| e.path())
+            .filter(|p| {
+                !ours.contains(p)
+                    && p.is_file()
+                    && p.file_name()
+                        .and_then(trial_of)
+                        .is_some_and(|(s, _)| s == stem)
+            })
+            .collect();
+        stale.sort();
+        for p in stale {
+            if std::fs::remove_file(&p).is_ok() {
+                removed.push(p);
+            }
+        }
+    }
+    removed
+}
+
+/// `long-seg016.csv` (or `.csv.gz`): `("long", 16)`.
+fn trial_of(name: &std::ffi::OsStr) -> Option<(&str, u64)> {
+    let name = name.to_str()?;
+    let base = name
+        .strip_suffix(".csv.gz")
+        .or_else(|| name.strip_suffix(".csv"))?;
+    let (stem, number) = base.rsplit_once("-seg")?;
+    if stem.is_empty() || number.is_empty() || !number.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    Some((stem, number.parse().ok()?))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
