@@ -19,6 +19,8 @@ sets=${4:-"noise sound finger long"}
 shift $(($# < 4 ? $# : 4))
 [ "${1:-}" = "--" ] && shift
 here=$(cd "$(dirname "$0")" && pwd)
+# tee opens OUT/lines.txt before the first seed makes OUT.
+mkdir -p "$out"
 for seed in $seeds; do
   d=$out/$seed
   mkdir -p "$d"
