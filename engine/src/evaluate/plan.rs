@@ -233,21 +233,11 @@ impl Plan {
         let recordings: usize = counts.values().sum();
         let e = &p.evaluation;
         let why = match self.method {
-            SplitMethod::Holdout
-                if fewest < e.train_per_class + e.gap_per_class + e.test_per_class =>
-            {
-                format!(
-                    "the holdout split needs {} per texture ({} to train, {}{} to test), {label} has {fewest}",
-                    crate::classify::scans(e.train_per_class + e.gap_per_class + e.test_per_class),
-                    e.train_per_class,
-                    if e.gap_per_class > 0 {
-                        format!("{} left out, ", e.gap_per_class)
-                    } else {
-                        String::new()
-                    },
-                    e.test_per_class
-                )
-            }
+            SplitMethod::Holdout if fewest < e.holdout_needs() => format!(
+                "the holdout split needs {} per texture ({}), {label} has {fewest}",
+                crate::classify::scans(e.holdout_needs()),
+                e.holdout_parts()
+            ),
             SplitMethod::KFold if self.group_by.is_none() && self.folds > recordings => format!(
                 "{}-fold cross-validation needs at least {}, there are {}",
                 self.folds,

@@ -376,7 +376,7 @@ fn sim_plan<'a>(
     let e = &lp.profile.evaluation;
     // The holdout's own counts; cross-validation names none, so as many
     // scans as `simulate` makes by default (more when the folds need it).
-    let held_out = e.train_per_class + e.gap_per_class + e.test_per_class;
+    let held_out = e.holdout_needs();
     let sim = SimPlan {
         per_class: per_class.unwrap_or(if held_out > 0 {
             held_out
@@ -391,16 +391,10 @@ fn sim_plan<'a>(
     }
     if plan.method == SplitMethod::Holdout && sim.per_class < held_out {
         return Err(bad(format!(
-            "--per-class {}: the profile's holdout split needs {held_out} scans per texture ({} to train, {}{} to test); \
+            "--per-class {}: the profile's holdout split needs {held_out} scans per texture ({}); \
              simulate at least that many, or cross-validate (--folds N)",
             sim.per_class,
-            e.train_per_class,
-            if e.gap_per_class > 0 {
-                format!("{} left out, ", e.gap_per_class)
-            } else {
-                String::new()
-            },
-            e.test_per_class
+            e.holdout_parts()
         )));
     }
     Ok(sim)

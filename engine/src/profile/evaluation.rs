@@ -50,6 +50,28 @@ pub struct Evaluation {
     pub group_by: Option<String>,
 }
 
+impl Evaluation {
+    /// Recordings of each class a holdout takes: trained on, left out
+    /// between, tested.
+    pub fn holdout_needs(&self) -> usize {
+        self.train_per_class + self.gap_per_class + self.test_per_class
+    }
+
+    /// How a holdout takes them, for a message: "5 to train, 2 left out,
+    /// 5 to test" (the middle part only with `gap_per_class`).
+    pub fn holdout_parts(&self) -> String {
+        let gap = if self.gap_per_class > 0 {
+            format!("{} left out, ", self.gap_per_class)
+        } else {
+            String::new()
+        };
+        format!(
+            "{} to train, {gap}{} to test",
+            self.train_per_class, self.test_per_class
+        )
+    }
+}
+
 impl Default for Evaluation {
     fn default() -> Self {
         Evaluation {
