@@ -118,6 +118,10 @@ pub struct TuneReport {
     /// The outer validation: "holdout", "5-fold", "leave-one-out", …
     pub method: String,
     pub inner_folds: usize,
+    /// Whether the inner folds were blocks in time with the trials that
+    /// overlap a test one left out of training (trials cut with a
+    /// `--split-hop` below `--split`), not shuffled folds.
+    pub inner_folds_in_time: bool,
     /// The outer estimate: the chosen settings tested on what each search
     /// never saw, pooled (0..1).
     pub outer_accuracy: f64,
@@ -322,8 +326,110 @@ fn folds_to_parts(within: &[usize], folds: &Folds) -> Vec<Part> {
         .collect()
 }
 
+/// One trial's span in the long recording it was cut from (`import
+/// --split`'s metadata): the source and its start and length in seconds.
+struct Span {
+    source: String,
+    start: f64,
+    length: f64,
+}
+
+impl Span {
+    fn of(e: &Entry) -> Option<Span> {
+        let num = |key: &str| {
+            e.meta.iter().find(|(k, _)| k == key).and_then(|(_, v)| {
+                v.as_float()
+                    .or_else(|| v.as_integer().map(|i| i as f64))
+                    .filter(|x| x.is_finite())
+            })
+        };
+        Some(Span {
+            source: e.meta_text("source")?,
+            start: num("segment_start_s")?,
+            length: num("segment_length_s")?,
+        })
+    }
+
+    /// Whether the two share signal: one source, spans that overlap by
+    /// more than a millionth of their length.
+    fn overlaps(&self, o: &Span) -> bool {
+        let eps = 1e-6 * self.length.max(o.length);
+        self.source == o.source
+            && self.start < o.start + o.length - eps
+            && o.start < self.start + self.length - eps
+    }
+}
+
+/// The spans of `train`'s recordings (in its order) when every one is a
+/// trial of a long recording and two of them overlap (`import --split`
+/// with a `--split-hop` below `--split`); `None` otherwise.
+fn overlapping_trials(scans: &[Entry], train: &[usize]) -> Option<Vec<Span>> {
+    let spans: Vec<Span> = train
+        .iter()
+        .map(|&i| Span::of(&scans[i]))
+        .collect::<Option<_>>()?;
+    let mut order: Vec<usize> = (0..spans.len()).collect();
+    order.sort_by(|&a, &b| {
+        (&spans[a].source, spans[a].start)
+            .partial_cmp(&(&spans[b].source, spans[b].start))
+            .unwrap_or(std::cmp::Ordering::Equal)
+    });
+    order
+        .windows(2)
+        .any(|w| spans[w[0]].overlaps(&spans[w[1]]))
+        .then_some(spans)
+}
+
+/// Inner folds over overlapping trials: each source's trials in time
+/// order cut into `folds` consecutive blocks, fold `f` testing block `f`
+/// of every source and training on the rest but the trials that overlap
+/// one it tests (as a purged time-series split): shuffled folds would
+/// test a trial beside its own overlapping neighbour and flatter the
+/// settings that memorise.
+fn purged_blocks(train: &[usize], spans: &[Span], folds: usize) -> Result<Vec<Part>, TuneError> {
+    let mut by_source: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
+    for (p, s) in spans.iter().enumerate() {
+        by_source.entry(&s.source).or_default().push(p);
+    }
+    let mut fold_of = vec![0; spans.len()];
+    for positions in by_source.values_mut() {
+        positions.sort_by(|&a, &b| spans[a].start.total_cmp(&spans[b].start));
+        let n = positions.len();
+        for (i, &p) in positions.iter().enumerate() {
+            fold_of[p] = i * folds / n;
+        }
+    }
+    let mut parts = Vec::with_capacity(folds);
+    for f in 0..folds {
+        let test: Vec<usize> = (0..spans.len()).filter(|&p| fold_of[p] == f).collect();
+        let train_f: Vec<usize> = (0..spans.len())
+            .filter(|&p| fold_of[p] != f && test.iter().all(|&t| !spans[p].overlaps(&spans[t])))
+            .collect();
+        if test.is_empty() {
+            continue;
+        }
+        if train_f.is_empty() {
+            return Err(plan_error(format!(
+                "a training part's {} overlapping trials leave an inner fold nothing to train on \
+                 once the trials overlapping its test ones are left out: import with a longer \
+                 --split-hop, or give the training part more",
+                spans.len()
+            )));
+        }
+        parts.push(Part {
+            train: train_f.iter().map(|&p| train[p]).collect(),
+            test: test.iter().map(|&p| train[p]).collect(),
+        });
+    }
+    Ok(parts)
+}
+
 /// The inner folds of a training part: stratified, grouped with groups,
 /// [`INNER_FOLDS`] of them or as many as there are recordings or groups.
+/// Without groups, over trials that overlap in time (`import --split`
+/// with `--split-hop`): consecutive blocks of each source's trials, the
+/// trials overlapping a fold's test ones left out of its training
+/// ([`purged_blocks`]).
 pub fn inner_parts(
     scans: &[Entry],
     group_by: Option<&str>,
@@ -331,6 +437,23 @@ pub fn inner_parts(
     seed: u64,
 ) -> Result<Vec<Part>, TuneError> {
     let data = Data::new(scans, group_by)?;
+    if group_by.is_none()
+        && let Some(spans) = overlapping_trials(scans, train)
+    {
+        let longest = spans
+            .iter()
+            .fold(BTreeMap::<&str, usize>::new(), |mut m, s| {
+                *m.entry(&s.source).or_default() += 1;
+                m
+            })
+            .into_values()
+            .max()
+            .unwrap_or(0);
+        let folds = INNER_FOLDS.min(longest);
+        if folds >= 2 {
+            return purged_blocks(train, &spans, folds);
+        }
+    }
     let groups = data.group_of(train);
     let units = match &groups {
         Some(g) => {
@@ -607,6 +730,8 @@ pub fn tune(
         feature_settings_scored,
         method,
         inner_folds: inner[final_part].len(),
+        inner_folds_in_time: group_by.is_none()
+            && overlapping_trials(scans, &parts[final_part].train).is_some(),
         outer_accuracy: outer.accuracy,
         outer,
         chosen: scored(chosen, final_part),

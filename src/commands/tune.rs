@@ -148,11 +148,16 @@ pub fn run(a: TuneArgs) -> Result<(), Failure> {
 fn print_report(r: &TuneReport, a: &TuneArgs) {
     let pct = |x: f64| format!("{:.1} %", 100.0 * x);
     crate::outln!(
-        "{} of {} settings ({} feature settings) scored by {}-fold cross-validation inside each training part; outer validation: {}",
+        "{} of {} settings ({} feature settings) scored by {}-fold cross-validation{} inside each training part; outer validation: {}",
         r.configurations,
         r.grid,
         r.feature_settings,
         r.inner_folds,
+        if r.inner_folds_in_time {
+            " (blocks in time, overlapping trials left out)"
+        } else {
+            ""
+        },
         r.method
     );
     let chosen: Vec<String> = r

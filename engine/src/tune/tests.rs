@@ -365,3 +365,64 @@ fn a_shared_grid_gives_the_features_resampling_again_gives() {
         extract(&scans2, &two, 1).unwrap()
     );
 }
+
+/// `n` trials of 1 s every `hop` s cut from one long recording per class
+/// (as `import --split 1 --split-hop HOP` writes them).
+fn cut_trials(classes: usize, n: usize, hop: f64) -> Vec<Entry> {
+    let mut s = scans(classes, n, |c, _, rng| {
+        tone(40.0 + 25.0 * c as f64, 1.0, 3.0, rng)
+    });
+    for e in &mut s {
+        let t: usize = e.file[1..3].parse().unwrap();
+        let c = &e.label;
+        e.meta = vec![
+            ("source".into(), toml::Value::String(format!("{c}.csv"))),
+            ("segment".into(), toml::Value::Integer(t as i64 + 1)),
+            ("segment_start_s".into(), toml::Value::Float(t as f64 * hop)),
+            ("segment_length_s".into(), toml::Value::Float(1.0)),
+        ];
+    }
+    s
+}
+
+#[test]
+fn overlapping_trials_are_folded_in_time_and_their_neighbours_left_out() {
+    // Half-overlapping: trial t shares signal with t - 1 and t + 1.
+    let s = cut_trials(2, 20, 0.5);
+    let all: Vec<usize> = (0..s.len()).collect();
+    let inner = inner_parts(&s, None, &all, 0).unwrap();
+    assert_eq!(inner.len(), 5);
+    let span = |i: usize| Span::of(&s[i]).unwrap();
+    let mut tested = vec![0; s.len()];
+    for part in &inner {
+        for &t in &part.test {
+            tested[t] += 1;
+            // No training trial overlaps a test one.
+            assert!(part.train.iter().all(|&r| !span(r).overlaps(&span(t))));
+        }
+        // Each fold tests a block of 4 consecutive trials of each class,
+        // and trains on all but those and their 2 neighbours (1 at an end).
+        assert_eq!(part.test.len(), 8);
+        assert!(
+            part.train.len() == 28 || part.train.len() == 30,
+            "{}",
+            part.train.len()
+        );
+    }
+    assert!(tested.iter().all(|&n| n == 1), "each trial tested once");
+    // Trials that only touch (hop = length) keep the shuffled folds.
+    let touching = cut_trials(2, 20, 1.0);
+    let shuffled = inner_parts(&touching, None, &all, 0).unwrap();
+    let plain = inner_parts(
+        &scans(2, 20, |_, _, rng| tone(50.0, 1.0, 1.0, rng)),
+        None,
+        &all,
+        0,
+    );
+    assert_eq!(shuffled, plain.unwrap());
+    // The report says how the inner folds were made.
+    let p = profile(HOLDOUT);
+    let r = run(&p, &cut_trials(2, 10, 0.5), 48, 0);
+    assert!(r.inner_folds_in_time);
+    assert!(!run(&p, &touching, 48, 0).inner_folds_in_time);
+}

@@ -137,6 +137,12 @@ fn comment_block(r: &TuneReport, about: &str) -> String {
         "# search scored by {}-fold cross-validation inside the training part only, the best then",
         r.inner_folds
     );
+    if r.inner_folds_in_time {
+        let _ = writeln!(
+            w,
+            "# (the trials overlap: each fold a block in time, the trials overlapping its test ones left out),"
+        );
+    }
     let _ = writeln!(
         w,
         "# tested once on what [evaluation] ({}) holds out.",
