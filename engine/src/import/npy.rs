@@ -318,7 +318,8 @@ fn leave_out_times(
             };
             return Err(bad(format!(
                 "{origin}: `{name}` looks like sample times ({said}) but --rate says {} Hz: \
-                 give the rate the times were taken at (the array is left out either way)",
+                 give the rate the times were taken at (the array is left out either way), \
+                 or rename it if it is a signal",
                 super::plain(rate)
             )));
         }

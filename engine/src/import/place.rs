@@ -160,7 +160,7 @@ pub(super) fn remove_stale_trials(placed: &[PathBuf]) -> Vec<PathBuf> {
     // (folder, stem) of each trial placed.
     let mut cuts = BTreeSet::new();
     for p in placed {
-        if let (Some(dir), Some((stem, _))) = (p.parent(), p.file_name().and_then(trial_of)) {
+        if let (Some(dir), Some(stem)) = (p.parent(), p.file_name().and_then(trial_of)) {
             cuts.insert((dir.to_path_buf(), stem.to_string()));
         }
     }
@@ -175,9 +175,7 @@ pub(super) fn remove_stale_trials(placed: &[PathBuf]) -> Vec<PathBuf> {
             .filter(|p| {
                 !ours.contains(p)
                     && p.is_file()
-                    && p.file_name()
-                        .and_then(trial_of)
-                        .is_some_and(|(s, _)| s == stem)
+                    && p.file_name().and_then(trial_of).is_some_and(|s| s == stem)
             })
             .collect();
         stale.sort();
@@ -190,17 +188,16 @@ pub(super) fn remove_stale_trials(placed: &[PathBuf]) -> Vec<PathBuf> {
     removed
 }
 
-/// `long-seg016.csv` (or `.csv.gz`): `("long", 16)`.
-fn trial_of(name: &std::ffi::OsStr) -> Option<(&str, u64)> {
+/// The stem of a trial's file name: `long-seg016.csv` (or `.csv.gz`):
+/// `long`.
+fn trial_of(name: &std::ffi::OsStr) -> Option<&str> {
     let name = name.to_str()?;
     let base = name
         .strip_suffix(".csv.gz")
         .or_else(|| name.strip_suffix(".csv"))?;
     let (stem, number) = base.rsplit_once("-seg")?;
-    if stem.is_empty() || number.is_empty() || !number.bytes().all(|b| b.is_ascii_digit()) {
-        return None;
-    }
-    Some((stem, number.parse().ok()?))
+    let digits = !number.is_empty() && number.bytes().all(|b| b.is_ascii_digit());
+    (!stem.is_empty() && digits).then_some(stem)
 }
 
 #[cfg(test)]
