@@ -32,7 +32,7 @@ mod text;
 mod wav;
 use checks::{check_written_names, flags_a_wav_ignores, one_folder_for_every_label};
 pub use csv::parse_csv;
-use place::{Staged, remove_abandoned_staging, remove_stale_trials, settle};
+use place::{Staged, remove_abandoned_staging, remove_other_cuts, settle};
 pub use wav::parse_wav;
 
 /// What to import and how: the files, the folder, and the mapping of
@@ -589,16 +589,15 @@ pub fn run(args: &Request, report: &dyn Report) -> Result<Vec<PathBuf>, ImportEr
     }
     if let Ok(placed) = &moved
         && args.force
-        && args.split.is_some()
     {
-        let stale = remove_stale_trials(placed);
-        if let (Some(first), Some(last)) = (stale.first(), stale.last()) {
+        let other = remove_other_cuts(placed, args.split.is_some());
+        if let (Some(first), Some(last)) = (other.first(), other.last()) {
             report.warn(&format!(
-                "--force: removed {} trial(s) an earlier import cut from inputs of the same \
-                 names and this one did not write again ({}{}), so each input is cut one way",
-                stale.len(),
+                "--force: removed {} recording(s) an earlier import cut another way from inputs \
+                 of the same names ({}{}), so each input is cut one way",
+                other.len(),
                 first.display(),
-                if stale.len() > 1 {
+                if other.len() > 1 {
                     format!(" … {}", last.display())
                 } else {
                     String::new()

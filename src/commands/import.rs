@@ -47,10 +47,10 @@ pub struct ImportArgs {
     pub delimiter: Option<char>,
     /// Replace the recordings already at the names this import writes
     /// (OUT/<label>/<stem>.csv or .csv.gz, the other of the two removed);
-    /// without it a name taken is refused and nothing is imported. With
-    /// --split, an earlier cut's trials of the same inputs that this one
-    /// does not write again (<stem>-segNNN) are removed too, so each input
-    /// is cut one way.
+    /// without it a name taken is refused and nothing is imported. An
+    /// earlier import's recordings of the same inputs cut another way
+    /// (<stem>.csv beside --split's <stem>-segNNN, or trials this cut does
+    /// not write again) are removed too, so each input is cut one way.
     #[arg(long)]
     pub force: bool,
     /// Compress each recording to OUT/<label>/<file stem>.csv.gz (gzip -9).

@@ -264,44 +264,59 @@ fn inputs_all_in_one_folder_are_imported_with_a_warning_that_they_share_its_labe
 }
 
 #[test]
-fn importing_again_with_force_and_a_longer_split_leaves_one_cut_of_each_input() {
+fn importing_again_with_force_cut_another_way_leaves_one_cut_of_each_input() {
     let dir = tempfile::tempdir().unwrap();
     let files = long_traces(&dir.path().join("in"));
     let rec = dir.path().join("rec");
-    let import = |split: &str, force: bool| {
-        let mut args = vec![
-            "import",
-            "--rate",
-            "100",
-            "--split",
-            split,
-            "--out",
-            p(&rec),
-        ];
+    // `split` None: each input whole.
+    let import = |split: Option<&str>, force: bool| {
+        let mut args = vec!["import", "--rate", "100", "--out", p(&rec)];
+        if let Some(s) = split {
+            args.extend(["--split", s]);
+        }
         if force {
             args.push("--force");
         }
         args.extend(files.iter().map(String::as_str));
         run(&args)
     };
-    assert_eq!(import("2", false).code, Some(0));
-    // Another recording of L2 that is no trial of L2.csv stays.
+    let names = || {
+        let mut n: Vec<String> = fs::read_dir(rec.join("L2"))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        n.sort();
+        n
+    };
+    assert_eq!(import(Some("2"), false).code, Some(0));
+    // Another recording of L2 that is no cut of L2.csv stays.
     fs::copy(
         rec.join("L2").join("L2-seg001.csv"),
         rec.join("L2").join("other.csv"),
     )
     .unwrap();
-    let r = import("4", true);
+    // A longer cut: the 2 s cut's trials past 15 go.
+    let r = import(Some("4"), true);
     assert_eq!(r.code, Some(0), "{r:?}");
-    assert!(r.stderr.contains("removed 45 trial(s)"), "{r:?}");
-    let mut names: Vec<String> = fs::read_dir(rec.join("L2"))
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    assert_eq!(names.len(), 16, "{names:?}");
-    assert_eq!(names[14], "L2-seg015.csv");
-    assert_eq!(names[15], "other.csv");
+    assert!(r.stderr.contains("removed 45 recording(s)"), "{r:?}");
+    let n = names();
+    assert_eq!(n.len(), 16, "{n:?}");
+    assert_eq!(
+        (n[14].as_str(), n[15].as_str()),
+        ("L2-seg015.csv", "other.csv")
+    );
     let r15 = recording::read(&rec.join("L2").join("L2-seg015.csv")).unwrap();
     assert_eq!(r15.len(), 400, "the 4 s cut");
+    // Whole: every trial goes.
+    let r = import(None, true);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(r.stderr.contains("removed 45 recording(s)"), "{r:?}");
+    assert_eq!(names(), ["L2.csv", "other.csv"]);
+    // Cut again: the whole one goes.
+    let r = import(Some("2"), true);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(r.stderr.contains("removed 3 recording(s)"), "{r:?}");
+    let n = names();
+    assert_eq!(n.len(), 31, "{n:?}");
+    assert!(!n.contains(&"L2.csv".to_string()));
 }

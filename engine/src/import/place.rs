@@ -148,19 +148,28 @@ fn place_one(s: &Staged, force: bool) -> Result<(), ImportError> {
     Ok(())
 }
 
-/// After `--force --split`: the trials an earlier import cut from inputs
-/// of the same names and this one did not write again (an earlier, shorter
-/// `--split` left `long-seg016` … `long-seg030` where this one wrote 15),
-/// removed so the folder holds one cut of each input, not two mixed. Only
-/// names of the form `<stem>-seg<digits>.csv` (or `.csv.gz`) beside a trial
-/// this run placed are touched. Returns the ones removed.
-pub(super) fn remove_stale_trials(placed: &[PathBuf]) -> Vec<PathBuf> {
+/// After `--force`: the recordings an earlier import made from inputs of
+/// the same names, cut another way, that this one did not write again:
+/// beside a whole `long.csv` its trials `long-seg001.csv` …, beside trials
+/// the whole `long.csv` or the trials past this cut's count (an earlier,
+/// shorter `--split` left `long-seg016` … `long-seg030` where this one
+/// wrote 15). Removed so the folder holds one cut of each input, never two
+/// mixed (their windows would train and test on one signal). Only
+/// `<stem>.csv`, `<stem>-seg<digits>.csv` (or `.csv.gz`) beside a
+/// recording this run placed are touched. Returns the ones removed.
+pub(super) fn remove_other_cuts(placed: &[PathBuf], split: bool) -> Vec<PathBuf> {
     use std::collections::{BTreeSet, HashSet};
     let ours: HashSet<&PathBuf> = placed.iter().collect();
-    // (folder, stem) of each trial placed.
+    // (folder, input stem) of each recording placed.
     let mut cuts = BTreeSet::new();
     for p in placed {
-        if let (Some(dir), Some(stem)) = (p.parent(), p.file_name().and_then(trial_of)) {
+        let name = p.file_name().and_then(|n| n.to_str());
+        let stem = if split {
+            name.and_then(trial_of)
+        } else {
+            name.and_then(whole_of)
+        };
+        if let (Some(dir), Some(stem)) = (p.parent(), stem) {
             cuts.insert((dir.to_path_buf(), stem.to_string()));
         }
     }
@@ -169,17 +178,20 @@ pub(super) fn remove_stale_trials(placed: &[PathBuf]) -> Vec<PathBuf> {
         let Ok(entries) = std::fs::read_dir(&dir) else {
             continue;
         };
-        let mut stale: Vec<PathBuf> = entries
+        let mut other: Vec<PathBuf> = entries
             .flatten()
             .map(|e| e.path())
             .filter(|p| {
+                let name = p.file_name().and_then(|n| n.to_str());
                 !ours.contains(p)
                     && p.is_file()
-                    && p.file_name().and_then(trial_of).is_some_and(|s| s == stem)
+                    && name.is_some_and(|n| {
+                        trial_of(n) == Some(stem.as_str()) || whole_of(n) == Some(stem.as_str())
+                    })
             })
             .collect();
-        stale.sort();
-        for p in stale {
+        other.sort();
+        for p in other {
             if std::fs::remove_file(&p).is_ok() {
                 removed.push(p);
             }
@@ -188,14 +200,17 @@ pub(super) fn remove_stale_trials(placed: &[PathBuf]) -> Vec<PathBuf> {
     removed
 }
 
-/// The stem of a trial's file name: `long-seg016.csv` (or `.csv.gz`):
-/// `long`.
-fn trial_of(name: &std::ffi::OsStr) -> Option<&str> {
-    let name = name.to_str()?;
-    let base = name
-        .strip_suffix(".csv.gz")
-        .or_else(|| name.strip_suffix(".csv"))?;
-    let (stem, number) = base.rsplit_once("-seg")?;
+/// The stem of a recording's file name: `long.csv` (or `.csv.gz`): `long`.
+fn whole_of(name: &str) -> Option<&str> {
+    name.strip_suffix(".csv.gz")
+        .or_else(|| name.strip_suffix(".csv"))
+        .filter(|s| !s.is_empty())
+}
+
+/// The input's stem of a trial's file name: `long-seg016.csv` (or
+/// `.csv.gz`): `long`.
+fn trial_of(name: &str) -> Option<&str> {
+    let (stem, number) = whole_of(name)?.rsplit_once("-seg")?;
     let digits = !number.is_empty() && number.bytes().all(|b| b.is_ascii_digit());
     (!stem.is_empty() && digits).then_some(stem)
 }
