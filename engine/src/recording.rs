@@ -70,10 +70,11 @@ pub enum RecordingError {
 
 impl RecordingError {
     /// True when the file is no hapticlab recording at all (its first line
-    /// is not the format line, or it is empty): another rig's file, for
-    /// `hapticlab import`.
+    /// is not the format line, is empty, or is no text: a WAV, an .npz):
+    /// another rig's file, for `hapticlab import`.
     pub fn is_not_a_recording(&self) -> bool {
-        matches!(self, Self::Malformed { line: 1, reason, .. } if reason.starts_with("not a hapticlab recording"))
+        matches!(self, Self::Malformed { line: 1, reason, .. }
+            if reason.starts_with("not a hapticlab recording") || reason.starts_with("invalid UTF-8"))
     }
 
     /// True when the recording itself is at fault (exit code 2), or a path

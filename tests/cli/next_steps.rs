@@ -104,4 +104,13 @@ fn profile_new_on_another_rigs_files_suggests_import() {
     let r = run(&["profile", "new", "--from", p(&wavs), "--out", p(&out)]);
     assert_eq!(r.code, Some(2), "{r:?}");
     assert!(r.stderr.contains("hapticlab import FILE..."), "{r:?}");
+    // A binary file named as a recording (an .npz, say) too, in evaluate.
+    let npz = dir.path().join("x.npz");
+    fs::write(&npz, b"PK\x03\x04\x14\x00\xff\xfe").unwrap();
+    let r = run(&["evaluate", p(&npz)]);
+    assert_eq!(r.code, Some(2), "{r:?}");
+    assert!(
+        r.stderr.contains("invalid UTF-8") && r.stderr.contains("hapticlab import FILE..."),
+        "{r:?}"
+    );
 }
