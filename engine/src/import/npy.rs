@@ -237,7 +237,16 @@ pub(super) fn signal(
                      `{k}` = {v} looks like one: give --rate {v} if that is in Hz"
                 )
             }
-            None => format!("{origin}: {what} carries no sample rate: give --rate HZ"),
+            None => match times_rate(&channels) {
+                Some((name, hz)) => format!(
+                    "{origin}: {what} carries no sample rate import can be sure of; its array \
+                     `{name}` looks like sample times, a sample every {} s: give --rate {} if \
+                     they are in seconds",
+                    super::plain(six_digits(1.0 / hz)),
+                    super::plain(six_digits(hz))
+                ),
+                None => format!("{origin}: {what} carries no sample rate: give --rate HZ"),
+            },
         }));
     };
     meta.retain(|(k, _)| scalar_key(k));
@@ -278,6 +287,27 @@ pub(super) fn signal(
     })
 }
 
+/// The array named like sample times and the rate its mean spacing gives,
+/// when it is steady (ascending, finite).
+fn times_rate(channels: &[(String, Vec<f64>)]) -> Option<(&str, f64)> {
+    let (name, t) = channels.iter().find(|(name, _)| is_time_name(name))?;
+    let n = t.len();
+    let period = (*t.get(n.checked_sub(1)?)? - t.first()?) / (n.checked_sub(1)? as f64);
+    (period.is_finite() && period > 0.0).then(|| (name.as_str(), 1.0 / period))
+}
+
+/// `x` to 6 significant digits, so a rate measured from float times
+/// reads 500, not 499.99999999999994.
+fn six_digits(x: f64) -> f64 {
+    format!("{x:.5e}").parse().unwrap_or(x)
+}
+
+fn is_time_name(name: &str) -> bool {
+    super::csv::TIME_NAMES
+        .iter()
+        .any(|t| name.eq_ignore_ascii_case(t))
+}
+
 /// The named arrays without one that holds the sample times (named `t`,
 /// `time`, `time_s`… as a CSV's time column): kept, it would be analysed
 /// as a signal. Its spacing must agree with `--rate` within 0.5 %, or
@@ -289,11 +319,7 @@ fn leave_out_times(
     origin: &str,
     what: &str,
 ) -> Result<(), ImportError> {
-    let Some(i) = channels.iter().position(|(name, _)| {
-        super::csv::TIME_NAMES
-            .iter()
-            .any(|t| name.eq_ignore_ascii_case(t))
-    }) else {
+    let Some(i) = channels.iter().position(|(name, _)| is_time_name(name)) else {
         return Ok(());
     };
     let (name, times) = channels.remove(i);
@@ -310,8 +336,8 @@ fn leave_out_times(
             let said = if period.is_finite() && period > 0.0 {
                 format!(
                     "a sample every {} s, {} Hz",
-                    super::plain(period),
-                    super::plain(1.0 / period)
+                    super::plain(six_digits(period)),
+                    super::plain(six_digits(1.0 / period))
                 )
             } else {
                 "no steady sample period".to_string()
@@ -478,7 +504,28 @@ mod tests {
                 && e.contains("--rate says 500 Hz"),
             "{e}"
         );
-        let e = signal_of(&[("t", t)], 1000.0).unwrap_err().to_string();
+        let e = signal_of(&[("t", t.clone())], 1000.0)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("holds only `t`"), "{e}");
+        // Without --rate, the times' rate is offered (times as np.arange(n) / 3
+        // gives them, float noise and all).
+        let t: Vec<f64> = (0..100).map(|i| i as f64 / 3.0).collect();
+        let channels = vec![("t".to_string(), t), ("acc".to_string(), vec![0.0; 100])];
+        let digits = vec![Digits::Shortest; 2];
+        let e = signal(
+            channels,
+            digits,
+            Vec::new(),
+            &Request::default(),
+            "x.npz",
+            "an .npz file",
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("`t` looks like sample times, a sample every 0.333333 s: give --rate 3 "),
+            "{e}"
+        );
     }
 }
