@@ -411,3 +411,30 @@ fn overlapping_segments_are_left_out_between_training_and_test() {
         "{test:?}"
     );
 }
+
+#[test]
+fn trials_numbered_without_leading_zeros_are_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("bare");
+    for (l, label) in ["a", "b"].iter().enumerate() {
+        fs::create_dir_all(rec.join(label)).unwrap();
+        for i in 1..=12 {
+            let text = recording(label, [0.05, 0.17][l], 2000, 1000.0, "", i);
+            fs::write(rec.join(label).join(format!("trial{i}.csv")), text).unwrap();
+        }
+    }
+    let out = dir.path().join("bare.toml");
+    let r = run(&["profile", "new", "--from", p(&rec), "--out", p(&out)]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(
+        r.stderr.contains(
+            "file names are numbered without leading zeros: file-name order, which a holdout and the time split take, puts trial12.csv before trial2.csv"
+        ),
+        "{r:?}"
+    );
+    let text = fs::read_to_string(&out).unwrap();
+    assert!(
+        text.contains("# Caution: file names are numbered without leading zeros"),
+        "{text}"
+    );
+}

@@ -80,6 +80,18 @@ pub fn of_rates(s: &Survey, time: Option<&str>) -> Option<String> {
     Some(text)
 }
 
+/// File names numbered without leading zeros, so that file-name order —
+/// the order a time split and a holdout take — is not their number order.
+pub fn of_names(s: &Survey) -> Option<String> {
+    let (before, after) = s.out_of_number_order.as_ref()?;
+    Some(format!(
+        "file names are numbered without leading zeros: file-name order, which a holdout and the \
+         time split take, puts {before} before {after}; if the numbers are the trials' order in \
+         time, rename them with leading zeros (as import --split names its trials: -seg001, \
+         -seg002, …) and run profile new again"
+    ))
+}
+
 /// A length along `axis` for people: seconds along time, millimetres along
 /// a position.
 fn length_text(axis: &str, v: f64) -> String {

@@ -168,6 +168,7 @@ fn plan<'a>(s: &'a Survey, from: &'a Path) -> Result<Plan<'a>, String> {
     let cautions = cautions::of_rates(s, time.then_some(spacing_text.as_str()))
         .into_iter()
         .chain(cautions::of_lengths(s, axis, &end_text, spacing))
+        .chain(cautions::of_names(s))
         .chain((split.shared > 0).then(|| shared_caution(split.shared)))
         .collect();
     // Log-Welch for other rigs' signals in time (vibration, sound) and for

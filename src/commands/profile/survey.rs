@@ -62,6 +62,10 @@ pub struct Survey {
     /// each recording lies in its source, when it is a segment of a long
     /// one (`import --split`); empty when none is.
     pub segments: BTreeMap<String, Vec<Option<Segment>>>,
+    /// The first two file names of one label that file-name order (the
+    /// order of a time split) puts against their numbers: `trial10.csv`
+    /// before `trial2.csv`, numbered without leading zeros.
+    pub out_of_number_order: Option<(String, String)>,
 }
 
 /// Where a segment of a long recording lies in it, from the metadata
@@ -345,6 +349,61 @@ const PLAIN_META: [&str; 14] = [
     "scan_to_m",
 ];
 
+/// The first two recordings of one label, adjacent in file-name order,
+/// whose names that order puts against their numbers (see
+/// [`Survey::out_of_number_order`]).
+fn out_of_number_order(seen: &[Seen]) -> Option<(String, String)> {
+    let name = |r: &Seen| {
+        Path::new(&r.file)
+            .file_name()
+            .map_or(r.file.clone(), |n| n.to_string_lossy().into_owned())
+    };
+    let mut last: BTreeMap<&str, String> = BTreeMap::new();
+    for r in seen {
+        let this = name(r);
+        if let Some(before) = last.get(r.label.as_str())
+            && by_number(before, &this) == std::cmp::Ordering::Greater
+        {
+            return Some((before.clone(), this));
+        }
+        last.insert(&r.label, this);
+    }
+    None
+}
+
+/// Names compared as a person numbers them: runs of digits by their
+/// value (`trial2` before `trial10`), the rest as text.
+fn by_number(a: &str, b: &str) -> std::cmp::Ordering {
+    fn runs(s: &str) -> Vec<(bool, &str)> {
+        let mut out = Vec::new();
+        let mut start = 0;
+        let digit = |c: char| c.is_ascii_digit();
+        for (i, c) in s.char_indices() {
+            if i > start && digit(c) != s[start..].starts_with(digit) {
+                out.push((s[start..].starts_with(digit), &s[start..i]));
+                start = i;
+            }
+        }
+        if start < s.len() {
+            out.push((s[start..].starts_with(digit), &s[start..]));
+        }
+        out
+    }
+    let (ra, rb) = (runs(a), runs(b));
+    for ((da, x), (db, y)) in ra.iter().zip(&rb) {
+        let o = if *da && *db {
+            let (x, y) = (x.trim_start_matches('0'), y.trim_start_matches('0'));
+            x.len().cmp(&y.len()).then_with(|| x.cmp(y))
+        } else {
+            x.cmp(y)
+        };
+        if o != std::cmp::Ordering::Equal {
+            return o;
+        }
+    }
+    ra.len().cmp(&rb.len())
+}
+
 fn sum_up(seen: &[Seen], incomplete: Vec<String>) -> Survey {
     // Each recording's column positions, looked up once: linear in the
     // columns (a WAV of 65,535 channels took seconds when searched).
@@ -379,6 +438,7 @@ fn sum_up(seen: &[Seen], incomplete: Vec<String>) -> Survey {
     for r in seen {
         *s.labels.entry(r.label.clone()).or_default() += 1;
     }
+    s.out_of_number_order = out_of_number_order(seen);
     let segments: Vec<Option<Segment>> = seen.iter().map(|r| Segment::of(&r.meta)).collect();
     if segments.iter().any(Option::is_some) {
         for (r, segment) in seen.iter().zip(segments) {
@@ -557,6 +617,45 @@ impl Survey {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn names_are_compared_by_their_numbers() {
+        use std::cmp::Ordering::*;
+        assert_eq!(by_number("trial2.csv", "trial10.csv"), Less);
+        assert_eq!(by_number("trial10.csv", "trial2.csv"), Greater);
+        assert_eq!(by_number("trial02.csv", "trial10.csv"), Less);
+        assert_eq!(by_number("a-seg001.csv", "a-seg002.csv"), Less);
+        assert_eq!(by_number("b1.csv", "a2.csv"), Greater);
+        assert_eq!(by_number("x.csv", "x.csv"), Equal);
+        let seen = |label: &str, file: &str| Seen {
+            file: format!("rec/{label}/{file}"),
+            label: label.into(),
+            columns: Vec::new(),
+            rate_hz: None,
+            travel: Vec::new(),
+            step: Vec::new(),
+            spread: Vec::new(),
+            meta: Vec::new(),
+        };
+        // File-name order, as the dataset reads them.
+        let padded = [
+            seen("a", "t01.csv"),
+            seen("a", "t02.csv"),
+            seen("a", "t10.csv"),
+        ];
+        assert_eq!(out_of_number_order(&padded), None);
+        let bare = [
+            seen("a", "t1.csv"),
+            seen("a", "t10.csv"),
+            seen("a", "t11.csv"),
+            seen("a", "t2.csv"),
+            seen("b", "t1.csv"),
+        ];
+        assert_eq!(
+            out_of_number_order(&bare),
+            Some(("t11.csv".into(), "t2.csv".into()))
+        );
+    }
 
     #[test]
     fn a_rate_is_rounded_only_as_far_as_the_sample_times_allow() {
