@@ -265,6 +265,14 @@ pub fn check_options(args: &Request) -> Result<Vec<(String, toml::Value)>, Impor
     // sample times run to hundreds of digits or overflow; faster, `t_s`
     // cannot tell one sample from the next.
     if let Some(r) = args.rate
+        && (r.is_nan() || r <= 0.0)
+    {
+        return Err(bad(format!(
+            "--rate must be a positive number of samples per second (Hz), got {}",
+            plain(r)
+        )));
+    }
+    if let Some(r) = args.rate
         && !(r.is_finite() && (MIN_RATE_HZ..=MAX_RATE_HZ).contains(&r))
     {
         return Err(bad(format!(

@@ -22,7 +22,7 @@ pub struct ImportArgs {
     pub time_column: Option<String>,
     /// The sampling rate in Hz, from 0.001 to 1e15 (CSV without a time column, headerless
     /// text, .npy, .npz and .mat; WAV files carry their own).
-    #[arg(long, value_name = "HZ")]
+    #[arg(long, value_name = "HZ", allow_negative_numbers = true)]
     pub rate: Option<f64>,
     /// CSV: the channel columns, comma-separated (default: every column but the time and label columns).
     #[arg(long, value_name = "A,B,…", value_delimiter = ',')]
@@ -59,11 +59,16 @@ pub struct ImportArgs {
     /// Cut each input into consecutive trials this many seconds long, at
     /// least 16 samples (<stem>-seg001.csv, …, in time order), for one long
     /// recording per material.
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     pub split: Option<f64>,
     /// With --split: seconds from one trial's start to the next, at least a
     /// tenth of the trial's length (default: the length, no overlap).
-    #[arg(long, value_name = "SECONDS", requires = "split")]
+    #[arg(
+        long,
+        value_name = "SECONDS",
+        requires = "split",
+        allow_negative_numbers = true
+    )]
     pub split_hop: Option<f64>,
     /// Files converted at once (default: the number of cores; 0 means the same).
     #[arg(long, value_name = "N")]

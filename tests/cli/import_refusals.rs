@@ -105,8 +105,17 @@ fn csv_only_flags_given_for_a_wav_are_refused_by_name() {
 #[test]
 fn rates_whose_times_cannot_be_written_and_burst_zero_are_refused() {
     let f = format!("{DATA}/bom.csv");
-    for rate in ["1e308", "1e16", "inf", "0"] {
+    for rate in ["1e308", "1e16", "inf"] {
         refused(&["--label", "S", "--rate", rate, &f], &["--rate", "1e15"]);
+    }
+    // A negative rate is the rate's fault, not taken for a file name.
+    for rate in ["0", "-5"] {
+        refused(
+            &["--label", "S", "--rate", rate, &f],
+            &[&format!(
+                "--rate must be a positive number of samples per second (Hz), got {rate}"
+            )],
+        );
     }
     refused(
         &["--label", "S", "--rate", "1000", "--burst", "0", &f],
@@ -396,7 +405,10 @@ fn messages_name_the_input_once_and_the_numbers_plainly() {
             &[&f, "scalar `fs` = 1000 looks like one", "give --rate 1000"],
         );
     }
-    for (rate, got) in [("--rate=0", "got 0:"), ("--rate=-1e3", "got -1000:")] {
+    for (rate, got) in [
+        ("--rate=0", "(Hz), got 0"),
+        ("--rate=-1e3", "(Hz), got -1000"),
+    ] {
         refused(&["--label", "S", rate, &trace], &[got]);
     }
 }
