@@ -453,14 +453,18 @@ fn stage(
     };
     let cut = split::check(length, args.split_hop, args.rate)?;
     let parts = split::split(&imp, &origin, cut)?;
-    parts
+    let mut staged = parts
         .iter()
         .enumerate()
         .map(|(j, part)| {
             let name = split::stem(&stem, j, parts.len());
             stage_one(f, part, &label, &name, args, staging)
         })
-        .collect()
+        .collect::<Result<Vec<Staged>, ImportError>>()?;
+    if let Some(first) = staged.first_mut() {
+        first.left_out_s = split::left_over(&imp, cut);
+    }
+    Ok(staged)
 }
 
 /// Writes `imp` under `staging` as `<label>/<stem>.csv` (or `.csv.gz`),
@@ -510,7 +514,38 @@ fn stage_one(
         path,
         other,
         staged,
+        left_out_s: 0.0,
     })
+}
+
+/// With `--split`: the inputs whose end no whole trial covers, in one
+/// line (the longest tail left out, an example, and how to keep more).
+fn left_out_tails(results: &[Option<Result<Vec<Staged>, ImportError>>]) -> Option<String> {
+    let tails: Vec<(&Path, f64)> = results
+        .iter()
+        .flatten()
+        .filter_map(|r| r.as_ref().ok())
+        .filter_map(|staged| staged.first())
+        .filter(|s| s.left_out_s > 0.0)
+        .map(|s| (s.input.as_path(), s.left_out_s))
+        .collect();
+    let longest = tails.iter().map(|t| t.1).fold(0.0, f64::max);
+    let (example, _) = tails.iter().find(|t| t.1 == longest)?;
+    Some(format!(
+        "--split: the end of {} no whole trial covers was left out (up to {} s, as in {}); \
+         a --split or --split-hop that divides the inputs' length keeps it",
+        plural_inputs(tails.len()),
+        plain(split::six_digits(longest)),
+        example.display()
+    ))
+}
+
+fn plural_inputs(n: usize) -> String {
+    if n == 1 {
+        "1 input".to_string()
+    } else {
+        format!("{n} inputs")
+    }
 }
 
 /// Runs `job` over `0..n` on `threads` threads, each taking the next index;
@@ -589,6 +624,7 @@ pub fn run(args: &Request, report: &dyn Report) -> Result<Vec<PathBuf>, ImportEr
         report.file_done();
         staged
     });
+    let cut_short = left_out_tails(&results);
     let moved = settle(args, &staging, results);
     let _ = std::fs::remove_dir_all(&staging);
     if moved.is_err() && !out_existed {
@@ -612,6 +648,11 @@ pub fn run(args: &Request, report: &dyn Report) -> Result<Vec<PathBuf>, ImportEr
                 }
             ));
         }
+    }
+    if moved.is_ok()
+        && let Some(warning) = cut_short
+    {
+        report.warn(&warning);
     }
     // Said once the import is done, so a refusal stays one line.
     if moved.is_ok()

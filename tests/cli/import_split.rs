@@ -320,3 +320,36 @@ fn importing_again_with_force_cut_another_way_leaves_one_cut_of_each_input() {
     assert_eq!(n.len(), 31, "{n:?}");
     assert!(!n.contains(&"L2.csv".to_string()));
 }
+
+#[test]
+fn the_end_no_whole_trial_covers_is_said_to_be_left_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let files = long_traces(&dir.path().join("in"));
+    let cut = |split: &str, out: &str| {
+        let rec = dir.path().join(out);
+        let mut args = vec![
+            "import",
+            "--rate",
+            "100",
+            "--split",
+            split,
+            "--out",
+            p(&rec),
+        ];
+        args.extend(files.iter().map(String::as_str));
+        run(&args)
+    };
+    // 60 s in 7 s trials: 8 of them, the last 4 s left out.
+    let r = cut("7", "seven");
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(
+        r.stderr.contains(
+            "--split: the end of 3 inputs no whole trial covers was left out (up to 4 s, as in "
+        ),
+        "{r:?}"
+    );
+    // 60 s in 6 s trials: nothing left, nothing said.
+    let r = cut("6", "six");
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(!r.stderr.contains("left out"), "{r:?}");
+}

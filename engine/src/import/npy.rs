@@ -242,8 +242,8 @@ pub(super) fn signal(
                     "{origin}: {what} carries no sample rate import can be sure of; its array \
                      `{name}` looks like sample times, a sample every {} s: give --rate {} if \
                      they are in seconds",
-                    super::plain(six_digits(1.0 / hz)),
-                    super::plain(six_digits(hz))
+                    super::plain(super::split::six_digits(1.0 / hz)),
+                    super::plain(super::split::six_digits(hz))
                 ),
                 None => format!("{origin}: {what} carries no sample rate: give --rate HZ"),
             },
@@ -296,12 +296,6 @@ fn times_rate(channels: &[(String, Vec<f64>)]) -> Option<(&str, f64)> {
     (period.is_finite() && period > 0.0).then(|| (name.as_str(), 1.0 / period))
 }
 
-/// `x` to 6 significant digits, so a rate measured from float times
-/// reads 500, not 499.99999999999994.
-fn six_digits(x: f64) -> f64 {
-    format!("{x:.5e}").parse().unwrap_or(x)
-}
-
 fn is_time_name(name: &str) -> bool {
     super::csv::TIME_NAMES
         .iter()
@@ -336,8 +330,8 @@ fn leave_out_times(
             let said = if period.is_finite() && period > 0.0 {
                 format!(
                     "a sample every {} s, {} Hz",
-                    super::plain(six_digits(period)),
-                    super::plain(six_digits(1.0 / period))
+                    super::plain(super::split::six_digits(period)),
+                    super::plain(super::split::six_digits(1.0 / period))
                 )
             } else {
                 "no steady sample period".to_string()

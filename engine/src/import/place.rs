@@ -17,6 +17,9 @@ pub(super) struct Staged {
     /// beside `.csv.gz`), replaced with it under `--force`.
     pub path: PathBuf,
     pub other: PathBuf,
+    /// With `--split`, on an input's first trial: the seconds at its end
+    /// that no whole trial covers (left out); else 0.
+    pub left_out_s: f64,
     pub staged: PathBuf,
 }
 
@@ -228,6 +231,7 @@ mod tests {
             input: PathBuf::from(name),
             path: out.join(name),
             other: out.join(format!("{name}.gz")),
+            left_out_s: 0.0,
             staged: s,
         }
     }

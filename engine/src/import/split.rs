@@ -160,6 +160,30 @@ pub fn split(imp: &Imported, origin: &str, cut: Cut) -> Result<Vec<Imported>, Im
     Ok(out)
 }
 
+/// The seconds at `imp`'s end that no whole trial covers (a last partial
+/// trial, left out), when they are at least one sample period.
+pub fn left_over(imp: &Imported, cut: Cut) -> f64 {
+    let n = imp.time.len();
+    if n < 2 {
+        return 0.0;
+    }
+    let (t0, last) = (imp.time[0], imp.time[n - 1]);
+    let dt = (last - t0) / (n - 1) as f64;
+    let span = last - t0 + dt;
+    let whole = ((span + dt * 1e-3 - cut.length) / cut.hop).floor();
+    if whole < 0.0 {
+        return 0.0;
+    }
+    let rest = span - (whole * cut.hop + cut.length);
+    if rest >= dt * (1.0 - 1e-3) { rest } else { 0.0 }
+}
+
+/// `x` to 6 significant digits (a tail measured from float times reads
+/// 1, not 0.9999999999999964).
+pub fn six_digits(x: f64) -> f64 {
+    format!("{x:.5e}").parse().unwrap_or(x)
+}
+
 /// The file stem of trial `j` (from 0) of `count`: numbered from 1 with
 /// leading zeros, so file-name order is time order.
 pub fn stem(stem: &str, j: usize, count: usize) -> String {
