@@ -402,8 +402,37 @@ fn purged_blocks(train: &[usize], spans: &[Span], folds: usize) -> Result<Vec<Pa
     let mut parts = Vec::with_capacity(folds);
     for f in 0..folds {
         let test: Vec<usize> = (0..spans.len()).filter(|&p| fold_of[p] == f).collect();
+        // Each source's block is consecutive in time: a trial before it
+        // overlaps one of its trials when it ends after the block's first
+        // start, one after it when it starts before the block's last end.
+        let mut left_out = vec![false; spans.len()];
+        for positions in by_source.values() {
+            let in_block = |p: usize| fold_of[p] == f;
+            let (Some(a), Some(b)) = (
+                positions.iter().position(|&p| in_block(p)),
+                positions.iter().rposition(|&p| in_block(p)),
+            ) else {
+                continue;
+            };
+            let eps = 1e-6
+                * positions
+                    .iter()
+                    .map(|&p| spans[p].length)
+                    .fold(0.0, f64::max);
+            let first_start = spans[positions[a]].start;
+            let last_end = positions[a..=b]
+                .iter()
+                .map(|&p| spans[p].start + spans[p].length)
+                .fold(f64::NEG_INFINITY, f64::max);
+            for &p in &positions[..a] {
+                left_out[p] = spans[p].start + spans[p].length > first_start + eps;
+            }
+            for &p in &positions[b + 1..] {
+                left_out[p] = spans[p].start < last_end - eps;
+            }
+        }
         let train_f: Vec<usize> = (0..spans.len())
-            .filter(|&p| fold_of[p] != f && test.iter().all(|&t| !spans[p].overlaps(&spans[t])))
+            .filter(|&p| fold_of[p] != f && !left_out[p])
             .collect();
         if test.is_empty() {
             continue;
