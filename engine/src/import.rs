@@ -33,6 +33,7 @@ mod wav;
 use checks::{check_written_names, flags_a_wav_ignores, one_folder_for_every_label};
 pub use csv::parse_csv;
 use place::{Staged, remove_abandoned_staging, remove_other_cuts, settle};
+pub use split::Segment;
 pub use wav::parse_wav;
 
 /// What to import and how: the files, the folder, and the mapping of
@@ -534,18 +535,10 @@ fn left_out_tails(results: &[Option<Result<Vec<Staged>, ImportError>>]) -> Optio
     Some(format!(
         "--split: the end of {} no whole trial covers was left out (up to {} s, as in {}); \
          a --split or --split-hop that divides the inputs' length keeps it",
-        plural_inputs(tails.len()),
-        plain(split::six_digits(longest)),
+        crate::classify::plural(tails.len(), "input", "inputs"),
+        plain(crate::profile::fitted::significant(longest, 6)),
         example.display()
     ))
-}
-
-fn plural_inputs(n: usize) -> String {
-    if n == 1 {
-        "1 input".to_string()
-    } else {
-        format!("{n} inputs")
-    }
 }
 
 /// Runs `job` over `0..n` on `threads` threads, each taking the next index;

@@ -45,6 +45,7 @@ use crate::dataset::{DatasetError, Entry};
 use crate::evaluate::cv::{Folds, make_folds};
 use crate::evaluate::plan::{Overrides, Plan};
 use crate::evaluate::{EvaluateError, PredictionRow, Report, count, split};
+use crate::import::Segment;
 use crate::profile::options::same_grid;
 use crate::profile::{Analysis, Profile, SplitMethod};
 use score::{
@@ -326,47 +327,19 @@ fn folds_to_parts(within: &[usize], folds: &Folds) -> Vec<Part> {
         .collect()
 }
 
-/// One trial's span in the long recording it was cut from (`import
-/// --split`'s metadata): the source and its start and length in seconds.
-struct Span {
-    source: String,
-    start: f64,
-    length: f64,
-}
-
-impl Span {
-    fn of(e: &Entry) -> Option<Span> {
-        let num = |key: &str| {
-            e.meta.iter().find(|(k, _)| k == key).and_then(|(_, v)| {
-                v.as_float()
-                    .or_else(|| v.as_integer().map(|i| i as f64))
-                    .filter(|x| x.is_finite())
-            })
-        };
-        Some(Span {
-            source: e.meta_text("source")?,
-            start: num("segment_start_s")?,
-            length: num("segment_length_s")?,
-        })
-    }
-
-    /// Whether the two share signal: one source, spans that overlap by
-    /// more than a millionth of their length.
-    fn overlaps(&self, o: &Span) -> bool {
-        let eps = 1e-6 * self.length.max(o.length);
-        self.source == o.source
-            && self.start < o.start + o.length - eps
-            && o.start < self.start + self.length - eps
-    }
+/// The segment a trial's metadata describes (`import --split`), when its
+/// start and length are finite.
+fn span_of(e: &Entry) -> Option<Segment> {
+    Segment::of(|key| e.meta_text(key)).filter(|s| s.start.is_finite() && s.length.is_finite())
 }
 
 /// The spans of `train`'s recordings (in its order) when every one is a
 /// trial of a long recording and two of them overlap (`import --split`
 /// with a `--split-hop` below `--split`); `None` otherwise.
-fn overlapping_trials(scans: &[Entry], train: &[usize]) -> Option<Vec<Span>> {
-    let spans: Vec<Span> = train
+fn overlapping_trials(scans: &[Entry], train: &[usize]) -> Option<Vec<Segment>> {
+    let spans: Vec<Segment> = train
         .iter()
-        .map(|&i| Span::of(&scans[i]))
+        .map(|&i| span_of(&scans[i]))
         .collect::<Option<_>>()?;
     let mut order: Vec<usize> = (0..spans.len()).collect();
     order.sort_by(|&a, &b| {
@@ -386,7 +359,7 @@ fn overlapping_trials(scans: &[Entry], train: &[usize]) -> Option<Vec<Span>> {
 /// one it tests (as a purged time-series split): shuffled folds would
 /// test a trial beside its own overlapping neighbour and flatter the
 /// settings that memorise.
-fn purged_blocks(train: &[usize], spans: &[Span], folds: usize) -> Result<Vec<Part>, TuneError> {
+fn purged_blocks(train: &[usize], spans: &[Segment], folds: usize) -> Result<Vec<Part>, TuneError> {
     let mut by_source: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
     for (p, s) in spans.iter().enumerate() {
         by_source.entry(&s.source).or_default().push(p);
@@ -414,7 +387,7 @@ fn purged_blocks(train: &[usize], spans: &[Span], folds: usize) -> Result<Vec<Pa
             ) else {
                 continue;
             };
-            let eps = 1e-6
+            let eps = Segment::TOUCH
                 * positions
                     .iter()
                     .map(|&p| spans[p].length)

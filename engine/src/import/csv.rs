@@ -10,7 +10,7 @@ use crate::recording::{Digits, time_decimals};
 /// Column names that say a column holds the sample times (compared
 /// without case): under `--rate` such a column would be kept as a
 /// channel, analysed as a signal, and chosen by `profile new`.
-pub(super) const TIME_NAMES: [&str; 18] = [
+const TIME_NAMES: [&str; 18] = [
     "t",
     "t_s",
     "ts",
@@ -31,11 +31,14 @@ pub(super) const TIME_NAMES: [&str; 18] = [
     "elapsed_s",
 ];
 
+/// Whether a column's (or an array's) name says it holds the sample times.
+pub(super) fn is_time_name(name: &str) -> bool {
+    TIME_NAMES.iter().any(|t| name.eq_ignore_ascii_case(t))
+}
+
 /// The first column whose name says it is the time, if any.
 fn time_like(cols: &[String]) -> Option<&str> {
-    cols.iter()
-        .map(|c| c.as_str())
-        .find(|c| TIME_NAMES.iter().any(|t| c.eq_ignore_ascii_case(t)))
+    cols.iter().map(|c| c.as_str()).find(|c| is_time_name(c))
 }
 
 /// The header line: where it is, the field separator, the column names.

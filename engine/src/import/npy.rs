@@ -11,6 +11,7 @@
 use std::io::Read as _;
 
 use super::{ImportError, Imported, Request, bad};
+use crate::profile::fitted::significant;
 use crate::recording::{Digits, time_decimals};
 
 /// One array read from a `.npy`: its shape, its values in C order, how they
@@ -242,8 +243,8 @@ pub(super) fn signal(
                     "{origin}: {what} carries no sample rate import can be sure of; its array \
                      `{name}` looks like sample times, a sample every {} s: give --rate {} if \
                      they are in seconds",
-                    super::plain(super::split::six_digits(1.0 / hz)),
-                    super::plain(super::split::six_digits(hz))
+                    super::plain(significant(1.0 / hz, 6)),
+                    super::plain(significant(hz, 6))
                 ),
                 None => format!("{origin}: {what} carries no sample rate: give --rate HZ"),
             },
@@ -290,16 +291,18 @@ pub(super) fn signal(
 /// The array named like sample times and the rate its mean spacing gives,
 /// when it is steady (ascending, finite).
 fn times_rate(channels: &[(String, Vec<f64>)]) -> Option<(&str, f64)> {
-    let (name, t) = channels.iter().find(|(name, _)| is_time_name(name))?;
-    let n = t.len();
-    let period = (*t.get(n.checked_sub(1)?)? - t.first()?) / (n.checked_sub(1)? as f64);
-    (period.is_finite() && period > 0.0).then(|| (name.as_str(), 1.0 / period))
+    let (name, t) = channels
+        .iter()
+        .find(|(name, _)| super::csv::is_time_name(name))?;
+    Some((name.as_str(), 1.0 / mean_period(t)?))
 }
 
-fn is_time_name(name: &str) -> bool {
-    super::csv::TIME_NAMES
-        .iter()
-        .any(|t| name.eq_ignore_ascii_case(t))
+/// The mean spacing of sample times, when there are two or more and it is
+/// finite and positive.
+fn mean_period(t: &[f64]) -> Option<f64> {
+    let (first, last) = (t.first()?, t.last()?);
+    let period = (last - first) / (t.len().checked_sub(1)? as f64);
+    (period.is_finite() && period > 0.0).then_some(period)
 }
 
 /// The named arrays without one that holds the sample times (named `t`,
@@ -313,7 +316,10 @@ fn leave_out_times(
     origin: &str,
     what: &str,
 ) -> Result<(), ImportError> {
-    let Some(i) = channels.iter().position(|(name, _)| is_time_name(name)) else {
+    let Some(i) = channels
+        .iter()
+        .position(|(name, _)| super::csv::is_time_name(name))
+    else {
         return Ok(());
     };
     let (name, times) = channels.remove(i);
@@ -325,17 +331,15 @@ fn leave_out_times(
         )));
     }
     if times.len() > 1 {
-        let period = (times[times.len() - 1] - times[0]) / (times.len() - 1) as f64;
-        if !(period.is_finite() && period > 0.0 && (period * rate - 1.0).abs() <= 0.005) {
-            let said = if period.is_finite() && period > 0.0 {
+        let period = mean_period(&times);
+        if !period.is_some_and(|p| (p * rate - 1.0).abs() <= 0.005) {
+            let said = period.map_or("no steady sample period".to_string(), |p| {
                 format!(
                     "a sample every {} s, {} Hz",
-                    super::plain(super::split::six_digits(period)),
-                    super::plain(super::split::six_digits(1.0 / period))
+                    super::plain(significant(p, 6)),
+                    super::plain(significant(1.0 / p, 6))
                 )
-            } else {
-                "no steady sample period".to_string()
-            };
+            });
             return Err(bad(format!(
                 "{origin}: `{name}` looks like sample times ({said}) but --rate says {} Hz: \
                  give the rate the times were taken at (the array is left out either way), \

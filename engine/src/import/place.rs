@@ -161,10 +161,11 @@ fn place_one(s: &Staged, force: bool) -> Result<(), ImportError> {
 /// `<stem>.csv`, `<stem>-seg<digits>.csv` (or `.csv.gz`) beside a
 /// recording this run placed are touched. Returns the ones removed.
 pub(super) fn remove_other_cuts(placed: &[PathBuf], split: bool) -> Vec<PathBuf> {
-    use std::collections::{BTreeSet, HashSet};
+    use std::collections::{BTreeMap, BTreeSet, HashSet};
     let ours: HashSet<&PathBuf> = placed.iter().collect();
-    // (folder, input stem) of each recording placed.
-    let mut cuts = BTreeSet::new();
+    // The input stems of the recordings placed, by folder: each folder is
+    // read once.
+    let mut cuts: BTreeMap<&Path, BTreeSet<&str>> = BTreeMap::new();
     for p in placed {
         let name = p.file_name().and_then(|n| n.to_str());
         let stem = if split {
@@ -173,12 +174,12 @@ pub(super) fn remove_other_cuts(placed: &[PathBuf], split: bool) -> Vec<PathBuf>
             name.and_then(whole_of)
         };
         if let (Some(dir), Some(stem)) = (p.parent(), stem) {
-            cuts.insert((dir.to_path_buf(), stem.to_string()));
+            cuts.entry(dir).or_default().insert(stem);
         }
     }
     let mut removed = Vec::new();
-    for (dir, stem) in cuts {
-        let Ok(entries) = std::fs::read_dir(&dir) else {
+    for (dir, stems) in cuts {
+        let Ok(entries) = std::fs::read_dir(dir) else {
             continue;
         };
         let mut other: Vec<PathBuf> = entries
@@ -189,7 +190,8 @@ pub(super) fn remove_other_cuts(placed: &[PathBuf], split: bool) -> Vec<PathBuf>
                 !ours.contains(p)
                     && p.is_file()
                     && name.is_some_and(|n| {
-                        trial_of(n) == Some(stem.as_str()) || whole_of(n) == Some(stem.as_str())
+                        trial_of(n).is_some_and(|s| stems.contains(s))
+                            || whole_of(n).is_some_and(|s| stems.contains(s))
                     })
             })
             .collect();
@@ -213,7 +215,7 @@ fn whole_of(name: &str) -> Option<&str> {
 /// The input's stem of a trial's file name: `long-seg016.csv` (or
 /// `.csv.gz`): `long`.
 fn trial_of(name: &str) -> Option<&str> {
-    let (stem, number) = whole_of(name)?.rsplit_once("-seg")?;
+    let (stem, number) = whole_of(name)?.rsplit_once(super::split::MARK)?;
     let digits = !number.is_empty() && number.bytes().all(|b| b.is_ascii_digit());
     (!stem.is_empty() && digits).then_some(stem)
 }

@@ -19,8 +19,48 @@ pub const MIN_TRIAL_SAMPLES: usize = 16;
 /// (`--split 2 --split-hop 0.001` wrote 58,001 files, 1.9 GB).
 const MIN_HOP_PART: f64 = 0.1;
 
+/// What stands between an input's stem and its trial's number in the
+/// trial's file name (`long-seg001.csv`).
+pub const MARK: &str = "-seg";
+
 /// The metadata keys each trial gets: its number, start and length.
 pub const KEYS: [&str; 3] = ["segment", "segment_start_s", "segment_length_s"];
+
+/// Where a trial lies in the long recording it was cut from, as its
+/// metadata says ([`KEYS`] and `source`): read by `profile new` (the time
+/// split's gap) and `tune` (its inner folds), so both judge overlap alike.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Segment {
+    pub source: String,
+    /// Seconds from the source's first sample.
+    pub start: f64,
+    pub length: f64,
+}
+
+impl Segment {
+    /// The segment a recording's metadata describes, each value as text
+    /// (`meta("segment_start_s")`); `None` when a key is missing.
+    pub fn of(meta: impl Fn(&str) -> Option<String>) -> Option<Segment> {
+        Some(Segment {
+            source: meta("source")?,
+            start: meta(KEYS[1])?.parse().ok()?,
+            length: meta(KEYS[2])?.parse().ok()?,
+        })
+    }
+
+    /// How far two segments may overlap and still only meet end to start
+    /// (float noise in `j * hop`): this part of the longer one's length.
+    pub const TOUCH: f64 = 1e-9;
+
+    /// Whether the two share signal: the same source, overlapping in time
+    /// (segments that only meet end to start do not).
+    pub fn overlaps(&self, other: &Segment) -> bool {
+        let touch = Self::TOUCH * self.length.max(other.length);
+        self.source == other.source
+            && self.start < other.start + other.length - touch
+            && other.start < self.start + self.length - touch
+    }
+}
 
 /// `--split` and `--split-hop`, checked: how to cut each input.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -97,20 +137,11 @@ fn check_samples(length: f64, dt: f64, origin: &str) -> Result<(), ImportError> 
 /// `cut.hop` s from its first sample, in time order; `origin` names it.
 pub fn split(imp: &Imported, origin: &str, cut: Cut) -> Result<Vec<Imported>, ImportError> {
     let Cut { length, hop } = cut;
-    let n = imp.time.len();
-    let (t0, last) = (imp.time[0], imp.time[n - 1]);
-    // One sample period (the mean): a segment is whole when its samples
-    // reach its end within a thousandth of one.
-    let dt = if n > 1 {
-        (last - t0) / (n - 1) as f64
-    } else {
-        0.0
-    };
+    let t0 = imp.time[0];
+    let (dt, span, whole) = layout(imp, cut);
     if dt > 0.0 {
         check_samples(length, dt, &format!("{origin}: "))?;
     }
-    let span = last - t0 + dt;
-    let whole = ((span + dt * 1e-3 - length) / hop).floor();
     if whole < 0.0 {
         return Err(bad(format!(
             "{origin}: it lasts {} s, shorter than one --split {} s trial: give a shorter --split",
@@ -163,32 +194,37 @@ pub fn split(imp: &Imported, origin: &str, cut: Cut) -> Result<Vec<Imported>, Im
 /// The seconds at `imp`'s end that no whole trial covers (a last partial
 /// trial, left out), when they are at least one sample period.
 pub fn left_over(imp: &Imported, cut: Cut) -> f64 {
-    let n = imp.time.len();
-    if n < 2 {
-        return 0.0;
-    }
-    let (t0, last) = (imp.time[0], imp.time[n - 1]);
-    let dt = (last - t0) / (n - 1) as f64;
-    let span = last - t0 + dt;
-    let whole = ((span + dt * 1e-3 - cut.length) / cut.hop).floor();
-    if whole < 0.0 {
+    let (dt, span, whole) = layout(imp, cut);
+    if whole < 0.0 || dt == 0.0 {
         return 0.0;
     }
     let rest = span - (whole * cut.hop + cut.length);
     if rest >= dt * (1.0 - 1e-3) { rest } else { 0.0 }
 }
 
-/// `x` to 6 significant digits (a tail measured from float times reads
-/// 1, not 0.9999999999999964).
-pub fn six_digits(x: f64) -> f64 {
-    format!("{x:.5e}").parse().unwrap_or(x)
+/// How `cut` lays over `imp`'s samples: one sample period (the mean; 0
+/// for a single sample), the seconds the samples span, and the hops
+/// after the first whole trial (negative when not even one fits). A
+/// trial is whole when its samples reach its end within a thousandth of
+/// a period.
+fn layout(imp: &Imported, cut: Cut) -> (f64, f64, f64) {
+    let n = imp.time.len();
+    let (t0, last) = (imp.time[0], imp.time[n - 1]);
+    let dt = if n > 1 {
+        (last - t0) / (n - 1) as f64
+    } else {
+        0.0
+    };
+    let span = last - t0 + dt;
+    let whole = ((span + dt * 1e-3 - cut.length) / cut.hop).floor();
+    (dt, span, whole)
 }
 
 /// The file stem of trial `j` (from 0) of `count`: numbered from 1 with
 /// leading zeros, so file-name order is time order.
 pub fn stem(stem: &str, j: usize, count: usize) -> String {
     let width = count.to_string().len().max(3);
-    format!("{stem}-seg{:0width$}", j + 1)
+    format!("{stem}{MARK}{:0width$}", j + 1)
 }
 
 #[cfg(test)]

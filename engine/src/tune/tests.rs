@@ -392,7 +392,7 @@ fn overlapping_trials_are_folded_in_time_and_their_neighbours_left_out() {
     let all: Vec<usize> = (0..s.len()).collect();
     let inner = inner_parts(&s, None, &all, 0).unwrap();
     assert_eq!(inner.len(), 5);
-    let span = |i: usize| Span::of(&s[i]).unwrap();
+    let span = |i: usize| span_of(&s[i]).unwrap();
     let mut tested = vec![0; s.len()];
     for part in &inner {
         for &t in &part.test {

@@ -8,6 +8,8 @@
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
+pub use crate::import::Segment;
+
 use crate::dataset;
 use crate::recording::{self, Recording};
 use crate::support::{Failure, bad, progress_bar, runtime, warn_skipped};
@@ -66,36 +68,6 @@ pub struct Survey {
     /// order of a time split) puts against their numbers: `trial10.csv`
     /// before `trial2.csv`, numbered without leading zeros.
     pub out_of_number_order: Option<(String, String)>,
-}
-
-/// Where a segment of a long recording lies in it, from the metadata
-/// `import --split` writes.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Segment {
-    pub source: String,
-    /// Seconds from the source's first sample.
-    pub start: f64,
-    pub length: f64,
-}
-
-impl Segment {
-    /// Whether the two share signal: the same source, overlapping in time
-    /// (segments that only meet end to start do not).
-    pub fn overlaps(&self, other: &Segment) -> bool {
-        let touch = 1e-9 * self.length.max(other.length);
-        self.source == other.source
-            && self.start < other.start + other.length - touch
-            && other.start < self.start + self.length - touch
-    }
-
-    fn of(meta: &[(String, String)]) -> Option<Segment> {
-        let get = |key: &str| meta.iter().find(|(k, _)| k == key).map(|(_, v)| v);
-        Some(Segment {
-            source: get("source")?.clone(),
-            start: get("segment_start_s")?.parse().ok()?,
-            length: get("segment_length_s")?.parse().ok()?,
-        })
-    }
 }
 
 /// How far the recordings reach along an axis: what a window can cover.
@@ -439,7 +411,17 @@ fn sum_up(seen: &[Seen], incomplete: Vec<String>) -> Survey {
         *s.labels.entry(r.label.clone()).or_default() += 1;
     }
     s.out_of_number_order = out_of_number_order(seen);
-    let segments: Vec<Option<Segment>> = seen.iter().map(|r| Segment::of(&r.meta)).collect();
+    let segments: Vec<Option<Segment>> = seen
+        .iter()
+        .map(|r| {
+            Segment::of(|key| {
+                r.meta
+                    .iter()
+                    .find(|(k, _)| k == key)
+                    .map(|(_, v)| v.clone())
+            })
+        })
+        .collect();
     if segments.iter().any(Option::is_some) {
         for (r, segment) in seen.iter().zip(segments) {
             s.segments.entry(r.label.clone()).or_default().push(segment);
