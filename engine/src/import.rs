@@ -627,7 +627,7 @@ pub fn run(args: &Request, report: &dyn Report) -> Result<Vec<PathBuf>, ImportEr
     if let Ok(placed) = &moved
         && args.force
     {
-        let other = remove_other_cuts(placed, args.split.is_some());
+        let other = remove_other_cuts(placed, args.split.is_some(), &args.files);
         if let (Some(first), Some(last)) = (other.first(), other.last()) {
             report.warn(&format!(
                 "--force: removed {} recording(s) an earlier import cut another way from inputs \

@@ -319,6 +319,27 @@ fn importing_again_with_force_cut_another_way_leaves_one_cut_of_each_input() {
     let n = names();
     assert_eq!(n.len(), 31, "{n:?}");
     assert!(!n.contains(&"L2.csv".to_string()));
+
+    // An input that sits where a whole recording of it would go is cut,
+    // never removed as an earlier cut of itself.
+    let inside = rec.join("L2").join("inside.csv");
+    fs::copy(&files[1], &inside).unwrap();
+    let r = run(&[
+        "import",
+        "--rate",
+        "100",
+        "--split",
+        "2",
+        "--label",
+        "L2",
+        "--force",
+        "--out",
+        p(&rec),
+        p(&inside),
+    ]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(inside.exists(), "the input was removed: {r:?}");
+    assert!(rec.join("L2").join("inside-seg030.csv").exists());
 }
 
 #[test]

@@ -7,7 +7,7 @@
 use std::path::{Path, PathBuf};
 
 use super::{ImportError, Request, bad};
-use crate::recording::files::move_no_replace;
+use crate::recording::files::{move_no_replace, same_file_as};
 
 /// One input converted into the staging folder, waiting to be moved in place.
 pub(super) struct Staged {
@@ -159,8 +159,14 @@ fn place_one(s: &Staged, force: bool) -> Result<(), ImportError> {
 /// wrote 15). Removed so the folder holds one cut of each input, never two
 /// mixed (their windows would train and test on one signal). Only
 /// `<stem>.csv`, `<stem>-seg<digits>.csv` (or `.csv.gz`) beside a
-/// recording this run placed are touched. Returns the ones removed.
-pub(super) fn remove_other_cuts(placed: &[PathBuf], split: bool) -> Vec<PathBuf> {
+/// recording this run placed are touched, and never one of `inputs` (a
+/// whole `long.csv` being cut is not an earlier cut of itself). Returns
+/// the ones removed.
+pub(super) fn remove_other_cuts(
+    placed: &[PathBuf],
+    split: bool,
+    inputs: &[PathBuf],
+) -> Vec<PathBuf> {
     use std::collections::{BTreeMap, BTreeSet, HashSet};
     let ours: HashSet<&PathBuf> = placed.iter().collect();
     // The input stems of the recordings placed, by folder: each folder is
@@ -188,7 +194,8 @@ pub(super) fn remove_other_cuts(placed: &[PathBuf], split: bool) -> Vec<PathBuf>
             .filter(|p| {
                 let name = p.file_name().and_then(|n| n.to_str());
                 !ours.contains(p)
-                    && p.is_file()
+                    && std::fs::metadata(p)
+                        .is_ok_and(|m| m.is_file() && same_file_as(&m, inputs).is_none())
                     && name.is_some_and(|n| {
                         trial_of(n).is_some_and(|s| stems.contains(s))
                             || whole_of(n).is_some_and(|s| stems.contains(s))
