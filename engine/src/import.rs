@@ -535,7 +535,10 @@ fn left_out_tails(results: &[Option<Result<Vec<Staged>, ImportError>>]) -> Optio
     Some(format!(
         "--split: the end of {} no whole trial covers was left out (up to {} s, as in {}); \
          a --split or --split-hop that divides the inputs' length keeps it",
-        crate::classify::plural(tails.len(), "input", "inputs"),
+        match tails.len() {
+            1 => "1 input".to_string(),
+            n => format!("{n} inputs"),
+        },
         plain(crate::profile::fitted::significant(longest, 6)),
         example.display()
     ))
