@@ -151,7 +151,13 @@ pub fn run(lp: LoadedProfile, opening: Opening) -> Result<(), Failure> {
     if let Some(s) = &opening.resumed {
         app.on_resumed(s, std::time::SystemTime::now());
     }
-    let _ = session::remember(&dataset, &opening.profile);
+    if let Err(why) = session::remember(&dataset, &opening.profile) {
+        // Never replaced, never silently passed over.
+        app.warn(format!(
+            "{why}; this session runs under {}",
+            opening.profile
+        ));
+    }
     let jobs = Jobs::default();
     let mut screen = open_terminal()?;
     let ending = match event::Input::start() {

@@ -11,7 +11,7 @@
 //! `hapticlab::dataset` and `crate::dataset` name the same thing.
 
 pub use hapticlab_engine::{
-    acquire, analysis, classify, clock, dataset, device, evaluate, import, predictor, profile,
+    acquire, analysis, classify, clock, dataset, device, evaluate, import, io, predictor, profile,
     recorder, recording, servo, triggers, tune,
 };
 

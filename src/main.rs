@@ -27,4 +27,12 @@ fn main() {
         hapticlab::terminal::err(format_args!("hapticlab: error: {}", f.message()));
         std::process::exit(f.exit_code());
     }
+    // Output lost to a full disk or an I/O error is a runtime failure, never
+    // a success (a closed pipe stays quiet).
+    if let Some(why) = hapticlab::terminal::stdout_failure() {
+        hapticlab::terminal::err(format_args!(
+            "hapticlab: error: standard output could not be written ({why}): what was printed is lost"
+        ));
+        std::process::exit(1);
+    }
 }

@@ -11,6 +11,7 @@
 
 pub mod evaluation_text;
 
+pub use crate::io::Existing;
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 
@@ -226,18 +227,23 @@ pub fn warn_skipped(skipped: &[dataset::Skipped]) {
     }
 }
 
-/// Write `bytes` to `path` through a temporary file beside it, then
-/// rename: never a half-written file. Refused (exit code 2) when `path` is
-/// one of `inputs`, a recording or not a regular file
-/// ([`crate::recording::files::check_output`]).
-pub fn write_atomically(path: &Path, inputs: &[PathBuf], bytes: &[u8]) -> Result<(), Failure> {
-    crate::recording::files::write_output(path, inputs, |w| w.write_all(bytes))
-        .map_err(output_failure)
+/// Write `bytes` to `path` through a temporary file beside it, put in
+/// place in one step: never a half-written file. Refused (exit code 2) when
+/// `path` is one of `inputs`, a recording or not a regular file, and when
+/// it exists unless `existing` is [`Existing::Replace`] (`--overwrite`)
+/// ([`crate::io::write_output`]).
+pub fn write_atomically(
+    path: &Path,
+    inputs: &[PathBuf],
+    existing: Existing,
+    bytes: &[u8],
+) -> Result<(), Failure> {
+    crate::io::write_output(path, inputs, existing, |w| w.write_all(bytes)).map_err(output_failure)
 }
 
 /// The files a command reads besides a model: the recordings under
 /// `paths` and the profile (a built-in name is no file and matches none).
-/// For [`crate::recording::files::check_output`] before any work, so a refused output
+/// For [`crate::io::check_output`] before any work, so a refused output
 /// costs nothing.
 pub fn inputs_of(profile: &ProfileArg, paths: &[PathBuf]) -> Result<Vec<PathBuf>, Failure> {
     let mut inputs = find_recordings(paths)?;
@@ -245,12 +251,12 @@ pub fn inputs_of(profile: &ProfileArg, paths: &[PathBuf]) -> Result<Vec<PathBuf>
     Ok(inputs)
 }
 
-/// [`crate::recording::files::check_output`] as a [`Failure`].
-pub fn check_output(out: &Path, inputs: &[PathBuf]) -> Result<(), Failure> {
-    crate::recording::files::check_output(out, inputs).map_err(output_failure)
+/// [`crate::io::check_output`] as a [`Failure`].
+pub fn check_output(out: &Path, inputs: &[PathBuf], existing: Existing) -> Result<(), Failure> {
+    crate::io::check_output(out, inputs, existing).map_err(output_failure)
 }
 
 /// An output refused is bad input; one that could not be written, a runtime failure.
-pub fn output_failure(e: crate::recording::files::OutputError) -> Failure {
+pub fn output_failure(e: crate::io::OutputError) -> Failure {
     if e.is_bad_input() { bad(e) } else { runtime(e) }
 }

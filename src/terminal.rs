@@ -102,18 +102,45 @@ pub fn install_panic_hook() {
     });
 }
 
+/// The first failure to write standard output that was not a closed pipe
+/// (a full disk, an I/O error): the output is lost, and the command must
+/// not end as if it had succeeded ([`stdout_failure`]).
+static OUT_FAILED: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
+
+/// Notes `e` unless it is a closed pipe (the reader has gone: quiet, as
+/// `head` expects).
+fn note_out_failure(e: &io::Error) {
+    if e.kind() != io::ErrorKind::BrokenPipe
+        && let Ok(mut f) = OUT_FAILED.lock()
+    {
+        f.get_or_insert_with(|| e.to_string());
+    }
+}
+
+/// Why standard output could not be written, if it could not (a closed
+/// pipe is no failure): `main` ends such a run with exit code 1.
+pub fn stdout_failure() -> Option<String> {
+    OUT_FAILED.lock().ok().and_then(|f| f.clone())
+}
+
 /// Write a line to standard output; `false` when it could not be written
-/// (the terminal or the pipe has gone). Never panics.
+/// (the terminal or the pipe has gone, the disk is full). Never panics.
 pub fn out(args: fmt::Arguments<'_>) -> bool {
     let mut o = io::stdout().lock();
-    writeln!(o, "{args}").and_then(|()| o.flush()).is_ok()
+    writeln!(o, "{args}")
+        .and_then(|()| o.flush())
+        .inspect_err(note_out_failure)
+        .is_ok()
 }
 
 /// Write text to standard output as it is (no line end added); `false` when
 /// it could not be written. Never panics.
 pub fn out_text(args: fmt::Arguments<'_>) -> bool {
     let mut o = io::stdout().lock();
-    write!(o, "{args}").and_then(|()| o.flush()).is_ok()
+    write!(o, "{args}")
+        .and_then(|()| o.flush())
+        .inspect_err(note_out_failure)
+        .is_ok()
 }
 
 /// `println!` that never panics: a line to standard output, dropped when the

@@ -442,7 +442,7 @@ fn load_one(
         Ok(r) => r,
         // Only a walk finds one (a file named is refused by `find`): a
         // FIFO or device named like a recording is passed over, never read.
-        Err(RecordingError::Io { source, .. }) if crate::recording::files::not_regular(&source) => {
+        Err(RecordingError::Io { source, .. }) if crate::io::not_regular(&source) => {
             return Outcome::Skipped(Skipped::Unusable {
                 file: name(),
                 reason: source.to_string(),

@@ -279,6 +279,43 @@ pub fn class_rates(labels: &[String], confusion: &[Vec<usize>]) -> Vec<ClassRate
         .collect()
 }
 
+/// Why a confusion matrix read back from a kept report (rows the true
+/// class) and its accuracy do not hold together, or `None` when they do: a
+/// square matrix of whole, non-negative counts, one row per label, that
+/// counts some test example, and an accuracy that is its diagonal's share.
+/// A report read from a file is checked by this before it is shown or drawn.
+pub fn confusion_fault(labels: &[String], confusion: &[Vec<f64>], accuracy: f64) -> Option<String> {
+    let n = labels.len();
+    if n == 0 {
+        return Some("it names no label".into());
+    }
+    if confusion.len() != n || confusion.iter().any(|r| r.len() != n) {
+        let cols = confusion.first().map_or(0, Vec::len);
+        return Some(format!(
+            "its confusion matrix is {}x{cols} for {n} labels",
+            confusion.len()
+        ));
+    }
+    if let Some(v) = confusion
+        .iter()
+        .flatten()
+        .find(|v| !(v.is_finite() && **v >= 0.0 && v.fract() == 0.0))
+    {
+        return Some(format!("its confusion matrix holds {v}, which is no count"));
+    }
+    let total: f64 = confusion.iter().flatten().sum();
+    if total == 0.0 {
+        return Some("its confusion matrix counts no test example".into());
+    }
+    let diagonal: f64 = (0..n).map(|i| confusion[i][i]).sum();
+    if !(accuracy.is_finite() && (accuracy - diagonal / total).abs() <= 1e-6) {
+        return Some(format!(
+            "its accuracy {accuracy} is not its matrix's ({diagonal} of {total} right)"
+        ));
+    }
+    None
+}
+
 impl Report {
     /// Test examples classified correctly.
     pub fn correct(&self) -> usize {

@@ -19,7 +19,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
-use crate::recording::files::{check_output_kind, not_regular, read_input, same_file_as};
+use crate::io::{check_output_kind, not_regular, read_input, same_file_as};
 use crate::recording::{Digits, MAX_RATE_HZ, MIN_RATE_HZ, RecordingError, RecordingWriter};
 
 mod checks;
@@ -27,12 +27,14 @@ mod csv;
 mod mat;
 mod npy;
 mod place;
+mod provenance;
 mod split;
 mod text;
 mod wav;
 use checks::{check_written_names, flags_a_wav_ignores, one_folder_for_every_label};
 pub use csv::parse_csv;
-use place::{Staged, remove_abandoned_staging, remove_other_cuts, settle};
+use place::{LOCK_FILE, Staged, earlier_cuts, remove_abandoned_staging, settle};
+pub use provenance::Source;
 pub use split::Segment;
 pub use wav::parse_wav;
 
@@ -443,14 +445,15 @@ fn stage(
     } else {
         stem
     };
+    let source = std::sync::Arc::new(Source::of(f, &bytes));
     let mut imp = parse_file(bytes, &origin, &ext, args)?;
     let label = label_of(f, &origin, args, imp.label.take())?;
-    imp.meta
-        .push(("source".to_string(), toml::Value::String(origin.clone())));
+    imp.meta.extend(source.meta());
     check_written_names(&imp, extra, &origin, args)?;
     imp.meta.extend(extra.iter().cloned());
     let Some(length) = args.split else {
-        return Ok(vec![stage_one(f, &imp, &label, &stem, args, staging)?]);
+        let staged = vec![stage_one(f, &imp, &label, &stem, args, staging, &source)?];
+        return one_cut(staged, args);
     };
     let cut = split::check(length, args.split_hop, args.rate)?;
     let parts = split::split(&imp, &origin, cut)?;
@@ -459,13 +462,42 @@ fn stage(
         .enumerate()
         .map(|(j, part)| {
             let name = split::stem(&stem, j, parts.len());
-            stage_one(f, part, &label, &name, args, staging)
+            stage_one(f, part, &label, &name, args, staging, &source)
         })
         .collect::<Result<Vec<Staged>, ImportError>>()?;
     if let Some(first) = staged.first_mut() {
         first.left_out_s = split::left_over(&imp, cut);
     }
-    Ok(staged)
+    one_cut(staged, args)
+}
+
+/// Without `--force`, an input a folder already holds cut another way (a
+/// whole recording beside its trials, or trials of another length) is
+/// refused, naming that cut: a folder holds one cut of each input.
+fn one_cut(staged: Vec<Staged>, args: &Request) -> Result<Vec<Staged>, ImportError> {
+    if args.force {
+        return Ok(staged);
+    }
+    let earlier = earlier_cuts(&staged);
+    let (Some(first), Some(s)) = (earlier.first(), staged.first()) else {
+        return Ok(staged);
+    };
+    Err(bad(format!(
+        "{}: {} already holds {} an earlier import cut from it another way ({}{}); a folder \
+         holds one cut of each input, so nothing was imported: --force replaces that cut with \
+         this one, or import into another --out",
+        s.input.display(),
+        first.parent().unwrap_or(&args.out).display(),
+        match earlier.len() {
+            1 => "a recording".to_string(),
+            n => format!("{n} recordings"),
+        },
+        first.display(),
+        match earlier.last() {
+            Some(last) if earlier.len() > 1 => format!(" … {}", last.display()),
+            _ => String::new(),
+        }
+    )))
 }
 
 /// Writes `imp` under `staging` as `<label>/<stem>.csv` (or `.csv.gz`),
@@ -477,6 +509,7 @@ fn stage_one(
     stem: &str,
     args: &Request,
     staging: &Path,
+    source: &std::sync::Arc<Source>,
 ) -> Result<Staged, ImportError> {
     let csv = Path::new(label).join(format!("{stem}.csv"));
     let gz = Path::new(label).join(format!("{stem}.csv.gz"));
@@ -497,13 +530,21 @@ fn stage_one(
             )));
         }
     }
-    if !args.force
-        && let Some(there) = [&path, &other].into_iter().find(|p| p.exists())
+    // A name taken, by anything (a symlink that leads nowhere too): without
+    // --force refused; with it, only a recording import wrote from this input.
+    for there in [&path, &other]
+        .into_iter()
+        .filter(|p| std::fs::symlink_metadata(p).is_ok())
     {
-        return Err(bad(format!(
-            "{}: already exists (use --force to replace it)",
-            there.display()
-        )));
+        if !args.force {
+            return Err(bad(format!(
+                "{}: already exists (use --force to replace it)",
+                there.display()
+            )));
+        }
+        source
+            .wrote(there)
+            .map_err(|why| place::not_ours(there, f, &why))?;
     }
     let staged =
         write_recording(&staging.join(&csv), imp, label, args.gzip).map_err(|e| match e {
@@ -516,7 +557,29 @@ fn stage_one(
         other,
         staged,
         left_out_s: 0.0,
+        source: source.clone(),
     })
+}
+
+/// What `--force` removed of an input's earlier cut, each one named: one
+/// line an input.
+fn removed_cut(input: &Path, gone: &[PathBuf]) -> String {
+    let folder = gone[0].parent().unwrap_or(Path::new(""));
+    let names: Vec<String> = gone
+        .iter()
+        .map(|p| match p.parent() {
+            Some(d) if d == folder => p.file_name().unwrap_or_default().to_string_lossy().into(),
+            _ => p.display().to_string(),
+        })
+        .collect();
+    format!(
+        "--force: removed {} recording(s) an earlier import cut another way from {} (a folder \
+         holds one cut of each input), from {}: {}",
+        gone.len(),
+        input.display(),
+        folder.display(),
+        names.join(", ")
+    )
 }
 
 /// With `--split`: the inputs whose end no whole trial covers, in one
@@ -613,6 +676,22 @@ pub fn run(args: &Request, report: &dyn Report) -> Result<Vec<PathBuf>, ImportEr
             args.out.display()
         )));
     }
+    // One import at a time into a folder: the checks, placing and clean-up
+    // below are one step under this lock (released when `_lock` drops, or
+    // by the system if the process dies).
+    let _lock = crate::io::FolderLock::acquire(&args.out, LOCK_FILE, |held| {
+        report.warn(&format!(
+            "another import is writing into {}: waiting for it to finish ({} is locked)",
+            args.out.display(),
+            held.display()
+        ))
+    })
+    .map_err(|e| {
+        ImportError::Runtime(format!(
+            "{}: cannot take the import lock: {e}",
+            args.out.join(LOCK_FILE).display()
+        ))
+    })?;
     remove_abandoned_staging(&args.out);
     let staging = args.out.join(format!(".import-{}", std::process::id()));
     let results = run_jobs(args.files.len(), threads, &|i| {
@@ -624,27 +703,17 @@ pub fn run(args: &Request, report: &dyn Report) -> Result<Vec<PathBuf>, ImportEr
     let moved = settle(args, &staging, results);
     let _ = std::fs::remove_dir_all(&staging);
     if moved.is_err() && !out_existed {
-        // Only empty folders go: the ones this import made.
+        // Only what this import made: the folder if empty, once the lock
+        // (whose file is in it) is let go.
+        drop(_lock);
         let _ = std::fs::remove_dir(&args.out);
     }
-    if let Ok(placed) = &moved
-        && args.force
-    {
-        let other = remove_other_cuts(placed, args.split.is_some(), &args.files);
-        if let (Some(first), Some(last)) = (other.first(), other.last()) {
-            report.warn(&format!(
-                "--force: removed {} recording(s) an earlier import cut another way from inputs \
-                 of the same names ({}{}), so each input is cut one way",
-                other.len(),
-                first.display(),
-                if other.len() > 1 {
-                    format!(" … {}", last.display())
-                } else {
-                    String::new()
-                }
-            ));
+    if let Ok(settled) = &moved {
+        for (input, gone) in &settled.removed {
+            report.warn(&removed_cut(input, gone));
         }
     }
+    let moved = moved.map(|s| s.written);
     if moved.is_ok()
         && let Some(warning) = cut_short
     {

@@ -34,6 +34,7 @@ pub mod dataset;
 pub mod device;
 pub mod evaluate;
 pub mod import;
+pub mod io;
 pub mod predictor;
 pub mod profile;
 pub mod recorder;

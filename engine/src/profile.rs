@@ -158,14 +158,13 @@ impl LoadedProfile {
             return Ok(Self::thesis());
         }
         let origin = path.display().to_string();
-        let text =
-            crate::recording::files::read_input_to_string(path).map_err(|e| ProfileError {
-                origin: origin.clone(),
-                line: None,
-                column: None,
-                key: None,
-                reason: format!("cannot read the profile: {e}"),
-            })?;
+        let text = crate::io::read_input_to_string(path).map_err(|e| ProfileError {
+            origin: origin.clone(),
+            line: None,
+            column: None,
+            key: None,
+            reason: format!("cannot read the profile: {e}"),
+        })?;
         let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
         Self::from_str(&text, &origin, &base)
     }

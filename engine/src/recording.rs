@@ -24,8 +24,9 @@ use std::fs;
 use std::io;
 use std::path::{Path, PathBuf};
 
-/// The first line of every recording in this format.
-pub const FORMAT_LINE: &str = "# hapticlab recording v1";
+/// The first line of every recording in this format (kept by [`crate::io`],
+/// which tells a recording from any other file).
+pub use crate::io::FORMAT_LINE;
 const FORMAT_PREFIX: &str = "# hapticlab recording v";
 /// The trailer's key: `# end samples = N`.
 pub(crate) const TRAILER_KEY: &str = "end samples";
@@ -35,7 +36,6 @@ pub const ABORTED_KEY: &str = "aborted";
 const QUOTE_CHARS: usize = 24;
 const GZIP_MAGIC: [u8; 2] = [0x1f, 0x8b];
 
-pub mod files;
 mod label;
 mod number;
 mod reader;
@@ -85,8 +85,7 @@ impl RecordingError {
         match self {
             Self::Malformed { .. } | Self::Compressed { .. } => true,
             Self::Io { source, .. } => {
-                source.kind() == io::ErrorKind::NotFound
-                    || crate::recording::files::not_regular(source)
+                source.kind() == io::ErrorKind::NotFound || crate::io::not_regular(source)
             }
             _ => false,
         }
@@ -179,7 +178,7 @@ pub fn read_columns(path: &Path, wanted: &[&str]) -> Result<Recording, Recording
 }
 
 fn read_selected(path: &Path, select: Select<'_>) -> Result<Recording, RecordingError> {
-    let bytes = crate::recording::files::read_input(path).map_err(|source| RecordingError::Io {
+    let bytes = crate::io::read_input(path).map_err(|source| RecordingError::Io {
         path: path.to_path_buf(),
         source,
     })?;
@@ -303,8 +302,8 @@ pub fn collect_files(paths: &[PathBuf]) -> Result<Vec<PathBuf>, RecordingError> 
                 path: path.clone(),
                 source: io::Error::new(
                     io::ErrorKind::InvalidInput,
-                    crate::recording::files::NotRegular {
-                        kind: crate::recording::files::kind_of(&metadata),
+                    crate::io::NotRegular {
+                        kind: crate::io::kind_of(&metadata),
                     },
                 ),
             });

@@ -67,7 +67,7 @@ fn classify(
             Ok(rec) => rec,
             // Found in a folder (one named is refused by `find`): passed over.
             Err(recording::RecordingError::Io { source, .. })
-                if crate::recording::files::not_regular(&source) =>
+                if crate::io::not_regular(&source) =>
             {
                 warn_skipped(&[crate::dataset::Skipped::Unusable {
                     file: f.display().to_string(),

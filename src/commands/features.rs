@@ -1,14 +1,13 @@
 //! `hapticlab features`: the feature vector (spectrum bins) of each
 //! recording, as `file,label,f1,…,fN` rows ([`crate::dataset`] computes them).
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use clap::Args;
 
 use crate::dataset;
 use crate::support::{
-    Failure, ProfileArg, check_output, inputs_of, load_profile, load_profile_examples, runtime,
+    Existing, Failure, ProfileArg, check_output, inputs_of, load_profile, load_profile_examples,
     write_atomically,
 };
 
@@ -22,18 +21,31 @@ pub struct FeaturesArgs {
     /// Write `file,label,f1,…,fN` rows here instead of standard output.
     #[arg(long, value_name = "FILE")]
     pub out: Option<PathBuf>,
+    /// Replace --out when it exists (never a recording or an input).
+    #[arg(long, requires = "out")]
+    pub overwrite: bool,
 }
 
 pub fn run(a: FeaturesArgs) -> Result<(), Failure> {
-    features(&a.profile, &a.paths, a.out.as_deref())
+    features(
+        &a.profile,
+        &a.paths,
+        a.out.as_deref(),
+        Existing::replace_if(a.overwrite),
+    )
 }
 
-fn features(profile: &ProfileArg, paths: &[PathBuf], out: Option<&Path>) -> Result<(), Failure> {
+fn features(
+    profile: &ProfileArg,
+    paths: &[PathBuf],
+    out: Option<&Path>,
+    existing: Existing,
+) -> Result<(), Failure> {
     let lp = load_profile(profile)?;
     let inputs = match out {
         Some(p) => {
             let inputs = inputs_of(profile, paths)?;
-            check_output(p, &inputs)?;
+            check_output(p, &inputs, existing)?;
             inputs
         }
         None => Vec::new(),
@@ -70,7 +82,7 @@ fn features(profile: &ProfileArg, paths: &[PathBuf], out: Option<&Path>) -> Resu
     }
     match out {
         Some(p) => {
-            write_atomically(p, &inputs, text.as_bytes())?;
+            write_atomically(p, &inputs, existing, text.as_bytes())?;
             crate::errln!(
                 "wrote {} feature rows ({} features each) to {}",
                 examples.len(),
@@ -78,9 +90,8 @@ fn features(profile: &ProfileArg, paths: &[PathBuf], out: Option<&Path>) -> Resu
                 p.display()
             );
         }
-        None => std::io::stdout()
-            .write_all(text.as_bytes())
-            .map_err(runtime)?,
+        // A write failure is noted for the exit code; a closed pipe is quiet.
+        None => crate::outp!("{text}"),
     }
     Ok(())
 }

@@ -28,7 +28,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use crate::analysis::FeatureExtractor;
 use crate::dataset::{self, features_of, label_of};
 use crate::recording;
-use crate::support::{Failure, ProfileArg, load_profile};
+use crate::support::{Existing, Failure, ProfileArg, load_profile};
 
 mod sweep;
 use sweep::SweepFigure;
@@ -47,6 +47,9 @@ pub struct PlotArgs {
     /// Figure size in pixels, WIDTHxHEIGHT.
     #[arg(long, global = true, default_value = "1000x700", value_name = "WxH")]
     pub size: String,
+    /// Replace --out when it exists (never a recording or an input).
+    #[arg(long, global = true)]
+    pub overwrite: bool,
 }
 
 #[derive(Debug, Subcommand, Clone)]
@@ -69,8 +72,9 @@ pub enum Figure {
         profile: ProfileArg,
         #[arg(required = true, value_name = "PATH")]
         paths: Vec<PathBuf>,
-        #[arg(long, default_value_t = 5, value_name = "N")]
-        per_class: usize,
+        /// Recordings drawn per class, 1 to 1000.
+        #[arg(long, default_value_t = 5, value_name = "N", value_parser = clap::value_parser!(u16).range(1..=1000))]
+        per_class: u16,
     },
     /// Accuracy against the swept value from `evaluate --sweep … --json`; a two-key grid (two --sweep flags) as a heat map.
     #[command(
@@ -151,17 +155,21 @@ pub fn run(args: &PlotArgs) -> Result<(), Failure> {
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     // Before any drawing: never over an input, a recording or a device.
-    crate::support::check_output(&out, &args.figure.inputs())?;
+    let (inputs, existing) = (args.figure.inputs(), Existing::replace_if(args.overwrite));
+    crate::support::check_output(&out, &inputs, existing)?;
     let data = Data::load(&args.figure)?;
-    if let Some(d) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(d)
-            .map_err(|e| Failure::Runtime(format!("{}: {e}", d.display())))?;
-    }
-    match ext.as_str() {
+    let bytes = match ext.as_str() {
         "png" => {
-            let root = BitMapBackend::new(&out, (w, h)).into_drawing_area();
-            data.draw(&root)?;
-            root.present().map_err(fail)?;
+            // Drawn in a scratch folder, then put in place by the one writer.
+            let scratch = tempfile::tempdir()
+                .map_err(|e| Failure::Runtime(format!("a scratch folder for the figure: {e}")))?;
+            let png = scratch.path().join("figure.png");
+            {
+                let root = BitMapBackend::new(&png, (w, h)).into_drawing_area();
+                data.draw(&root)?;
+                root.present().map_err(fail)?;
+            }
+            std::fs::read(&png).map_err(|e| Failure::Runtime(format!("{}: {e}", png.display())))?
         }
         "svg" => {
             let mut svg = String::new();
@@ -172,12 +180,11 @@ pub fn run(args: &PlotArgs) -> Result<(), Failure> {
             }
             // SVG text is drawn by the viewer: name the PNGs' bundled font
             // first, the viewer's sans-serif only as the fallback.
-            let svg = svg.replace(
+            svg.replace(
                 "font-family=\"sans-serif\"",
                 &format!("font-family=\"{SVG_FONT}\""),
-            );
-            std::fs::write(&out, svg)
-                .map_err(|e| Failure::Runtime(format!("{}: {e}", out.display())))?;
+            )
+            .into_bytes()
         }
         _ => {
             return Err(bad(format!(
@@ -185,7 +192,8 @@ pub fn run(args: &PlotArgs) -> Result<(), Failure> {
                 out.display()
             )));
         }
-    }
+    };
+    crate::support::write_atomically(&out, &inputs, existing, &bytes)?;
     crate::errln!("wrote {}", out.display());
     Ok(())
 }
@@ -245,10 +253,10 @@ fn feature_axis(a: &crate::profile::Analysis) -> (usize, &'static str) {
 const LABELS: (&str, u32) = ("sans-serif", 18);
 
 fn read_json(p: &Path) -> Result<serde_json::Value, Failure> {
-    let bytes = crate::recording::files::read_input(p).map_err(|e| {
+    let bytes = crate::io::read_input(p).map_err(|e| {
         let m = format!("{}: {e}", p.display());
         // Missing, or not a regular file (a FIFO would block): the argument's fault.
-        if crate::recording::files::not_regular(&e) || e.kind() == std::io::ErrorKind::NotFound {
+        if crate::io::not_regular(&e) || e.kind() == std::io::ErrorKind::NotFound {
             bad(m)
         } else {
             Failure::Runtime(m)
@@ -317,19 +325,20 @@ impl Data {
                     })?;
                 let confusion: Vec<Vec<f64>> = serde_json::from_value(v["confusion"].clone())
                     .map_err(|_| bad(format!("{}: no `confusion` matrix", report.display())))?;
-                if confusion.len() != labels.len()
-                    || confusion.iter().any(|r| r.len() != labels.len())
+                let accuracy = v["accuracy"].as_f64().unwrap_or(f64::NAN);
+                // Checked before it is drawn: a figure never shows a report
+                // that does not hold together.
+                if let Some(fault) = crate::evaluate::confusion_fault(&labels, &confusion, accuracy)
                 {
                     return Err(bad(format!(
-                        "{}: the confusion matrix is not {n}x{n}",
-                        report.display(),
-                        n = labels.len()
+                        "{}: {fault}; nothing was drawn (expected `evaluate --json` output)",
+                        report.display()
                     )));
                 }
                 Ok(Data::Confusion(Confusion {
                     labels,
                     confusion,
-                    accuracy: v["accuracy"].as_f64().unwrap_or(f64::NAN),
+                    accuracy,
                 }))
             }
             Figure::Features {
@@ -363,7 +372,7 @@ impl Data {
                             classes.len() - 1
                         }
                     };
-                    if classes[i].1.len() < *per_class {
+                    if classes[i].1.len() < usize::from(*per_class) {
                         classes[i].1.push(e.features);
                     }
                 }

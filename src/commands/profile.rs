@@ -16,7 +16,7 @@ use std::path::{Path, PathBuf};
 use clap::{Args, Subcommand};
 
 use crate::profile::LoadedProfile;
-use crate::support::{Failure, bad, check_output, runtime, write_atomically};
+use crate::support::{Existing, Failure, bad, check_output, runtime, write_atomically};
 
 pub mod cautions;
 pub mod draft;
@@ -61,14 +61,10 @@ pub fn run(a: ProfileArgs) -> Result<(), Failure> {
 }
 
 fn new(a: &NewArgs) -> Result<(), Failure> {
-    // Refused before the survey, --overwrite or not: a recording, or not a regular file.
-    check_output(&a.out, &[])?;
-    if a.out.exists() && !a.overwrite {
-        return Err(bad(format!(
-            "{} already exists: profile new does not replace it; give another --out, or --overwrite",
-            a.out.display()
-        )));
-    }
+    // Refused before the survey: a file there without --overwrite, and
+    // with it a recording or not a regular file.
+    let existing = Existing::replace_if(a.overwrite);
+    check_output(&a.out, &[], existing)?;
     let s = survey(&a.from)?;
     let name = a
         .out
@@ -83,7 +79,7 @@ fn new(a: &NewArgs) -> Result<(), Failure> {
     let base = a.out.parent().unwrap_or(Path::new("."));
     LoadedProfile::from_str(&text, &a.out.display().to_string(), base)
         .map_err(|e| runtime(format!("the profile drafted is invalid (a bug): {e}")))?;
-    write_atomically(&a.out, &[], text.as_bytes())?;
+    write_atomically(&a.out, &[], existing, text.as_bytes())?;
     for c in &cautions {
         crate::errln!("warning: {}: {c}", a.from.display());
     }

@@ -7,8 +7,8 @@ use clap::Args;
 
 use crate::classify::{Model, plural};
 use crate::support::{
-    Failure, ProfileArg, bad, check_output, inputs_of, load_profile, load_profile_examples,
-    output_failure,
+    Existing, Failure, ProfileArg, bad, check_output, inputs_of, load_profile,
+    load_profile_examples, output_failure,
 };
 
 #[derive(Debug, Args)]
@@ -20,16 +20,29 @@ pub struct TrainArgs {
     /// Model file to write (JSON).
     #[arg(long, value_name = "MODEL")]
     pub out: PathBuf,
+    /// Replace --out when it exists (never a recording or an input).
+    #[arg(long)]
+    pub overwrite: bool,
 }
 
 pub fn run(a: TrainArgs) -> Result<(), Failure> {
-    train(&a.profile, &a.paths, &a.out)
+    train(
+        &a.profile,
+        &a.paths,
+        &a.out,
+        Existing::replace_if(a.overwrite),
+    )
 }
 
-fn train(profile: &ProfileArg, paths: &[PathBuf], out: &Path) -> Result<(), Failure> {
+fn train(
+    profile: &ProfileArg,
+    paths: &[PathBuf],
+    out: &Path,
+    existing: Existing,
+) -> Result<(), Failure> {
     let lp = load_profile(profile)?;
     let inputs = inputs_of(profile, paths)?;
-    check_output(out, &inputs)?;
+    check_output(out, &inputs, existing)?;
     let examples = load_profile_examples(&lp, paths)?;
     // With sub-windows, a recording gives several examples, consecutive.
     let recordings = examples
@@ -56,7 +69,7 @@ fn train(profile: &ProfileArg, paths: &[PathBuf], out: &Path) -> Result<(), Fail
     if let Some(note) = model.k_notice() {
         crate::errln!("note: {note}");
     }
-    model.save(out, &inputs).map_err(output_failure)?;
+    model.save(out, &inputs, existing).map_err(output_failure)?;
     crate::outln!(
         "trained k-NN (k = {}) on {} of {} ({}); model saved to {}",
         model.classifier.k,

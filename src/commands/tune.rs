@@ -12,8 +12,8 @@ use crate::dataset::{self, Keep, Options, Unusable};
 use crate::evaluate::plan::Recordings;
 use crate::profile::{LoadedProfile, THESIS_PROFILE};
 use crate::support::{
-    Failure, ProfileArg, bad, check_output, find_recordings, inputs_of, load_profile, progress_bar,
-    runtime, warn_skipped, write_atomically,
+    Existing, Failure, ProfileArg, bad, check_output, find_recordings, inputs_of, load_profile,
+    progress_bar, runtime, warn_skipped, write_atomically,
 };
 use crate::tune::{self, TuneError, TuneReport};
 
@@ -52,14 +52,7 @@ impl From<TuneError> for Failure {
 /// regular file (the shared guard); an existing profile only with
 /// `--overwrite`.
 fn check_out(a: &TuneArgs, inputs: &[PathBuf]) -> Result<(), Failure> {
-    check_output(&a.out, inputs)?;
-    if a.out.exists() && !a.overwrite {
-        return Err(bad(format!(
-            "{} already exists: tune does not replace it; give another --out, or --overwrite",
-            a.out.display()
-        )));
-    }
-    Ok(())
+    check_output(&a.out, inputs, Existing::replace_if(a.overwrite))
 }
 
 /// The profile's own text, to write the tuned one from.
@@ -68,7 +61,7 @@ fn profile_text(arg: &ProfileArg) -> Result<String, Failure> {
     if p.as_os_str() == "thesis" && !p.exists() {
         return Ok(THESIS_PROFILE.to_string());
     }
-    crate::recording::files::read_input_to_string(p)
+    crate::io::read_input_to_string(p)
         .map_err(|e| bad(format!("{}: cannot read: {e}", p.display())))
 }
 
@@ -136,7 +129,12 @@ pub fn run(a: TuneArgs) -> Result<(), Failure> {
             "the tuned profile does not read back as the setting chosen (a bug)",
         ));
     }
-    write_atomically(&a.out, &inputs, text.as_bytes())?;
+    write_atomically(
+        &a.out,
+        &inputs,
+        Existing::replace_if(a.overwrite),
+        text.as_bytes(),
+    )?;
     if a.json {
         crate::outln!("{}", serde_json::to_string(&report).map_err(runtime)?);
     } else {

@@ -277,7 +277,7 @@ impl Jobs {
             Ok((model, skipped)) => {
                 let file = dir.join(MODEL_FILE);
                 let saved = model
-                    .save(&file, &[])
+                    .save(&file, &[], crate::io::Existing::Replace)
                     .map(|()| file)
                     .map_err(|e| e.to_string());
                 JobResult::Trained {
@@ -430,11 +430,21 @@ fn save_report(lp: &LoadedProfile, dir: &Path, ev: &Evaluation) -> Result<(), St
         );
     }
     let json = serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?;
-    crate::support::write_atomically(&dir.join(REPORT_FILE), &[], text.as_bytes())
-        .and_then(|()| {
-            crate::support::write_atomically(&dir.join(REPORT_JSON), &[], json.as_bytes())
-        })
-        .map_err(|e| e.message().to_string())
+    crate::support::write_atomically(
+        &dir.join(REPORT_FILE),
+        &[],
+        crate::io::Existing::Replace,
+        text.as_bytes(),
+    )
+    .and_then(|()| {
+        crate::support::write_atomically(
+            &dir.join(REPORT_JSON),
+            &[],
+            crate::io::Existing::Replace,
+            json.as_bytes(),
+        )
+    })
+    .map_err(|e| e.message().to_string())
 }
 
 fn train(lp: &LoadedProfile, dir: &Path) -> Result<(Model, usize), String> {
@@ -469,13 +479,19 @@ pub fn load_saved_model(
     Ok(Some((model, file)))
 }
 
+/// A kept report is a few lines per test recording: more is not one.
+const KEPT_REPORT_MAX: u64 = 256 << 20;
+
 /// The evaluation an earlier `e` kept in `dir` ([`REPORT_JSON`]), as its
-/// report and how it was split, when the file is there and readable.
-pub fn load_saved_report(dir: &Path) -> Option<(Report, String)> {
+/// report and how it was split: `Ok(None)` when there is none, an error
+/// saying why when the file is there but not read (not a regular file, not
+/// JSON, or a report that does not hold together: ignored with a word, as a
+/// stale model is).
+pub fn load_saved_report(dir: &Path) -> Result<Option<(Report, String)>, String> {
     #[derive(serde::Deserialize)]
     struct Kept {
         labels: Vec<String>,
-        confusion: Vec<Vec<usize>>,
+        confusion: Vec<Vec<f64>>,
         accuracy: f64,
         per_class: Vec<Rate>,
         #[serde(default)]
@@ -501,11 +517,34 @@ pub fn load_saved_report(dir: &Path) -> Option<(Report, String)> {
         predicted: String,
         votes: Vec<(String, usize)>,
     }
-    let text = std::fs::read_to_string(dir.join(REPORT_JSON)).ok()?;
-    let k: Kept = serde_json::from_str(&text).ok()?;
+    let path = dir.join(REPORT_JSON);
+    if std::fs::symlink_metadata(&path).is_err() {
+        return Ok(None);
+    }
+    let ignored = |why: String| format!("{}: {why}: ignored", path.display());
+    let bytes = crate::io::read_input_at_most(&path, KEPT_REPORT_MAX)
+        .map_err(|e| ignored(e.to_string()))?;
+    let k: Kept = serde_json::from_slice(&bytes)
+        .map_err(|e| ignored(format!("not an evaluation kept by the console ({e})")))?;
+    if let Some(fault) = crate::evaluate::confusion_fault(&k.labels, &k.confusion, k.accuracy) {
+        return Err(ignored(fault));
+    }
+    if k.per_class.len() != k.labels.len()
+        || k.per_class
+            .iter()
+            .zip(&k.labels)
+            .any(|(r, l)| r.label != *l)
+    {
+        return Err(ignored("its per-class rates name other labels".into()));
+    }
     let report = Report {
         labels: k.labels,
-        confusion: k.confusion,
+        // Whole, non-negative counts: checked above.
+        confusion: k
+            .confusion
+            .iter()
+            .map(|r| r.iter().map(|&v| v as usize).collect())
+            .collect(),
         accuracy: k.accuracy,
         per_class: k
             .per_class
@@ -530,16 +569,22 @@ pub fn load_saved_report(dir: &Path) -> Option<(Report, String)> {
             })
             .collect(),
     };
-    Some((report, k.method))
+    Ok(Some((report, k.method)))
 }
 
 /// Take up what an earlier session kept in `dir`: the last evaluation (the
 /// Dataset panel shows it, with its age), and the model, or say on the
 /// status line and in the Dataset panel why the model is not used.
 pub fn adopt_saved_model(app: &mut App, dir: &Path) {
-    if app.dataset.report.is_none()
-        && let Some((report, method)) = load_saved_report(dir)
-    {
+    let kept = if app.dataset.report.is_none() {
+        load_saved_report(dir).unwrap_or_else(|why| {
+            app.warn(why);
+            None
+        })
+    } else {
+        None
+    };
+    if let Some((report, method)) = kept {
         let file = dir.join(REPORT_FILE);
         let age = std::fs::metadata(dir.join(REPORT_JSON))
             .and_then(|m| m.modified())

@@ -108,20 +108,82 @@ pub fn choose(root: &Path, now: SystemTime) -> (PathBuf, Option<Session>) {
     }
 }
 
+/// What a session folder's `session.toml` says.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SessionFile {
+    /// There is none.
+    Absent,
+    /// It names the profile the folder's scans were recorded under.
+    Names(PathBuf),
+    /// It is there but cannot be read as a session file: why, in words.
+    /// It is kept as it is; the console says so on its status line.
+    Unreadable(String),
+}
+
+/// A session file is a line or two: anything longer is not one.
+const SESSION_FILE_MAX: u64 = 64 << 10;
+
+/// Reads `dir`'s `session.toml` through the one reader (a regular file
+/// only, never waited on; a FIFO or a folder there is unreadable).
+pub fn read(dir: &Path) -> SessionFile {
+    let path = dir.join(SESSION_FILE);
+    if std::fs::symlink_metadata(&path).is_err() {
+        return SessionFile::Absent;
+    }
+    let unreadable = |why: String| SessionFile::Unreadable(format!("{}: {why}", path.display()));
+    let bytes = match crate::io::read_input_at_most(&path, SESSION_FILE_MAX) {
+        Ok(b) => b,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return unreadable("a symlink that leads nowhere".into());
+        }
+        Err(e) => return unreadable(e.to_string()),
+    };
+    let Ok(text) = String::from_utf8(bytes) else {
+        return unreadable("not UTF-8 text".into());
+    };
+    let table: toml::Table = match text.parse() {
+        Ok(t) => t,
+        Err(e) => {
+            let line = e
+                .span()
+                .map(|s| text[..s.start.min(text.len())].lines().count().max(1));
+            return unreadable(match line {
+                Some(l) => format!("not TOML (line {l}: {})", e.message()),
+                None => format!("not TOML ({})", e.message()),
+            });
+        }
+    };
+    match table.get("profile") {
+        Some(toml::Value::String(p)) if !p.is_empty() => SessionFile::Names(PathBuf::from(p)),
+        Some(_) => unreadable("its `profile` is not the name or path of a profile".into()),
+        None => unreadable("it names no `profile`".into()),
+    }
+}
+
 /// The profile a session's folder was recorded under (`session.toml`'s
 /// `profile`), when it names one.
 pub fn profile_of(dir: &Path) -> Option<PathBuf> {
-    let text = std::fs::read_to_string(dir.join(SESSION_FILE)).ok()?;
-    let v: toml::Table = text.parse().ok()?;
-    v.get("profile")?.as_str().map(PathBuf::from)
+    match read(dir) {
+        SessionFile::Names(p) => Some(p),
+        _ => None,
+    }
 }
 
 /// Note the profile in the session's folder (once the folder exists: the
-/// first scan makes it). A file a user could write by hand.
-pub fn remember(dir: &Path, profile: &str) -> std::io::Result<()> {
-    if !dir.is_dir() || profile_of(dir).as_deref() == Some(Path::new(profile)) {
+/// first scan makes it). A file a user could write by hand. Through the one
+/// writer: a new file is created no-clobber; one naming another profile is
+/// replaced by a rename (never written through a symlink, never a
+/// recording); one that cannot be read is kept as it is.
+pub fn remember(dir: &Path, profile: &str) -> Result<(), String> {
+    if !dir.is_dir() {
         return Ok(());
     }
+    let existing = match read(dir) {
+        SessionFile::Absent => crate::io::Existing::Keep,
+        SessionFile::Names(p) if p == Path::new(profile) => return Ok(()),
+        SessionFile::Names(_) => crate::io::Existing::Replace,
+        SessionFile::Unreadable(why) => return Err(format!("{why}; kept as it is")),
+    };
     let mut t = toml::Table::new();
     t.insert("profile".into(), toml::Value::String(profile.into()));
     let text = format!(
@@ -129,7 +191,11 @@ pub fn remember(dir: &Path, profile: &str) -> std::io::Result<()> {
         dir.display(),
         toml::to_string(&t).unwrap_or_default()
     );
-    std::fs::write(dir.join(SESSION_FILE), text)
+    crate::io::write_output(&dir.join(SESSION_FILE), &[], existing, |w| {
+        use std::io::Write;
+        w.write_all(text.as_bytes())
+    })
+    .map_err(|e| e.to_string())
 }
 
 #[cfg(test)]

@@ -76,6 +76,11 @@ pub enum DirState {
     NotADirectory {
         blocker: PathBuf,
     },
+    /// The path, or a folder on the way to it, is a symlink that leads
+    /// nowhere: nothing can be made there (the console refuses it too).
+    DanglingLink {
+        link: PathBuf,
+    },
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -278,6 +283,13 @@ pub fn dir_state(dir: &Path) -> DirState {
                     blocker: probe.to_path_buf(),
                 };
             }
+            Err(_)
+                if std::fs::symlink_metadata(probe).is_ok_and(|m| m.file_type().is_symlink()) =>
+            {
+                return DirState::DanglingLink {
+                    link: probe.to_path_buf(),
+                };
+            }
             Err(_) => match at.parent() {
                 Some(up) => at = up,
                 None => {
@@ -326,9 +338,9 @@ impl DatasetFacts {
         let (write, free) = match &state {
             DirState::Exists => (write_probe(dir), filesystem(dir)),
             DirState::Missing { ancestor } => (write_probe(ancestor), filesystem(ancestor)),
-            DirState::NotADirectory { blocker } => (
-                Err(format!("{} is a file", blocker.display())),
-                blocker.parent().and_then(|p| {
+            DirState::NotADirectory { blocker: b } | DirState::DanglingLink { link: b } => (
+                Err(format!("{} is not a folder", b.display())),
+                b.parent().and_then(|p| {
                     filesystem(if p.as_os_str().is_empty() {
                         Path::new(".")
                     } else {

@@ -22,6 +22,17 @@ pub fn folder_checks(needs: &Needs, d: &DatasetFacts, root: bool) -> Vec<Check> 
             ),
             "give `--dataset` a folder path (or move the file away)",
         ),
+        (DirState::DanglingLink { link }, _) => with_fix(
+            check(
+                "dataset",
+                Status::Fail,
+                format!(
+                    "{dir} cannot be a folder: {} is a symlink that leads nowhere",
+                    link.display()
+                ),
+            ),
+            "point the symlink at a folder, remove it, or give `--dataset` another path",
+        ),
         (DirState::Exists, Ok(())) => check(
             "dataset",
             Status::Ok,

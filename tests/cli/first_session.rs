@@ -105,7 +105,7 @@ fn a_chosen_k_survives_the_model_file_and_is_checked_against_the_profile() {
     let m = Model::train_adapting_k("t", &analysis(2), &knn(10), four_textures(5)).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("model.json");
-    m.save(&path, &[]).unwrap();
+    m.save(&path, &[], hapticlab::io::Existing::Keep).unwrap();
     let back = Model::load(&path).unwrap();
     assert_eq!(back, m);
     assert_eq!(back.k_notice(), m.k_notice());

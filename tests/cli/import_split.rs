@@ -298,7 +298,13 @@ fn importing_again_with_force_cut_another_way_leaves_one_cut_of_each_input() {
     // A longer cut: the 2 s cut's trials past 15 go.
     let r = import(Some("4"), true);
     assert_eq!(r.code, Some(0), "{r:?}");
-    assert!(r.stderr.contains("removed 45 recording(s)"), "{r:?}");
+    // One line an input, each recording removed named.
+    assert_eq!(
+        r.stderr.matches("removed 15 recording(s)").count(),
+        3,
+        "{r:?}"
+    );
+    assert!(r.stderr.contains("L2-seg016.csv, L2-seg017.csv"), "{r:?}");
     let n = names();
     assert_eq!(n.len(), 16, "{n:?}");
     assert_eq!(
@@ -310,12 +316,20 @@ fn importing_again_with_force_cut_another_way_leaves_one_cut_of_each_input() {
     // Whole: every trial goes.
     let r = import(None, true);
     assert_eq!(r.code, Some(0), "{r:?}");
-    assert!(r.stderr.contains("removed 45 recording(s)"), "{r:?}");
+    assert_eq!(
+        r.stderr.matches("removed 15 recording(s)").count(),
+        3,
+        "{r:?}"
+    );
     assert_eq!(names(), ["L2.csv", "other.csv"]);
     // Cut again: the whole one goes.
     let r = import(Some("2"), true);
     assert_eq!(r.code, Some(0), "{r:?}");
-    assert!(r.stderr.contains("removed 3 recording(s)"), "{r:?}");
+    assert_eq!(
+        r.stderr.matches("removed 1 recording(s)").count(),
+        3,
+        "{r:?}"
+    );
     let n = names();
     assert_eq!(n.len(), 31, "{n:?}");
     assert!(!n.contains(&"L2.csv".to_string()));

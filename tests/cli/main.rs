@@ -22,6 +22,7 @@ mod import_formats;
 mod import_refusals;
 mod import_split;
 mod next_steps;
+mod nothing_lost;
 mod one_answer;
 mod plot;
 mod profile_new;

@@ -79,6 +79,7 @@ fn trained(dir: &Path, profile: &str) -> serde_json::Value {
         &format!("{SMALL}/two-labels"),
         "--out",
         p(&model),
+        "--overwrite",
     ]);
     assert_eq!(r.code, Some(0), "{r:?}");
     serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap()

@@ -90,10 +90,13 @@ fn features_and_train_never_write_over_an_input_or_a_recording() {
     let r = run(&["features", "-p", p(&profile), p(&ds), "--out", p(&profile)]);
     assert_eq!(r.code, Some(2), "{r:?}");
     assert!(r.stderr.contains("prof.toml"), "{r:?}");
-    // A file of its own kind is still replaced.
+    // A file of its own kind is replaced with --overwrite, never without.
     let table = dir.path().join("table.csv");
     std::fs::write(&table, "old\n").unwrap();
     let r = run(&["features", p(&ds), "--out", p(&table)]);
+    assert_eq!(r.code, Some(2), "{r:?}");
+    assert_eq!(std::fs::read_to_string(&table).unwrap(), "old\n");
+    let r = run(&["features", p(&ds), "--out", p(&table), "--overwrite"]);
     assert_eq!(r.code, Some(0), "{r:?}");
     assert!(
         std::fs::read_to_string(&table)

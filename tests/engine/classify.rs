@@ -140,7 +140,7 @@ fn a_model_survives_a_save_and_load() {
     let mut examples = two_clusters();
     examples[0].features = vec![0.1 + 0.2, 1.0 / 3.0];
     let m = Model::train("thesis", &analysis(2), &knn(3), examples).unwrap();
-    m.save(&path, &[]).unwrap();
+    m.save(&path, &[], hapticlab::io::Existing::Keep).unwrap();
     let back = Model::load(&path).unwrap();
     assert_eq!(back, m);
     let text = std::fs::read_to_string(&path).unwrap();

@@ -75,7 +75,7 @@ fn standardisation_is_fitted_on_the_training_part_and_saved() {
     // The scaling survives the model file.
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("m.json");
-    m.save(&path, &[]).unwrap();
+    m.save(&path, &[], hapticlab::io::Existing::Keep).unwrap();
     let back = Model::load(&path).unwrap();
     assert_eq!(back, m);
     assert_eq!(back.classify(&q2).unwrap().label, "B");

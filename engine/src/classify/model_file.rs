@@ -9,17 +9,23 @@ use std::io::{BufReader, Read, Write};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
-use crate::recording::files::OutputError;
+use crate::io::OutputError;
 
 use super::{ClassifyError, MODEL_FORMAT, Model, check_parts, sorted_labels};
 use crate::profile::Analysis;
 
 impl Model {
     /// Write the model as pretty-printed JSON, streamed to a temporary file
-    /// then renamed ([`crate::recording::files::write_output`]): refused when `path`
-    /// is one of `inputs`, a recording or not a regular file.
-    pub fn save(&self, path: &Path, inputs: &[PathBuf]) -> Result<(), OutputError> {
-        crate::recording::files::write_output(path, inputs, |w| {
+    /// then put in place ([`crate::io::write_output`]): refused when `path`
+    /// is one of `inputs`, a recording or not a regular file, and when it
+    /// exists unless `existing` says to replace it.
+    pub fn save(
+        &self,
+        path: &Path,
+        inputs: &[PathBuf],
+        existing: crate::io::Existing,
+    ) -> Result<(), OutputError> {
+        crate::io::write_output(path, inputs, existing, |w| {
             serde_json::to_writer_pretty(&mut *w, self).map_err(std::io::Error::other)?;
             w.write_all(b"\n")
         })
@@ -30,7 +36,7 @@ impl Model {
     /// examples and their prepared matrix). Only a regular file is read.
     pub fn load(path: &Path) -> Result<Model, ClassifyError> {
         let open = || {
-            crate::recording::files::open_input(path)
+            crate::io::open_input(path)
                 .map(|f| BufReader::with_capacity(1 << 16, f))
                 .map_err(|source| ClassifyError::Io {
                     path: path.to_path_buf(),

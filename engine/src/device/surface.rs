@@ -249,11 +249,10 @@ impl ProbeTrace {
 
 /// Read `x_m,height_m` rows (a header line first; `#` comments allowed).
 pub fn read_surface_csv(path: &Path) -> Result<(Vec<f64>, Vec<f64>), SurfaceError> {
-    let text =
-        crate::recording::files::read_input_to_string(path).map_err(|source| SurfaceError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+    let text = crate::io::read_input_to_string(path).map_err(|source| SurfaceError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let bad = |line: usize, reason: String| SurfaceError::Malformed {
         path: path.to_path_buf(),
         line,

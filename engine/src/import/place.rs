@@ -1,13 +1,21 @@
 //! Placing an import's recordings: each input's recordings are staged in
 //! a hidden folder under `--out` (`.import-<pid>`), then, once every input
 //! is good, synced and moved in place, each by one atomic step that never
-//! replaces a recording unless `--force` says so. Also removes the staging
-//! folders of imports that were killed. Never prints.
+//! replaces a file unless `--force` says so, and then only a recording this
+//! import wrote from the same input ([`Source::wrote`]). All of it runs
+//! under the folder's import lock ([`LOCK_FILE`]), so two imports into one
+//! folder never interleave their checks, placing and clean-up. Also removes
+//! the staging folders of imports that were killed. Never prints.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
+use super::provenance::Source;
 use super::{ImportError, Request, bad};
-use crate::recording::files::{move_no_replace, same_file_as};
+use crate::io::{move_no_replace, same_file_as};
+
+/// The hidden file in `--out` whose lock one import at a time holds.
+pub const LOCK_FILE: &str = ".hapticlab-import.lock";
 
 /// One input converted into the staging folder, waiting to be moved in place.
 pub(super) struct Staged {
@@ -21,6 +29,16 @@ pub(super) struct Staged {
     /// that no whole trial covers (left out); else 0.
     pub left_out_s: f64,
     pub staged: PathBuf,
+    /// What the input was: who may be replaced under `--force`.
+    pub source: Arc<Source>,
+}
+
+/// What an import placed, and what `--force` removed: recordings an
+/// earlier import cut another way from the same inputs.
+pub(super) struct Settled {
+    pub written: Vec<PathBuf>,
+    /// Each input with the recordings of its earlier cut removed.
+    pub removed: Vec<(PathBuf, Vec<PathBuf>)>,
 }
 
 /// Remove the staging folders (`.import-<pid>`) of imports that were killed:
@@ -50,12 +68,13 @@ pub(super) fn remove_abandoned_staging(out: &Path) {
 }
 
 /// The first failure in input order, or every staged recording synced and
-/// moved in place.
+/// moved in place; under `--force`, then the earlier cuts of the same
+/// inputs removed.
 pub(super) fn settle(
     args: &Request,
     staging: &Path,
     results: Vec<Option<Result<Vec<Staged>, ImportError>>>,
-) -> Result<Vec<PathBuf>, ImportError> {
+) -> Result<Settled, ImportError> {
     let mut staged: Vec<Staged> = Vec::new();
     // Where each recording goes: the index of the staged one going there.
     let mut places = std::collections::HashMap::new();
@@ -70,10 +89,19 @@ pub(super) fn settle(
         }
     }
     if staged.is_empty() {
-        return Ok(Vec::new());
+        return Ok(Settled {
+            written: Vec::new(),
+            removed: Vec::new(),
+        });
     }
     crate::recording::sync_folder(staging).map_err(|e| ImportError::Runtime(e.to_string()))?;
-    place(&staged, args.force)
+    let written = place(&staged, args.force)?;
+    let removed = if args.force {
+        remove_other_cuts(&staged, &args.files)
+    } else {
+        Vec::new()
+    };
+    Ok(Settled { written, removed })
 }
 
 /// Two staged recordings bound for one place: both inputs named, and the
@@ -126,8 +154,16 @@ fn place_one(s: &Staged, force: bool) -> Result<(), ImportError> {
         std::fs::create_dir_all(d).map_err(|e| fail(d, e))?;
     }
     if force {
+        // Checked again at the moment of replacing: only our own go.
+        for p in [&s.path, &s.other] {
+            if std::fs::symlink_metadata(p).is_ok() {
+                s.source
+                    .wrote(p)
+                    .map_err(|why| not_ours(p, &s.input, &why))?;
+            }
+        }
         std::fs::rename(&s.staged, &s.path).map_err(|e| fail(&s.path, e))?;
-        if s.other.exists() {
+        if std::fs::symlink_metadata(&s.other).is_ok() {
             std::fs::remove_file(&s.other).map_err(|e| fail(&s.other, e))?;
         }
         return Ok(());
@@ -143,7 +179,7 @@ fn place_one(s: &Staged, force: bool) -> Result<(), ImportError> {
         Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => return Err(taken(&s.path)),
         Err(e) => return Err(fail(&s.path, e)),
     }
-    if s.other.exists() {
+    if std::fs::symlink_metadata(&s.other).is_ok() {
         // The same recording under its other name (.csv beside .csv.gz).
         let _ = std::fs::remove_file(&s.path);
         return Err(taken(&s.other));
@@ -151,62 +187,74 @@ fn place_one(s: &Staged, force: bool) -> Result<(), ImportError> {
     Ok(())
 }
 
-/// After `--force`: the recordings an earlier import made from inputs of
-/// the same names, cut another way, that this one did not write again:
-/// beside a whole `long.csv` its trials `long-seg001.csv` …, beside trials
-/// the whole `long.csv` or the trials past this cut's count (an earlier,
-/// shorter `--split` left `long-seg016` … `long-seg030` where this one
-/// wrote 15). Removed so the folder holds one cut of each input, never two
-/// mixed (their windows would train and test on one signal). Only
-/// `<stem>.csv`, `<stem>-seg<digits>.csv` (or `.csv.gz`) beside a
-/// recording this run placed are touched, and never one of `inputs` (a
-/// whole `long.csv` being cut is not an earlier cut of itself). Returns
-/// the ones removed.
-pub(super) fn remove_other_cuts(
-    placed: &[PathBuf],
-    split: bool,
-    inputs: &[PathBuf],
-) -> Vec<PathBuf> {
-    use std::collections::{BTreeMap, BTreeSet, HashSet};
-    let ours: HashSet<&PathBuf> = placed.iter().collect();
-    // The input stems of the recordings placed, by folder: each folder is
-    // read once.
-    let mut cuts: BTreeMap<&Path, BTreeSet<&str>> = BTreeMap::new();
-    for p in placed {
-        let name = p.file_name().and_then(|n| n.to_str());
-        let stem = if split {
-            name.and_then(trial_of)
-        } else {
-            name.and_then(whole_of)
-        };
-        if let (Some(dir), Some(stem)) = (p.parent(), stem) {
-            cuts.entry(dir).or_default().insert(stem);
-        }
-    }
+/// `--force` met a file it may not replace: named, with why and what to do.
+pub(super) fn not_ours(p: &Path, input: &Path, why: &str) -> ImportError {
+    bad(format!(
+        "{}: --force replaces only recordings imported from {}, and {why}; nothing was imported: move it away, or import into another --out",
+        p.display(),
+        input.display()
+    ))
+}
+
+/// The recordings an earlier import made from the same input as `cut` (one
+/// input's staged recordings), cut another way, that are not at the names
+/// `cut` goes to: beside a whole `long.csv` its trials `long-seg001.csv` …,
+/// beside trials the whole `long.csv` or the trials past this cut's count.
+/// Only names of the input's stem (`<stem>.csv`, `<stem>-seg<digits>.csv`,
+/// or `.csv.gz`) in the folder it goes to are looked at, and of those only
+/// the recordings [`Source::wrote`] says import wrote from this input: never
+/// a symlink, a file that is no recording, or another input's import.
+pub(super) fn earlier_cuts(cut: &[Staged]) -> Vec<PathBuf> {
+    use std::collections::HashSet;
+    let Some(first) = cut.first() else {
+        return Vec::new();
+    };
+    let (Some(dir), Some(stem)) = (
+        first.path.parent(),
+        first
+            .path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .and_then(|n| trial_of(n).or_else(|| whole_of(n))),
+    ) else {
+        return Vec::new();
+    };
+    let ours: HashSet<&PathBuf> = cut.iter().flat_map(|s| [&s.path, &s.other]).collect();
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Vec::new();
+    };
+    let mut found: Vec<PathBuf> = entries
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| {
+            let name = p.file_name().and_then(|n| n.to_str());
+            !ours.contains(p)
+                && name.is_some_and(|n| trial_of(n) == Some(stem) || whole_of(n) == Some(stem))
+                && first.source.wrote(p).is_ok()
+        })
+        .collect();
+    found.sort();
+    found
+}
+
+/// After `--force` has placed `staged`: each input's earlier cuts
+/// ([`earlier_cuts`]) removed, so the folder holds one cut of each input,
+/// never two mixed (their windows would train and test on one signal).
+/// Never one of `inputs` (a whole `long.csv` being cut is not an earlier
+/// cut of itself). Returns the ones removed, input by input.
+fn remove_other_cuts(staged: &[Staged], inputs: &[PathBuf]) -> Vec<(PathBuf, Vec<PathBuf>)> {
     let mut removed = Vec::new();
-    for (dir, stems) in cuts {
-        let Ok(entries) = std::fs::read_dir(dir) else {
-            continue;
-        };
-        let mut other: Vec<PathBuf> = entries
-            .flatten()
-            .map(|e| e.path())
+    for cut in staged.chunk_by(|a, b| a.input == b.input) {
+        let gone: Vec<PathBuf> = earlier_cuts(cut)
+            .into_iter()
             .filter(|p| {
-                let name = p.file_name().and_then(|n| n.to_str());
-                !ours.contains(p)
-                    && std::fs::metadata(p)
-                        .is_ok_and(|m| m.is_file() && same_file_as(&m, inputs).is_none())
-                    && name.is_some_and(|n| {
-                        trial_of(n).is_some_and(|s| stems.contains(s))
-                            || whole_of(n).is_some_and(|s| stems.contains(s))
-                    })
+                let is_input =
+                    std::fs::metadata(p).is_ok_and(|m| same_file_as(&m, inputs).is_some());
+                !is_input && std::fs::remove_file(p).is_ok()
             })
             .collect();
-        other.sort();
-        for p in other {
-            if std::fs::remove_file(&p).is_ok() {
-                removed.push(p);
-            }
+        if !gone.is_empty() {
+            removed.push((cut[0].input.clone(), gone));
         }
     }
     removed
@@ -242,6 +290,7 @@ mod tests {
             other: out.join(format!("{name}.gz")),
             left_out_s: 0.0,
             staged: s,
+            source: Arc::new(Source::of(Path::new(name), name.as_bytes())),
         }
     }
 
@@ -283,9 +332,14 @@ mod tests {
             e.to_string()
         );
         assert!(!out.join("d.csv").exists());
-        // With --force the batch replaces.
+        // --force replaces only a recording import wrote from the same
+        // input: "theirs" is no recording, and stays.
         let forced = [staged(&staging, &out, "c.csv", "ours")];
-        assert_eq!(place(&forced, true).unwrap(), [out.join("c.csv")]);
-        assert_eq!(std::fs::read_to_string(out.join("c.csv")).unwrap(), "ours");
+        let e = place(&forced, true).unwrap_err();
+        assert!(e.to_string().contains("it is no recording"), "{e}");
+        assert_eq!(
+            std::fs::read_to_string(out.join("c.csv")).unwrap(),
+            "theirs"
+        );
     }
 }

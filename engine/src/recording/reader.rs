@@ -9,7 +9,6 @@
 //! not converted or kept, which is most of the work saved.
 
 use std::collections::HashMap;
-use std::io::{self, Read};
 
 use super::number::{parse_row_fast, parse_value};
 use super::{
@@ -35,31 +34,19 @@ pub(super) fn gunzip_at_most(
     origin: &str,
     limit: u64,
 ) -> Result<Vec<u8>, RecordingError> {
-    let mut text = Vec::with_capacity(bytes.len().saturating_mul(4));
-    flate2::read::MultiGzDecoder::new(bytes)
-        .take(limit.saturating_add(1))
-        .read_to_end(&mut text)
-        .map_err(|e| RecordingError::Compressed {
-            origin: origin.to_string(),
-            reason: if e.kind() == io::ErrorKind::UnexpectedEof {
-                format!(
-                    "truncated gzip stream (it ends after {} bytes of text)",
-                    text.len()
-                )
-            } else {
-                format!("corrupt gzip stream ({e})")
-            },
-        })?;
-    if text.len() as u64 > limit {
-        return Err(RecordingError::Compressed {
-            origin: origin.to_string(),
-            reason: format!(
-                "it unpacks to more than {limit} bytes ({} compressed): too large for a recording (a gzip bomb?)",
-                bytes.len()
+    use crate::io::{InflateError, Packing, inflate_at_most};
+    inflate_at_most(bytes, Packing::Gzip, limit).map_err(|e| RecordingError::Compressed {
+        origin: origin.to_string(),
+        reason: match e {
+            InflateError::Truncated { got } => {
+                format!("truncated gzip stream (it ends after {got} bytes of text)")
+            }
+            InflateError::Corrupt(e) => format!("corrupt gzip stream ({e})"),
+            InflateError::TooLarge { limit, compressed } => format!(
+                "it unpacks to more than {limit} bytes ({compressed} compressed): too large for a recording (a gzip bomb?)"
             ),
-        });
-    }
-    Ok(text)
+        },
+    })
 }
 
 /// Which columns a reader converts and keeps: every one, or `t_s` and

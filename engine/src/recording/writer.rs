@@ -451,14 +451,14 @@ pub fn compress_quickly(path: &Path) -> Result<PathBuf, RecordingError> {
     compress_by(path, 0)
 }
 
-/// An error ([`crate::recording::files::NotRegular`]) when `path` exists and is not a
+/// An error ([`crate::io::NotRegular`]) when `path` exists and is not a
 /// regular file.
 fn refuse_special(path: &Path) -> io::Result<()> {
     match fs::metadata(path) {
         Ok(m) if !m.is_file() => Err(io::Error::new(
             io::ErrorKind::InvalidInput,
-            crate::recording::files::NotRegular {
-                kind: crate::recording::files::kind_of(&m),
+            crate::io::NotRegular {
+                kind: crate::io::kind_of(&m),
             },
         )),
         _ => Ok(()),

@@ -204,9 +204,7 @@ pub fn survey(dir: &Path) -> Result<Survey, Failure> {
 fn look_at(file: &Path) -> Result<Option<Seen>, Failure> {
     let rec = match recording::read(file) {
         Ok(rec) => rec,
-        Err(recording::RecordingError::Io { source, .. })
-            if crate::recording::files::not_regular(&source) =>
-        {
+        Err(recording::RecordingError::Io { source, .. }) if crate::io::not_regular(&source) => {
             warn_skipped(&[dataset::Skipped::Unusable {
                 file: file.display().to_string(),
                 reason: source.to_string(),

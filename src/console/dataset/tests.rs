@@ -239,7 +239,9 @@ fn a_saved_model_with_other_classifier_settings_is_not_used_silently() {
         examples,
     )
     .unwrap();
-    model.save(&d.path().join(MODEL_FILE), &[]).unwrap();
+    model
+        .save(&d.path().join(MODEL_FILE), &[], crate::io::Existing::Keep)
+        .unwrap();
 
     // Under the profile it was trained with, it is taken up.
     let mut app = fixtures::app(120, 40);
