@@ -252,5 +252,52 @@ mod tests {
         );
         remember(&tmp.path().join("missing"), "x").unwrap();
         assert!(!tmp.path().join("missing").exists());
+        // Another profile given: the file is replaced by a rename.
+        remember(tmp.path(), "thesis").unwrap();
+        assert_eq!(profile_of(tmp.path()), Some(PathBuf::from("thesis")));
+    }
+
+    /// A session file that cannot be read is said and kept as it is: a
+    /// symlink to a recording elsewhere is never written through, a FIFO
+    /// never waited on, a corrupt file never replaced.
+    #[test]
+    fn a_session_file_that_cannot_be_read_is_named_and_kept() {
+        let tmp = tempfile::tempdir().unwrap();
+        let elsewhere = tmp.path().join("rec.csv");
+        let rec = format!("{}\n# label = \"S1\"\nt_s,z_m\n", crate::io::FORMAT_LINE);
+        std::fs::write(&elsewhere, &rec).unwrap();
+        let linked = tmp.path().join("linked");
+        std::fs::create_dir(&linked).unwrap();
+        std::os::unix::fs::symlink(&elsewhere, linked.join(SESSION_FILE)).unwrap();
+        let fifo = tmp.path().join("fifo");
+        std::fs::create_dir(&fifo).unwrap();
+        let c = std::ffi::CString::new(fifo.join(SESSION_FILE).to_str().unwrap()).unwrap();
+        // SAFETY: a valid NUL-terminated path.
+        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+        let corrupt = tmp.path().join("corrupt");
+        std::fs::create_dir(&corrupt).unwrap();
+        std::fs::write(corrupt.join(SESSION_FILE), "profile = \"lab\n").unwrap();
+        for (dir, said) in [
+            (&linked, "not TOML"),
+            (&fifo, "FIFO"),
+            (&corrupt, "not TOML (line 1"),
+        ] {
+            let SessionFile::Unreadable(why) = read(dir) else {
+                panic!("{dir:?}: {:?}", read(dir));
+            };
+            assert!(why.contains(said), "{why}");
+            let e = remember(dir, "thesis").unwrap_err();
+            assert!(e.contains("kept as it is"), "{e}");
+        }
+        assert_eq!(std::fs::read_to_string(&elsewhere).unwrap(), rec);
+        assert!(
+            std::fs::symlink_metadata(linked.join(SESSION_FILE))
+                .unwrap()
+                .is_symlink()
+        );
+        assert_eq!(
+            std::fs::read_to_string(corrupt.join(SESSION_FILE)).unwrap(),
+            "profile = \"lab\n"
+        );
     }
 }

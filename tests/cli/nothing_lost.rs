@@ -362,3 +362,59 @@ fn plot_refuses_what_it_cannot_draw_truly() {
         assert!(!out.exists());
     }
 }
+
+/// Standard output to a full disk is a failure (exit 1, said), for every
+/// command that prints; a closed pipe stays quiet.
+#[test]
+fn output_lost_to_a_full_disk_is_a_failure() {
+    if !Path::new("/dev/full").exists() {
+        return;
+    }
+    for args in [
+        vec!["doctor", "--udev-rule"],
+        vec![
+            "features",
+            "-p",
+            "tests/data/small/tiny.toml",
+            "tests/data/small/two-labels",
+        ],
+        vec!["check", "thesis"],
+    ] {
+        let full = fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap();
+        let o = hapticlab().args(&args).stdout(full).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.contains("standard output could not be written"),
+            "{args:?}: {err}"
+        );
+    }
+    // A reader that goes away: quiet, and no failure.
+    let mut c = hapticlab()
+        .args(["doctor", "--udev-rule"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(c.stdout.take());
+    let o = c.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(0), "{o:?}");
+    assert!(o.stderr.is_empty(), "{o:?}");
+}
+
+/// `doctor --dataset` on a symlink that leads nowhere says so (the console
+/// refuses it), never that the folder can be created.
+#[test]
+fn doctor_names_a_dataset_symlink_that_leads_nowhere() {
+    let dir = tempfile::tempdir().unwrap();
+    let link = dir.path().join("ds");
+    std::os::unix::fs::symlink(dir.path().join("nowhere"), &link).unwrap();
+    let r = run(&["doctor", "--dataset", p(&link)]);
+    assert!(
+        r.stdout.contains("symlink that leads nowhere") && !r.stdout.contains("can be created"),
+        "{r:?}"
+    );
+}

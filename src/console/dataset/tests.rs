@@ -335,3 +335,31 @@ fn jobs_run_at_a_lower_priority_than_the_console() {
     assert_eq!(job, (before + super::JOB_NICENESS).min(19));
     assert_eq!(inner, job, "threads a job starts inherit its priority");
 }
+
+/// A kept evaluation that does not hold together (5 labels, a 2x2 matrix)
+/// is ignored with a word, never a panic; a FIFO there is never waited on.
+#[test]
+fn a_kept_report_that_does_not_hold_together_is_ignored_with_a_word() {
+    let d = tempfile::tempdir().unwrap();
+    let json = serde_json::json!({
+        "labels": ["a", "b", "c", "d", "e"],
+        "confusion": [[1, 0], [0, 1]],
+        "accuracy": 1.0,
+        "per_class": [],
+        "method": "holdout",
+    });
+    std::fs::write(d.path().join(REPORT_JSON), json.to_string()).unwrap();
+    let e = load_saved_report(d.path()).unwrap_err();
+    assert!(
+        e.contains("2x2 for 5 labels") && e.contains("ignored"),
+        "{e}"
+    );
+    std::fs::remove_file(d.path().join(REPORT_JSON)).unwrap();
+    let c = std::ffi::CString::new(d.path().join(REPORT_JSON).to_str().unwrap()).unwrap();
+    // SAFETY: a valid NUL-terminated path.
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    let e = load_saved_report(d.path()).unwrap_err();
+    assert!(e.contains("FIFO"), "{e}");
+    std::fs::remove_file(d.path().join(REPORT_JSON)).unwrap();
+    assert!(load_saved_report(d.path()).unwrap().is_none());
+}
