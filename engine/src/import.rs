@@ -161,6 +161,18 @@ impl Report for Quiet {
     fn file_done(&self) {}
 }
 
+/// The largest integer a sample (a 64-bit float) holds exactly: 2^53.
+const EXACT_INTEGER: f64 = 9_007_199_254_740_992.0;
+
+/// An integer sample beyond [`EXACT_INTEGER`]: refused, never rounded.
+fn inexact_integer(at: &str, value: usize, text: &str) -> ImportError {
+    bad(format!(
+        "{at}: value {value} ({text}) is an integer beyond 2^53 = 9007199254740992, which a \
+         recording's samples (64-bit floats) cannot hold exactly: subtract an offset or scale it \
+         before importing"
+    ))
+}
+
 fn bad(m: impl std::fmt::Display) -> ImportError {
     ImportError::BadInput(m.to_string())
 }
@@ -334,20 +346,32 @@ pub fn parse_file(
         "csv" | "txt" | "tsv" | "dat" => {
             let text =
                 String::from_utf8(bytes).map_err(|_| bad(format!("{origin}: not UTF-8 text")))?;
-            if !text::has_lines(&text) {
+            // A byte-order mark is no part of the first value or name.
+            let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+            if !text::has_lines(text) {
                 return Err(bad(format!(
                     "{origin}: holds no header and no samples, only blank or comment lines"
                 )));
             }
-            if text::is_headerless(&text) {
-                text::parse(&text, origin, args)
+            if text::is_headerless(text) {
+                checks::csv_only_flags(args, origin, "a file without a header")?;
+                text::parse(text, origin, args)
             } else {
-                parse_csv(&text, origin, args)
+                parse_csv(text, origin, args)
             }
         }
-        "npy" => npy::parse_npy_file(&bytes, origin, args),
-        "npz" => npy::parse_npz_file(&bytes, origin, args),
-        "mat" => mat::parse_mat_file(&bytes, origin, args),
+        "npy" => {
+            checks::csv_only_flags(args, origin, "a .npy file")?;
+            npy::parse_npy_file(&bytes, origin, args)
+        }
+        "npz" => {
+            checks::csv_only_flags(args, origin, "a .npz file")?;
+            npy::parse_npz_file(&bytes, origin, args)
+        }
+        "mat" => {
+            checks::csv_only_flags(args, origin, "a .mat file")?;
+            mat::parse_mat_file(&bytes, origin, args)
+        }
         _ => Err(bad(format!(
             "{origin}: unknown format (expected .csv, .txt, .dat, .wav, .npy, .npz or .mat)"
         ))),

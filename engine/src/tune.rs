@@ -256,8 +256,21 @@ pub fn check_plan(scans: &[Entry], plan: &Plan) -> Result<(), TuneError> {
             } else {
                 "recordings"
             };
+            // Two folds at least: with fewer than two groups no k-fold can test.
+            let way = if units < 2 {
+                format!(
+                    "k-fold needs two {what} at least, and there is {units}: {}",
+                    if data.groups.is_some() {
+                        "give group_by a key with two values or more, or leave group_by out"
+                    } else {
+                        "record more"
+                    }
+                )
+            } else {
+                format!("set [evaluation] folds to {units} or fewer")
+            };
             return Err(plan_error(format!(
-                "{} need at least as many {what}, and there are {units}: set [evaluation] folds to {units} or fewer",
+                "{} need at least as many {what}, and there are {units}: {way}",
                 plural(plan.folds, "fold", "folds")
             )));
         }

@@ -18,6 +18,7 @@ mod classify;
 mod evaluate;
 mod fuzz_regressions;
 mod import;
+mod import_hostile;
 mod knn_options;
 mod layers;
 mod profiles;

@@ -19,14 +19,7 @@ pub(super) fn flags_a_wav_ignores(args: &Request) -> Result<Option<String>, Impo
     let Some(wav) = args.files.iter().find(|f| is_wav(f)) else {
         return Ok(None);
     };
-    let csv_only = [
-        ("--time-column", args.time_column.is_some()),
-        ("--channels", !args.channels.is_empty()),
-        ("--label-column", args.label_column.is_some()),
-        ("--burst", args.burst != 1),
-        ("--delimiter", args.delimiter.is_some()),
-    ];
-    let csv_only: Vec<&str> = csv_only
+    let csv_only: Vec<&str> = csv_only(args)
         .iter()
         .filter(|(_, on)| *on)
         .map(|(f, _)| *f)
@@ -61,6 +54,42 @@ pub(super) fn flags_a_wav_ignores(args: &Request) -> Result<Option<String>, Impo
     Ok(Some(format!(
         "warning: {said}; {} and any other WAV file keep their own rate and channels",
         wav.display()
+    )))
+}
+
+/// The flags only a CSV file with a header takes (its columns by name,
+/// bursts of one channel, its separator), as (flag, given).
+fn csv_only(args: &Request) -> [(&'static str, bool); 5] {
+    [
+        ("--time-column", args.time_column.is_some()),
+        ("--channels", !args.channels.is_empty()),
+        ("--label-column", args.label_column.is_some()),
+        ("--burst", args.burst != 1),
+        ("--delimiter", args.delimiter.is_some()),
+    ]
+}
+
+/// Refuses the flags only a CSV file with a header takes on `origin`, a
+/// file of another kind (`what`), naming them: never ignored without a word.
+pub(super) fn csv_only_flags(args: &Request, origin: &str, what: &str) -> Result<(), ImportError> {
+    let given: Vec<&str> = csv_only(args)
+        .iter()
+        .filter(|(_, on)| *on)
+        .map(|(f, _)| *f)
+        .collect();
+    if given.is_empty() {
+        return Ok(());
+    }
+    Err(bad(format!(
+        "{origin}: {} {} to CSV files with a header only, and this is {what}: leave {} out \
+         (its channels are {}; name them with --names)",
+        given.join(", "),
+        if given.len() == 1 { "applies" } else { "apply" },
+        if given.len() == 1 { "it" } else { "them" },
+        match what {
+            "a .npz file" | "a .mat file" => "its arrays",
+            _ => "its columns or rows, all of them",
+        }
     )))
 }
 

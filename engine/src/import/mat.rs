@@ -5,8 +5,6 @@
 //! metadata; text, cells, structs and sparse matrices are left out. A v7.3
 //! file (HDF5 inside) is refused with how to save it in a form this reads.
 
-use std::io::Read as _;
-
 use super::npy::{Array, channels_of, signal};
 use super::{ImportError, Imported, Request, bad};
 use crate::recording::Digits;
@@ -114,8 +112,11 @@ fn variable(m: &[u8], big: bool, origin: &str) -> Result<Option<(String, Array)>
         .map(|d| *d as usize)
         .collect();
     let (real, _) = element(m, at, big).ok_or_else(|| err(&format!("{name}: no values")))?;
+    // The dimensions are checked against the values the file holds before
+    // anything is made of them (their product may overflow).
+    let declared = dims.iter().try_fold(1usize, |n, &d| n.checked_mul(d));
     let (values, _) = numbers(&real, big).ok_or_else(|| err(&format!("{name}: values")))?;
-    if values.len() != dims.iter().product::<usize>() {
+    if declared != Some(values.len()) {
         return Err(err(&format!(
             "{name}: {} values for dimensions {dims:?}",
             values.len()
@@ -178,10 +179,40 @@ pub fn parse_mat_file(b: &[u8], origin: &str, args: &Request) -> Result<Imported
             )));
         }
     };
+    // The header's byte order must be the data's: a first element that is
+    // a matrix only when read the other way says the file is damaged.
+    let kind = |big: bool| {
+        b.get(128..132).map(|w| {
+            let w: [u8; 4] = w.try_into().unwrap_or_default();
+            if big {
+                u32::from_be_bytes(w)
+            } else {
+                u32::from_le_bytes(w)
+            }
+        })
+    };
+    if let (Some(ours), Some(other)) = (kind(big), kind(!big))
+        && ![MI_MATRIX, MI_COMPRESSED].contains(&ours)
+        && [MI_MATRIX, MI_COMPRESSED].contains(&other)
+    {
+        return Err(bad(format!(
+            "{origin}: its header says the data is {} but the data reads as {}: a damaged \
+             .mat file (save it again, or as CSV)",
+            if big {
+                "big-endian ('MI')"
+            } else {
+                "little-endian ('IM')"
+            },
+            if big { "little-endian" } else { "big-endian" }
+        )));
+    }
     let mut channels = Vec::new();
     let mut digits = Vec::new();
     let mut meta = Vec::new();
     let mut at = 128;
+    // What all compressed variables together may unpack to: a bomb is
+    // refused having unpacked at most this ([`crate::io::inflate_limit`]).
+    let mut budget = crate::io::inflate_limit(b.len() as u64);
     while at + 8 <= b.len() {
         let (e, next) =
             element(b, at, big).ok_or_else(|| bad(format!("{origin}: cut short at byte {at}")))?;
@@ -190,12 +221,9 @@ pub fn parse_mat_file(b: &[u8], origin: &str, args: &Request) -> Result<Imported
         let matrix = match e.kind {
             MI_MATRIX => e.data,
             MI_COMPRESSED => {
-                let mut v = Vec::new();
-                flate2::read::ZlibDecoder::new(e.data)
-                    .take(1 << 31)
-                    .read_to_end(&mut v)
+                inflated = crate::io::inflate_at_most(e.data, crate::io::Packing::Zlib, budget)
                     .map_err(|x| bad(format!("{origin}: a compressed variable: {x}")))?;
-                inflated = v;
+                budget -= inflated.len() as u64;
                 match element(&inflated, 0, big) {
                     Some((inner, _)) if inner.kind == MI_MATRIX => inner.data,
                     _ => continue,

@@ -8,8 +8,6 @@
 //! it; a scalar (0-d) array becomes metadata; an array named like sample
 //! times (`t`, `time`, `time_s`…) is left out, checked against `--rate`.
 
-use std::io::Read as _;
-
 use super::{ImportError, Imported, Request, bad};
 use crate::profile::fitted::significant;
 use crate::recording::{Digits, time_decimals};
@@ -35,27 +33,20 @@ pub(super) fn parse_npy(b: &[u8], origin: &str) -> Result<Array, ImportError> {
     };
     let header = b
         .get(start..start + len)
-        .and_then(|h| std::str::from_utf8(h).ok())
         .ok_or_else(|| err("the header is cut short".into()))?;
-    let descr =
-        dict_value(header, "descr").ok_or_else(|| err("no 'descr' in the header".into()))?;
-    let descr = descr.trim_matches(['\'', '"']);
-    let fortran = dict_value(header, "fortran_order").is_some_and(|v| v.starts_with("True"));
-    let shape_text =
-        dict_value(header, "shape").ok_or_else(|| err("no 'shape' in the header".into()))?;
-    let shape: Vec<usize> = shape_text
-        .trim_start_matches('(')
-        .split(')')
-        .next()
-        .unwrap_or("")
-        .split(',')
-        .map(str::trim)
-        .filter(|s| !s.is_empty())
-        .map(|s| {
-            s.parse::<usize>()
-                .map_err(|_| err(format!("shape {shape_text}")))
-        })
-        .collect::<Result<_, _>>()?;
+    let header = std::str::from_utf8(header).map_err(|e| {
+        err(format!(
+            "the header is not text (byte {} of it is 0x{:02x})",
+            e.valid_up_to(),
+            header[e.valid_up_to()]
+        ))
+    })?;
+    let Header {
+        descr,
+        fortran,
+        shape,
+    } = Header::parse(header).map_err(|m| err(format!("its header {m}")))?;
+    let descr = descr.as_str();
     let (width, kind) = element(descr).ok_or_else(|| {
         err(format!(
             "dtype {descr:?} (integers, unsigned integers and floats of 1 to 8 bytes only)"
@@ -78,6 +69,26 @@ pub(super) fn parse_npy(b: &[u8], origin: &str) -> Result<Array, ImportError> {
         .chunks_exact(width)
         .map(|c| number(c, kind, big))
         .collect();
+    // 64-bit integers beyond 2^53 would be rounded: refused, never written wrong.
+    if kind != 'f'
+        && width == 8
+        && let Some(i) = values.iter().position(|v| v.abs() > super::EXACT_INTEGER)
+    {
+        let c = &data[i * 8..i * 8 + 8];
+        let mut raw = [0u8; 8];
+        raw.copy_from_slice(c);
+        let raw = if big {
+            u64::from_be_bytes(raw)
+        } else {
+            u64::from_le_bytes(raw)
+        };
+        let text = if kind == 'u' {
+            raw.to_string()
+        } else {
+            (raw as i64).to_string()
+        };
+        return Err(super::inexact_integer(origin, i + 1, &text));
+    }
     if let Some(i) = values.iter().position(|v| !v.is_finite()) {
         return Err(err(format!("element {i} is not a finite number")));
     }
@@ -96,26 +107,146 @@ pub(super) fn parse_npy(b: &[u8], origin: &str) -> Result<Array, ImportError> {
     })
 }
 
-/// The text of `key`'s value in a Python dict literal (up to the next
-/// top-level comma).
-fn dict_value<'a>(header: &'a str, key: &str) -> Option<&'a str> {
-    let at = header
-        .find(&format!("'{key}'"))
-        .or_else(|| header.find(&format!("\"{key}\"")))?;
-    let rest = header[at + key.len() + 2..]
-        .trim_start()
-        .strip_prefix(':')?
-        .trim_start();
-    let mut depth = 0;
-    for (i, c) in rest.char_indices() {
-        match c {
-            '(' | '[' => depth += 1,
-            ')' | ']' => depth -= 1,
-            ',' | '}' if depth == 0 => return Some(rest[..i].trim()),
-            _ => {}
+/// A `.npy` header: exactly the dict literal numpy writes, `{'descr':
+/// '<f8', 'fortran_order': False, 'shape': (3, 2), }`, parsed as Python
+/// would (strings, `True`/`False`, a tuple of integers), with exactly these
+/// three keys: a string that merely holds `'shape': (1,)` is a string.
+struct Header {
+    descr: String,
+    fortran: bool,
+    shape: Vec<usize>,
+}
+
+impl Header {
+    fn parse(text: &str) -> Result<Header, String> {
+        let mut p = Literal {
+            s: text.as_bytes(),
+            at: 0,
+        };
+        p.expect(b'{')?;
+        let (mut descr, mut fortran, mut shape) = (None, None, None);
+        loop {
+            p.space();
+            if p.eat(b'}') {
+                break;
+            }
+            let key = p.string()?;
+            p.space();
+            p.expect(b':')?;
+            p.space();
+            match key.as_str() {
+                "descr" if descr.is_none() => descr = Some(p.string()?),
+                "fortran_order" if fortran.is_none() => fortran = Some(p.boolean()?),
+                "shape" if shape.is_none() => shape = Some(p.tuple()?),
+                "descr" | "fortran_order" | "shape" => return Err(format!("gives {key:?} twice")),
+                _ => return Err(format!("has a key {key:?} numpy does not write")),
+            }
+            p.space();
+            if !p.eat(b',') {
+                p.space();
+                p.expect(b'}')?;
+                break;
+            }
+        }
+        if !p.s[p.at..].iter().all(u8::is_ascii_whitespace) {
+            return Err("goes on after its dict".into());
+        }
+        Ok(Header {
+            descr: descr.ok_or("has no 'descr'")?,
+            fortran: fortran.ok_or("has no 'fortran_order'")?,
+            shape: shape.ok_or("has no 'shape'")?,
+        })
+    }
+}
+
+/// A reader of the few Python literals a `.npy` header holds.
+struct Literal<'a> {
+    s: &'a [u8],
+    at: usize,
+}
+
+impl Literal<'_> {
+    fn space(&mut self) {
+        while self.s.get(self.at).is_some_and(u8::is_ascii_whitespace) {
+            self.at += 1;
         }
     }
-    Some(rest.trim())
+    fn eat(&mut self, c: u8) -> bool {
+        let hit = self.s.get(self.at) == Some(&c);
+        self.at += usize::from(hit);
+        hit
+    }
+    fn expect(&mut self, c: u8) -> Result<(), String> {
+        if self.eat(c) {
+            Ok(())
+        } else {
+            Err(format!(
+                "is no dict literal: {:?} expected at character {}",
+                c as char,
+                self.at + 1
+            ))
+        }
+    }
+    /// A quoted string without escapes (numpy writes none).
+    fn string(&mut self) -> Result<String, String> {
+        let quote = match self.s.get(self.at) {
+            Some(&q @ (b'\'' | b'"')) => q,
+            _ => return Err(format!("has no string at character {}", self.at + 1)),
+        };
+        let from = self.at + 1;
+        let len = self.s[from..]
+            .iter()
+            .position(|&c| c == quote || c == b'\\')
+            .ok_or("has a string that is never closed")?;
+        if self.s[from + len] == b'\\' {
+            return Err("has an escape in a string, which numpy never writes".into());
+        }
+        self.at = from + len + 1;
+        Ok(String::from_utf8_lossy(&self.s[from..from + len]).into_owned())
+    }
+    fn boolean(&mut self) -> Result<bool, String> {
+        for (word, value) in [(&b"True"[..], true), (&b"False"[..], false)] {
+            if self.s[self.at..].starts_with(word) {
+                self.at += word.len();
+                return Ok(value);
+            }
+        }
+        Err("has a 'fortran_order' that is not True or False".into())
+    }
+    /// `()`, `(n,)` or `(n, m, …)` of non-negative integers.
+    fn tuple(&mut self) -> Result<Vec<usize>, String> {
+        self.expect(b'(')?;
+        let mut dims = Vec::new();
+        loop {
+            self.space();
+            if self.eat(b')') {
+                return Ok(dims);
+            }
+            let from = self.at;
+            while self.s.get(self.at).is_some_and(u8::is_ascii_digit) {
+                self.at += 1;
+            }
+            let digits = std::str::from_utf8(&self.s[from..self.at]).unwrap_or("");
+            dims.push(digits.parse::<usize>().map_err(|_| {
+                format!(
+                    "has a 'shape' that is no tuple of sizes (character {})",
+                    from + 1
+                )
+            })?);
+            // Python 2's long integers: `(3L,)`.
+            self.eat(b'L');
+            self.space();
+            if !self.eat(b',') {
+                self.space();
+                self.expect(b')')?;
+                // `(3)` is 3, not a tuple; numpy writes `(3,)`.
+                if dims.len() == 1 {
+                    return Err("has a 'shape' of (n) without a comma, which is no tuple".into());
+                }
+                return Ok(dims);
+            }
+        }
+    }
 }
 
 /// Width in bytes and kind (`i`, `u`, `f`) of a dtype such as `<f8`.
@@ -250,6 +381,7 @@ pub(super) fn signal(
             },
         }));
     };
+    check_stated_rate(&meta, rate, origin, what)?;
     meta.retain(|(k, _)| scalar_key(k));
     leave_out_times(&mut channels, &mut digits, rate, origin, what)?;
     let n = channels.first().map_or(0, |c| c.1.len());
@@ -286,6 +418,36 @@ pub(super) fn signal(
         time_digits: Digits::Decimals(time_decimals(rate)),
         channel_digits: digits,
     })
+}
+
+/// A scalar named like a rate (`fs` = 2000) that `--rate` contradicts by
+/// more than 0.5 % (as a time array is checked), in Hz or in kHz: refused,
+/// never imported at the wrong rate without a word.
+fn check_stated_rate(
+    meta: &[(String, toml::Value)],
+    rate: f64,
+    origin: &str,
+    what: &str,
+) -> Result<(), ImportError> {
+    for (k, v) in meta {
+        let Some(stated) = v.as_float().or_else(|| v.as_integer().map(|i| i as f64)) else {
+            continue;
+        };
+        let named_like_a_rate = RATE_NAMES.iter().any(|r| k.eq_ignore_ascii_case(r));
+        if !(named_like_a_rate && stated.is_finite() && stated > 0.0) {
+            continue;
+        }
+        let near = |hz: f64| (hz - rate).abs() <= 0.005 * rate;
+        if !near(stated) && !near(stated * 1000.0) {
+            let v = super::plain(stated);
+            return Err(bad(format!(
+                "{origin}: {what} states its rate as `{k}` = {v}, but --rate is {}: give --rate \
+                 {v} if `{k}` is in Hz (or rename `{k}` if it is no sample rate)",
+                super::plain(rate)
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// The array named like sample times and the rate its mean spacing gives,
@@ -428,6 +590,8 @@ fn unzip(b: &[u8], origin: &str) -> Result<Vec<(String, Vec<u8>)>, ImportError> 
     let count = u16_at(eocd + 10).ok_or_else(|| err("cut short"))?;
     let mut at = u32_at(eocd + 16).ok_or_else(|| err("cut short"))?;
     let mut out = Vec::new();
+    // What all entries together may unpack to ([`crate::io::inflate_limit`]).
+    let mut budget = crate::io::inflate_limit(b.len() as u64);
     for _ in 0..count {
         if !b.get(at..).is_some_and(|s| s.starts_with(b"PK\x01\x02")) {
             return Err(err("a central directory entry is damaged"));
@@ -450,11 +614,30 @@ fn unzip(b: &[u8], origin: &str) -> Result<Vec<(String, Vec<u8>)>, ImportError> 
         let data = match method {
             0 => raw.to_vec(),
             8 => {
-                let mut v = Vec::with_capacity(full.min(1 << 30));
-                flate2::read::DeflateDecoder::new(raw)
-                    .take(full as u64 + 1)
-                    .read_to_end(&mut v)
-                    .map_err(|e| err(&format!("entry {name:?}: {e}")))?;
+                // The size the entry claims is checked against what the
+                // file may unpack to before anything is allocated, and the
+                // inflation stops past it.
+                if full as u64 > budget {
+                    return Err(bad(format!(
+                        "{origin}: entry {name:?} claims {full} bytes unpacked, more than the {budget} \
+                         an .npz of {} bytes is read as: refused as a decompression bomb",
+                        b.len()
+                    )));
+                }
+                let v = crate::io::inflate_at_most(raw, crate::io::Packing::Deflate, full as u64)
+                    .map_err(|e| match e {
+                    crate::io::InflateError::TooLarge { .. } => err(&format!(
+                        "entry {name:?} unpacks to more than the {full} bytes it claims"
+                    )),
+                    e => err(&format!("entry {name:?}: {e}")),
+                })?;
+                if v.len() != full {
+                    return Err(err(&format!(
+                        "entry {name:?} unpacks to {} bytes, not the {full} it claims",
+                        v.len()
+                    )));
+                }
+                budget -= full as u64;
                 v
             }
             m => return Err(err(&format!("entry {name:?} uses compression method {m}"))),

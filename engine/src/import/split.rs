@@ -120,7 +120,8 @@ fn about(x: f64) -> String {
 fn check_samples(length: f64, dt: f64, origin: &str) -> Result<(), ImportError> {
     // The samples at k·dt before the trial's end less a thousandth of a
     // period (as `split` takes them); 16 periods hold 16 samples.
-    let held = (length / dt - 1e-3).ceil();
+    // Never below none (`--split 1e-300` holds no sample, not "-0").
+    let held = (length / dt - 1e-3).ceil().max(0.0);
     if held >= MIN_TRIAL_SAMPLES as f64 {
         return Ok(());
     }

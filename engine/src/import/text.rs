@@ -6,17 +6,65 @@
 use super::{ImportError, Imported, Request, bad};
 use crate::recording::Digits;
 
+/// The lines of `text`, ended by `\n`, `\r\n` or a lone `\r` (a classic
+/// Mac export), numbered from 1.
+fn lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
+    let mut rest = text;
+    let mut n = 0;
+    std::iter::from_fn(move || {
+        if rest.is_empty() {
+            return None;
+        }
+        n += 1;
+        let end = rest.find(['\n', '\r']).unwrap_or(rest.len());
+        let line = &rest[..end];
+        let skip = match rest.as_bytes().get(end) {
+            Some(b'\r') if rest.as_bytes().get(end + 1) == Some(&b'\n') => 2,
+            Some(_) => 1,
+            None => 0,
+        };
+        rest = &rest[end + skip..];
+        Some((n, line))
+    })
+}
+
 /// The lines of `text` that hold data, numbered from 1.
 fn data_lines(text: &str) -> impl Iterator<Item = (usize, &str)> {
-    text.lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim()))
+    lines(text)
+        .map(|(i, l)| (i, l.trim()))
         .filter(|(_, l)| !l.is_empty() && !l.starts_with('#') && !l.starts_with('%'))
 }
 
-fn fields(line: &str) -> impl Iterator<Item = &str> {
-    line.split(|c: char| c.is_whitespace() || c == ',' || c == ';')
-        .filter(|f| !f.is_empty())
+/// The values of a line: separated by whitespace, or by `,` or `;` (spaces
+/// around them allowed). `None` for a value left empty between two
+/// separators (`1,,-1`): the columns after it would shift.
+fn fields(line: &str) -> Vec<Option<&str>> {
+    let parts: Vec<&str> = line.split([',', ';']).collect();
+    let last = parts.len() - 1;
+    parts
+        .iter()
+        .enumerate()
+        .flat_map(|(i, part)| {
+            let words: Vec<Option<&str>> = part.split_whitespace().map(Some).collect();
+            // One trailing separator ("1,2,") is an exporter's habit, not a value.
+            if words.is_empty() && !(i == last && last > 0) {
+                vec![None]
+            } else {
+                words
+            }
+        })
+        .collect()
+}
+
+/// Whether `line` writes its decimals with a comma: `0,099;-0,099` (a
+/// `;` beside commas), or a value after a comma with a leading zero that no
+/// integer column has (`0,099`).
+fn decimal_comma(line: &str) -> bool {
+    let leading_zero = |f: &str| {
+        let f = f.trim().trim_start_matches(['-', '+']);
+        f.len() > 1 && f.starts_with('0') && f.as_bytes()[1].is_ascii_digit()
+    };
+    line.contains(',') && (line.contains(';') || line.split(',').skip(1).any(leading_zero))
 }
 
 /// Whether `text` holds anything but blank lines and comments.
@@ -27,8 +75,10 @@ pub fn has_lines(text: &str) -> bool {
 /// Whether `text` starts with a line of numbers only (no header).
 pub fn is_headerless(text: &str) -> bool {
     data_lines(text).next().is_some_and(|(_, l)| {
-        let mut f = fields(l).peekable();
-        f.peek().is_some() && f.all(|x| x.parse::<f64>().is_ok())
+        let f = fields(l);
+        !f.is_empty()
+            && f.iter()
+                .all(|x| x.is_some_and(|x| x.parse::<f64>().is_ok()))
     })
 }
 
@@ -42,7 +92,22 @@ pub fn parse(text: &str, origin: &str, args: &Request) -> Result<Imported, Impor
     let mut channels: Vec<Vec<f64>> = Vec::new();
     let mut integers = true;
     for (ln, line) in data_lines(text) {
-        let values: Vec<&str> = fields(line).collect();
+        if decimal_comma(line) {
+            return Err(bad(format!(
+                "{origin}:{ln}: {line:?} looks like numbers written with a decimal comma, which \
+                 would be read as two columns: write decimal points (and separate the values by \
+                 commas, tabs or spaces)"
+            )));
+        }
+        let values = fields(line);
+        if let Some(c) = values.iter().position(Option::is_none) {
+            return Err(bad(format!(
+                "{origin}:{ln}: value {} is empty ({line:?}): every column needs a value on every \
+                 line, or the columns after it would shift",
+                c + 1
+            )));
+        }
+        let values: Vec<&str> = values.into_iter().flatten().collect();
         if channels.is_empty() {
             channels = vec![Vec::new(); values.len()];
         }
@@ -64,7 +129,16 @@ pub fn parse(text: &str, origin: &str, args: &Request) -> Result<Imported, Impor
                         c + 1
                     ))
                 })?;
-            integers &= !v.contains(['.', 'e', 'E']);
+            let integer = !v.contains(['.', 'e', 'E']);
+            // Exactly the integer written? (f64 rounds 2^53 + 1 to 2^53.)
+            let exact = || match v.trim_start_matches('+').parse::<i128>() {
+                Ok(n) => x as i128 == n,
+                Err(_) => x.abs() < super::EXACT_INTEGER,
+            };
+            if integer && x.abs() >= super::EXACT_INTEGER && !exact() {
+                return Err(super::inexact_integer(&format!("{origin}:{ln}"), c + 1, v));
+            }
+            integers &= integer;
             channels[c].push(x);
         }
     }
@@ -106,6 +180,11 @@ mod tests {
         assert_eq!(one.names, ["ch1"]);
         assert_eq!(one.channels, [vec![0.012, -0.03, 0.5]]);
         assert_eq!(one.time[2], 0.0002);
+        // Lines ended by a lone CR (a classic Mac export) are lines.
+        let cr = parse("0.5\r0.25\r-1\r", "cr.txt", &args).unwrap();
+        assert_eq!(cr.channels, [vec![0.5, 0.25, -1.0]]);
+        let crlf = parse("1,2\r\n3, 4,\r\n", "crlf.txt", &args).unwrap();
+        assert_eq!(crlf.channels, [vec![1.0, 3.0], vec![2.0, 4.0]]);
         let two = parse("1  2\n3\t4\n", "b.txt", &args).unwrap();
         assert_eq!(two.channels, [vec![1.0, 3.0], vec![2.0, 4.0]]);
         assert_eq!(two.channel_digits[0], Digits::Decimals(0));
@@ -122,6 +201,18 @@ mod tests {
         };
         assert!(m(parse("1 2\n3\n", "r.txt", &args)).contains("r.txt:2: 1 values"));
         assert!(m(parse("1\nnan\n", "n.txt", &args)).contains("n.txt:2: value 1"));
+        // A value left empty between separators would shift the columns.
+        assert!(m(parse("1,2,3\n1,,-1\n", "e.txt", &args)).contains("e.txt:2: value 2 is empty"));
+        // Decimal commas are not read as two columns.
+        for text in ["0,099\n0,1\n", "0,099;-0,099\n"] {
+            assert!(
+                m(parse(text, "c.txt", &args)).contains("decimal comma"),
+                "{text:?}"
+            );
+        }
+        // An integer a 64-bit float cannot hold exactly.
+        let e = m(parse("1\n9007199254740993\n", "i.txt", &args));
+        assert!(e.contains("i.txt:2") && e.contains("2^53"), "{e}");
         let e = m(parse("1\n2\n", "x.txt", &Request::default()));
         assert!(e.contains("x.txt") && e.contains("--rate"), "{e}");
     }
