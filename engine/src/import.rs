@@ -19,7 +19,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
-use crate::io::{check_output_kind, not_regular, read_input, same_file_as};
+use crate::io::{check_output_kind, not_regular, same_file_as};
 use crate::recording::{Digits, MAX_RATE_HZ, MIN_RATE_HZ, RecordingError, RecordingWriter};
 
 mod checks;
@@ -160,6 +160,10 @@ impl Report for Quiet {
     fn warn(&self, _: &str) {}
     fn file_done(&self) {}
 }
+
+/// The largest input import reads: its samples are held as text and as
+/// numbers at once, and a run stays within 2 GB.
+const MAX_INPUT_BYTES: u64 = 512 << 20;
 
 /// The largest integer a sample (a 64-bit float) holds exactly: 2^53.
 const EXACT_INTEGER: f64 = 9_007_199_254_740_992.0;
@@ -441,10 +445,21 @@ fn stage(
     staging: &Path,
 ) -> Result<Vec<Staged>, ImportError> {
     let origin = f.display().to_string();
-    let bytes = read_input(f).map_err(|e| {
-        let m = format!("{origin}: {e}");
-        // A file named that does not exist, or not a regular file, is the argument's fault.
-        if e.kind() == std::io::ErrorKind::NotFound || not_regular(&e) {
+    let bytes = crate::io::read_input_at_most(f, MAX_INPUT_BYTES).map_err(|e| {
+        let m = if e.get_ref().is_some_and(|i| i.is::<crate::io::TooLarge>()) {
+            format!(
+                "{origin}: {e}: import reads inputs of up to 512 MiB (what it holds is kept in \
+                 memory twice over); cut it into parts first"
+            )
+        } else {
+            format!("{origin}: {e}")
+        };
+        // A file named that does not exist, not a regular file, or too
+        // large, is the argument's fault.
+        if e.kind() == std::io::ErrorKind::NotFound
+            || not_regular(&e)
+            || e.kind() == std::io::ErrorKind::InvalidData
+        {
             ImportError::BadInput(m)
         } else {
             ImportError::Runtime(m)

@@ -174,6 +174,37 @@ pub fn import_csv(data: &[u8]) -> Outcome {
     imported(&Request::from(cli.args), file.to_vec(), "csv")
 }
 
+/// Headerless text (or, when its first line is no numbers, CSV) at
+/// `--rate 1000`, as `import::run` does for a `.txt`.
+pub fn import_text(data: &[u8]) -> Outcome {
+    imported(&at_a_rate("txt"), data.to_vec(), "txt")
+}
+
+/// NumPy: the first byte picks the kind (even: `.npy`, odd: `.npz`), the
+/// rest is the file, imported at `--rate 1000`.
+pub fn import_numpy(data: &[u8]) -> Outcome {
+    let Some((&kind, file)) = data.split_first() else {
+        return Err("empty".into());
+    };
+    let ext = if kind % 2 == 0 { "npy" } else { "npz" };
+    imported(&at_a_rate(ext), file.to_vec(), ext)
+}
+
+/// A MATLAB `.mat` file imported at `--rate 1000`.
+pub fn import_mat(data: &[u8]) -> Outcome {
+    imported(&at_a_rate("mat"), data.to_vec(), "mat")
+}
+
+fn at_a_rate(ext: &str) -> Request {
+    Request {
+        files: vec![format!("fuzz.{ext}").into()],
+        out: "out".into(),
+        rate: Some(1000.0),
+        label: Some("fuzz".into()),
+        ..Request::default()
+    }
+}
+
 /// A WAV import of the file's bytes, as `import::run` does for a `.wav`.
 pub fn import_wav(data: &[u8]) -> Outcome {
     let args = Request {

@@ -76,3 +76,18 @@ fn import_csv() {
 fn import_wav() {
     run("import_wav", entries::import_wav);
 }
+
+#[test]
+fn import_text() {
+    run("import_text", entries::import_text);
+}
+
+#[test]
+fn import_numpy() {
+    run("import_numpy", entries::import_numpy);
+}
+
+#[test]
+fn import_mat() {
+    run("import_mat", entries::import_mat);
+}

@@ -16,17 +16,12 @@ use super::{
     check_label, is_bare_key, quote,
 };
 
-/// A gzipped recording may hold at most this much text, or this many times
-/// its compressed size if that is more: a real recording (CSV of decimals)
-/// compresses three to five times, a gzip bomb a thousand.
-const GZIP_MIN_LIMIT: u64 = 1 << 30;
-const GZIP_MAX_RATIO: u64 = 100;
-
+/// A gzipped recording unpacks to at most [`crate::io::inflate_limit`] of
+/// its size: a hundred times it (a real recording, CSV of decimals,
+/// compresses three to five times, a gzip bomb a thousand), at least 64 MiB
+/// and at most 1 GiB.
 pub(super) fn gunzip(bytes: &[u8], origin: &str) -> Result<Vec<u8>, RecordingError> {
-    let limit = (bytes.len() as u64)
-        .saturating_mul(GZIP_MAX_RATIO)
-        .max(GZIP_MIN_LIMIT);
-    gunzip_at_most(bytes, origin, limit)
+    gunzip_at_most(bytes, origin, crate::io::inflate_limit(bytes.len() as u64))
 }
 
 pub(super) fn gunzip_at_most(
