@@ -430,6 +430,14 @@ fn save_report(lp: &LoadedProfile, dir: &Path, ev: &Evaluation) -> Result<(), St
         );
     }
     let json = serde_json::to_string_pretty(&json).map_err(|e| e.to_string())?;
+    // The console replaces only an evaluation it kept: a file of that name
+    // that is none (a user's own, a FIFO) is left as it is.
+    if let Err(why) = load_saved_report(dir) {
+        return Err(format!(
+            "{why}; it is no evaluation the console kept, so neither it nor {REPORT_FILE} was \
+             replaced (the evaluation is shown, not kept)"
+        ));
+    }
     crate::support::write_atomically(
         &dir.join(REPORT_FILE),
         &[],
