@@ -11,7 +11,7 @@ use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use hapticlab::classify::{Model, TrainingExample};
-use hapticlab::evaluate::cv::{cross_validate, make_folds};
+use hapticlab::evaluate::cv::{Dealt, cross_validate, make_folds};
 use hapticlab::evaluate::plan::Recordings;
 use hapticlab::profile::{Analysis, Classifier, SplitMethod};
 use hapticlab::recording::RecordingWriter;
@@ -71,7 +71,8 @@ fn evaluate_10_fold(c: &mut Criterion) {
                 .unwrap();
                 let examples = data.examples(&analysis).unwrap();
                 let labels: Vec<&str> = examples.iter().map(|e| e.label.as_str()).collect();
-                let folds = make_folds(&labels, None, SplitMethod::KFold, 10, 1).unwrap();
+                let folds =
+                    Dealt::plain(make_folds(&labels, None, SplitMethod::KFold, 10, 1).unwrap());
                 let r = cross_validate(
                     &examples,
                     &folds,

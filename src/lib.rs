@@ -11,8 +11,8 @@
 //! `hapticlab::dataset` and `crate::dataset` name the same thing.
 
 pub use hapticlab_engine::{
-    acquire, analysis, classify, clock, dataset, device, evaluate, import, io, predictor, profile,
-    recorder, recording, servo, triggers, tune,
+    acquire, analysis, classify, clock, dataset, device, evaluate, folds, import, io, predictor,
+    profile, recorder, recording, servo, triggers, tune,
 };
 
 pub mod cli;

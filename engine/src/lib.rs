@@ -33,6 +33,7 @@ pub mod clock;
 pub mod dataset;
 pub mod device;
 pub mod evaluate;
+pub mod folds;
 pub mod import;
 pub mod io;
 pub mod predictor;

@@ -44,7 +44,7 @@ fn loo_accuracy(examples: &[TrainingExample], k: usize) -> (f64, Option<String>)
     let folds = make_folds(&labels, None, SplitMethod::LeaveOneOut, 0, 0).unwrap();
     let r = cross_validate(
         examples,
-        &folds,
+        &hapticlab::evaluate::cv::Dealt::plain(folds.clone()),
         "t",
         &analysis(2),
         &knn(k),

@@ -33,4 +33,5 @@ mod sweep_grid;
 mod sweep_simulated;
 mod tune;
 mod validation;
+mod white_noise;
 mod windows;

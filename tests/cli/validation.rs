@@ -70,10 +70,30 @@ fn grouping_removes_the_optimism_of_leaky_folds() {
     };
     let a = analysis(1);
     let leaky = make_folds(&labels, None, SplitMethod::KFold, 5, 1).unwrap();
-    let r = cross_validate(&examples, &leaky, "t", &a, &knn, "k-fold", 1, 2).unwrap();
+    let r = cross_validate(
+        &examples,
+        &hapticlab::evaluate::cv::Dealt::plain(leaky.clone()),
+        "t",
+        &a,
+        &knn,
+        "k-fold",
+        1,
+        2,
+    )
+    .unwrap();
     assert_eq!(r.accuracy, 1.0, "a session's twin is always in training");
     let honest = make_folds(&labels, Some(&groups), SplitMethod::KFold, 4, 1).unwrap();
-    let r = cross_validate(&examples, &honest, "t", &a, &knn, "grouped", 1, 2).unwrap();
+    let r = cross_validate(
+        &examples,
+        &hapticlab::evaluate::cv::Dealt::plain(honest.clone()),
+        "t",
+        &a,
+        &knn,
+        "grouped",
+        1,
+        2,
+    )
+    .unwrap();
     assert!(r.accuracy < 0.7, "grouped accuracy {}", r.accuracy);
 }
 
@@ -114,7 +134,7 @@ fn a_seeded_evaluation_gives_the_same_numbers_twice() {
         let f = make_folds(&labels, None, SplitMethod::KFold, 6, seed).unwrap();
         cross_validate(
             &examples,
-            &f,
+            &hapticlab::evaluate::cv::Dealt::plain(f.clone()),
             "t",
             &analysis(2),
             &knn,
@@ -411,7 +431,9 @@ fn a_holdout_through_plan_validate_takes_the_same_split_as_plain_evaluate() {
         "{}",
         plan.describe()
     );
-    let report = hapticlab::evaluate::plan::validate(p, examples.clone(), None, &plan).unwrap();
+    let report =
+        hapticlab::evaluate::plan::validate(p, examples.clone(), Default::default(), &plan)
+            .unwrap();
     let got: BTreeSet<String> = report.test.iter().cloned().collect();
     assert_eq!(got, want);
 
@@ -421,7 +443,9 @@ fn a_holdout_through_plan_validate_takes_the_same_split_as_plain_evaluate() {
         ..Default::default()
     };
     let plan = hapticlab::evaluate::plan::Plan::new(p, &args);
-    let report = hapticlab::evaluate::plan::validate(p, examples.clone(), None, &plan).unwrap();
+    let report =
+        hapticlab::evaluate::plan::validate(p, examples.clone(), Default::default(), &plan)
+            .unwrap();
     let mut eval = p.evaluation.clone();
     eval.shuffle_seed = Some(7);
     let shuffled = hapticlab::evaluate::split(examples, &eval).unwrap();

@@ -22,10 +22,96 @@ use serde::Serialize;
 
 use super::{EvaluateError, Report, class_rates, class_seed, evaluate};
 use crate::classify::{KFallback, Model, TrainingExample, plural};
+use crate::folds::Shared;
 use crate::profile::{Analysis, Classifier, SplitMethod};
 
 /// The test indices of each fold.
 pub type Folds = Vec<Vec<usize>>;
+
+/// Folds as a cross-validation runs them: each fold's test items, and the
+/// items left out of its training because they share samples with one it
+/// tests (overlapping segments of one recording: [`Shared`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Dealt {
+    pub folds: Folds,
+    pub purged: Vec<Vec<usize>>,
+    /// Whether segments of one recording were dealt as blocks in time.
+    pub in_time: bool,
+}
+
+impl Dealt {
+    /// `folds` with nothing left out of any training part.
+    pub fn plain(folds: Folds) -> Dealt {
+        let purged = vec![Vec::new(); folds.len()];
+        Dealt {
+            folds,
+            purged,
+            in_time: false,
+        }
+    }
+}
+
+/// The folds of [`make_folds`] for items some of which are segments of one
+/// recording (`shared`): without groups, k-fold deals each recording's
+/// segments into the folds as consecutive blocks in time; under every
+/// method the segments overlapping a tested one are left out of that
+/// fold's training; a fold that then has nothing of a tested label to
+/// train on is refused in one line.
+pub fn deal(
+    labels: &[&str],
+    groups: Option<&[String]>,
+    shared: &Shared,
+    method: SplitMethod,
+    folds: usize,
+    seed: u64,
+) -> Result<Dealt, EvaluateError> {
+    let in_time = groups.is_none() && method == SplitMethod::KFold && shared.has_segments();
+    let f = if in_time {
+        let n = labels.len();
+        if folds < 2 || folds > n {
+            return make_folds(labels, None, method, folds, seed).map(Dealt::plain);
+        }
+        every_label_testable(labels, None)?;
+        let all: Vec<usize> = (0..n).collect();
+        shared.time_blocks(&all, folds, |loose| {
+            let l: Vec<&str> = loose.iter().map(|&i| labels[i]).collect();
+            match make_folds(&l, None, SplitMethod::KFold, folds.min(loose.len()), seed) {
+                Ok(f) => f
+                    .into_iter()
+                    .map(|f| f.into_iter().map(|j| loose[j]).collect())
+                    .collect(),
+                Err(_) => loose.iter().map(|&i| vec![i]).collect(),
+            }
+        })
+    } else {
+        make_folds(labels, groups, method, folds, seed)?
+    };
+    let purged = shared.purge(&f);
+    for (k, (test, gone)) in f.iter().zip(&purged).enumerate() {
+        let mut out = vec![false; labels.len()];
+        for &i in test.iter().chain(gone) {
+            out[i] = true;
+        }
+        let trained: std::collections::BTreeSet<&str> = (0..labels.len())
+            .filter(|&i| !out[i])
+            .map(|i| labels[i])
+            .collect();
+        if let Some(&t) = test.iter().find(|&&t| !trained.contains(labels[t])) {
+            return Err(EvaluateError::Folds(format!(
+                "fold {} of {}: every {:?} recording it could train on overlaps one it tests                  (trials cut from one recording share samples), so nothing of {:?} is left to                  learn from: import with a --split-hop of --split or more, use fewer folds, or                  record more",
+                k + 1,
+                f.len(),
+                labels[t],
+                labels[t]
+            )));
+        }
+    }
+    Ok(Dealt {
+        folds: f,
+        purged,
+        in_time,
+    })
+}
 
 /// Folds for k-fold (`folds` of them) or leave-one-out, over examples with
 /// these labels and (optionally) groups. Deterministic for a seed.
@@ -245,6 +331,14 @@ pub struct FoldResult {
     /// Why this fold's training part did not use the profile's k.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub k_fallback: Option<KFallback>,
+    /// Recordings left out of this fold's training: they overlap one it
+    /// tests (segments of one recording).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub left_out: usize,
+}
+
+fn is_zero(n: &usize) -> bool {
+    *n == 0
 }
 
 /// One line saying in how many folds the profile's k gave way to a k
@@ -311,6 +405,10 @@ pub struct CvReport {
     pub macro_f1: f64,
     /// Per class, in `labels` order (NaN, `null` in JSON, for no test example).
     pub f1: Vec<f64>,
+    /// Whether segments of one recording were dealt into the folds as
+    /// blocks in time ([`deal`]).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub in_time: bool,
 }
 
 /// Per-class F1 from a confusion matrix (rows true, columns classified as).
@@ -350,7 +448,7 @@ pub fn mean_std(x: &[f64]) -> (f64, f64) {
 #[allow(clippy::too_many_arguments)]
 pub fn cross_validate(
     examples: &[TrainingExample],
-    folds: &Folds,
+    folds: &Dealt,
     profile_name: &str,
     analysis: &Analysis,
     classifier: &Classifier,
@@ -368,7 +466,7 @@ pub fn cross_validate(
     )?;
     let labels: Vec<String> = examples.iter().map(|e| e.label.clone()).collect();
     let train = examples.iter().map(|e| e.file.clone()).collect();
-    Ok(pool(labels, train, runs, method, seed))
+    Ok(pool(labels, train, runs, folds, method, seed))
 }
 
 /// One fold's outcome: its report, the k it used, and why k was lowered.
@@ -382,15 +480,17 @@ pub(super) type FoldRun<R> = (R, usize, Option<KFallback>);
 /// first fold's error (in fold order) is the one returned.
 pub(super) fn fold_runs<T: Clone + Sync, R: Send>(
     items: &[T],
-    folds: &Folds,
+    folds: &Dealt,
     (profile_name, analysis, classifier): (&str, &Analysis, &Classifier),
     threads: usize,
     examples: impl Fn(Vec<&T>) -> Vec<TrainingExample> + Sync,
     test: impl Fn(&Model, &[T]) -> Result<R, EvaluateError> + Sync,
 ) -> Result<Vec<FoldRun<R>>, EvaluateError> {
-    let run = |test_idx: &Vec<usize>| -> Result<FoldRun<R>, EvaluateError> {
+    let run = |f: usize| -> Result<FoldRun<R>, EvaluateError> {
+        let test_idx = &folds.folds[f];
+        // Tested, or left out beside a tested one: not trained on.
         let mut is_test = vec![false; items.len()];
-        for &i in test_idx {
+        for &i in test_idx.iter().chain(&folds.purged[f]) {
             is_test[i] = true;
         }
         let train = examples(
@@ -405,20 +505,18 @@ pub(super) fn fold_runs<T: Clone + Sync, R: Send>(
         let model = Model::train_adapting_k(profile_name, analysis, classifier, train)?;
         Ok((test(&model, &tested)?, model.classifier.k, model.k_fallback))
     };
-    run_folds(folds, threads, run).into_iter().collect()
+    run_folds(folds.folds.len(), threads, run)
+        .into_iter()
+        .collect()
 }
 
 /// `run` on every fold, on up to `threads` threads; the results in fold
 /// order, whatever the number of threads.
-fn run_folds<R: Send>(
-    folds: &Folds,
-    threads: usize,
-    run: impl Fn(&Vec<usize>) -> R + Sync,
-) -> Vec<R> {
-    let threads = threads.clamp(1, folds.len().max(1));
-    let mut results: Vec<Option<R>> = (0..folds.len()).map(|_| None).collect();
+fn run_folds<R: Send>(folds: usize, threads: usize, run: impl Fn(usize) -> R + Sync) -> Vec<R> {
+    let threads = threads.clamp(1, folds.max(1));
+    let mut results: Vec<Option<R>> = (0..folds).map(|_| None).collect();
     std::thread::scope(|s| {
-        let chunks = results.chunks_mut(folds.len().div_ceil(threads).max(1));
+        let chunks = results.chunks_mut(folds.div_ceil(threads).max(1));
         let mut start = 0;
         for chunk in chunks {
             let first = start;
@@ -426,7 +524,7 @@ fn run_folds<R: Send>(
             let run = &run;
             s.spawn(move || {
                 for (j, slot) in chunk.iter_mut().enumerate() {
-                    *slot = Some(run(&folds[first + j]));
+                    *slot = Some(run(first + j));
                 }
             });
         }
@@ -444,6 +542,7 @@ pub(super) fn pool(
     mut labels: Vec<String>,
     train: Vec<String>,
     runs: Vec<FoldRun<Report>>,
+    dealt: &Dealt,
     method: &str,
     seed: u64,
 ) -> CvReport {
@@ -453,7 +552,7 @@ pub(super) fn pool(
     let mut predictions = Vec::new();
     let mut test = Vec::new();
     let mut fold_results = Vec::new();
-    for (report, k, k_fallback) in runs {
+    for ((report, k, k_fallback), purged) in runs.into_iter().zip(&dealt.purged) {
         for (i, li) in report.labels.iter().enumerate() {
             for (j, lj) in report.labels.iter().enumerate() {
                 let (Ok(a), Ok(b)) = (labels.binary_search(li), labels.binary_search(lj)) else {
@@ -467,6 +566,7 @@ pub(super) fn pool(
             accuracy: report.accuracy,
             k,
             k_fallback,
+            left_out: purged.len(),
         });
         test.extend(report.test);
         predictions.extend(report.predictions);
@@ -496,6 +596,7 @@ pub(super) fn pool(
         accuracy_std,
         macro_f1,
         f1,
+        in_time: dealt.in_time,
     }
 }
 
@@ -525,6 +626,32 @@ impl CvReport {
             100.0 * self.accuracy_std,
             self.macro_f1
         ));
+        if let Some(note) = self.segments_note() {
+            out.push_str(&format!("{note}\n"));
+        }
         out
+    }
+
+    /// How segments of one recording were kept apart, when they were: one
+    /// line, or `None`.
+    pub fn segments_note(&self) -> Option<String> {
+        let left: usize = self.folds.iter().map(|f| f.left_out).sum();
+        let blocks = if self.in_time {
+            "each recording's segments were dealt into the folds as blocks in time"
+        } else {
+            ""
+        };
+        match (self.in_time, left) {
+            (false, 0) => None,
+            (_, 0) => Some(format!("segments of one recording: {blocks}")),
+            (_, n) => Some(format!(
+                "segments of one recording: {}{}left out of training {} beside a tested one \
+                 (they share its samples), {:.1} per fold",
+                blocks,
+                if self.in_time { "; " } else { "" },
+                plural(n, "overlapping segment", "overlapping segments"),
+                n as f64 / self.folds.len().max(1) as f64
+            )),
+        }
     }
 }

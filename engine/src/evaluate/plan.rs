@@ -20,6 +20,7 @@ use crate::analysis::FeatureExtractor;
 use crate::classify::{KFallback, Model, TrainingExample};
 use crate::dataset::Unusable;
 use crate::dataset::{self, Entry, Keep, Options, Skipped};
+use crate::folds::{Segment, Shared};
 use crate::profile::{Analysis, Profile, SplitMethod};
 
 fn bad(m: impl std::fmt::Display) -> EvaluateError {
@@ -142,6 +143,15 @@ impl Recordings {
         (recordings, self.scans.len())
     }
 
+    /// The segment each recording is of a longer one (`import --split`),
+    /// by file: what every split asks to keep overlapping segments apart.
+    pub fn segments(&self) -> Segments {
+        self.scans
+            .iter()
+            .filter_map(|s| Segment::of(|k| s.meta_text(k)).map(|g| (s.file.clone(), g)))
+            .collect()
+    }
+
     /// Each scan's value of a metadata key; a scan without it is an error.
     pub fn groups(&self, key: &str) -> Result<Vec<String>, EvaluateError> {
         self.scans
@@ -155,6 +165,37 @@ impl Recordings {
                 })
             })
             .collect()
+    }
+}
+
+/// Recordings that are segments of a longer one, by file.
+pub type Segments = std::collections::HashMap<String, Segment>;
+
+/// How the examples a validation deals are related beside their labels:
+/// the group each belongs to (`group_by`: one value per example or per
+/// recording), and which are segments of one recording ([`Segments`], by
+/// file): a split keeps a group on one side and leaves the segments that
+/// overlap a tested one out of its training.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Related<'a> {
+    pub groups: Option<&'a [String]>,
+    pub segments: Option<&'a Segments>,
+}
+
+impl<'a> Related<'a> {
+    pub fn new(groups: Option<&'a [String]>, segments: &'a Segments) -> Related<'a> {
+        Related {
+            groups,
+            segments: Some(segments),
+        }
+    }
+
+    /// The segments of the items named by `files`, in their order.
+    pub fn shared<'f>(&self, files: impl Iterator<Item = &'f str>) -> Shared {
+        match self.segments {
+            Some(s) if !s.is_empty() => Shared::new(files.map(|f| s.get(f).cloned()).collect()),
+            _ => Shared::none(files.count()),
+        }
     }
 }
 
@@ -299,10 +340,10 @@ pub struct Validated {
 pub fn validate(
     profile: &Profile,
     examples: Vec<TrainingExample>,
-    groups: Option<&[String]>,
+    related: Related,
     plan: &Plan,
 ) -> Result<CvReport, EvaluateError> {
-    validate_with_votes(profile, examples, groups, plan).map(|v| v.report)
+    validate_with_votes(profile, examples, related, plan).map(|v| v.report)
 }
 
 /// At most this many feature-value comparisons (vectors² × features, what
@@ -327,7 +368,7 @@ pub fn check_comparisons(vectors: usize, features: usize) -> Result<(), Evaluate
 pub fn validate_with_votes(
     profile: &Profile,
     examples: Vec<TrainingExample>,
-    groups: Option<&[String]>,
+    related: Related,
     plan: &Plan,
 ) -> Result<Validated, EvaluateError> {
     super::check_two_labels(&examples)?;
@@ -336,9 +377,9 @@ pub fn validate_with_votes(
         return holdout(profile, examples, plan).map(|h| h.pooled(plan.seed));
     }
     if profile.analysis.windows.is_some() {
-        return validate_windows(profile, examples, groups, plan);
+        return validate_windows(profile, examples, related, plan);
     }
-    validate_plain(profile, examples, groups, plan).map(|report| Validated {
+    validate_plain(profile, examples, related, plan).map(|report| Validated {
         report,
         windows: None,
     })
@@ -383,6 +424,7 @@ impl Holdout {
                 self.split_labels,
                 self.split_files,
                 vec![run],
+                &cv::Dealt::plain(vec![Vec::new()]),
                 "holdout",
                 seed,
             ),
@@ -438,11 +480,12 @@ pub fn holdout(
 fn validate_windows(
     profile: &Profile,
     examples: Vec<TrainingExample>,
-    groups: Option<&[String]>,
+    related: Related,
     plan: &Plan,
 ) -> Result<Validated, EvaluateError> {
-    let recs = win::recordings_of(examples, groups)?;
-    let folds = win::recording_folds(&recs, plan.method, plan.folds, plan.seed)?;
+    let recs = win::recordings_of(examples, related.groups)?;
+    let shared = related.shared(recs.iter().map(|r| r.file.as_str()));
+    let folds = win::recording_folds(&recs, &shared, plan.method, plan.folds, plan.seed)?;
     let r = win::cross_validate_recordings(
         &recs,
         &folds,
@@ -462,11 +505,19 @@ fn validate_windows(
 fn validate_plain(
     profile: &Profile,
     examples: Vec<TrainingExample>,
-    groups: Option<&[String]>,
+    related: Related,
     plan: &Plan,
 ) -> Result<CvReport, EvaluateError> {
     let labels: Vec<&str> = examples.iter().map(|e| e.label.as_str()).collect();
-    let folds = cv::make_folds(&labels, groups, plan.method, plan.folds, plan.seed)?;
+    let shared = related.shared(examples.iter().map(|e| e.file.as_str()));
+    let folds = cv::deal(
+        &labels,
+        related.groups,
+        &shared,
+        plan.method,
+        plan.folds,
+        plan.seed,
+    )?;
     cv::cross_validate(
         &examples,
         &folds,

@@ -15,7 +15,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use serde::Serialize;
 
 use super::EvaluateError;
-use super::plan::{Holdout, Overrides, Plan, Recordings, Validated, holdout, validate_with_votes};
+use super::plan::{
+    Holdout, Overrides, Plan, Recordings, Related, Validated, holdout, validate_with_votes,
+};
 use super::sweep::{
     MakeScratch, Scratch, SimPlan, Sweep, Swept, combinations, resolve_all, simulated_dataset,
     sweep_grid, sweep_grid_simulated,
@@ -295,7 +297,9 @@ pub fn run(
         Some(g) => Some(data.groups(g)?),
         None => None,
     };
-    let validated = validate_with_votes(&lp.profile, examples, groups.as_deref(), &plan)
+    let segments = data.segments();
+    let related = Related::new(groups.as_deref(), &segments);
+    let validated = validate_with_votes(&lp.profile, examples, related, &plan)
         .map_err(|e| not_enough(e, req))?;
     Ok(Evaluation {
         outcome: Outcome::Validated(validated),
@@ -349,7 +353,9 @@ fn thesis_holdout(
         None
     };
     let outcome = if fell_back.is_some() {
-        Outcome::Validated(validate_with_votes(&lp.profile, examples, None, &plan)?)
+        let segments = data.segments();
+        let related = Related::new(None, &segments);
+        Outcome::Validated(validate_with_votes(&lp.profile, examples, related, &plan)?)
     } else {
         Outcome::Holdout(holdout(&lp.profile, examples, &plan).map_err(|e| not_enough(e, req))?)
     };

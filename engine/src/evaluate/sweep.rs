@@ -40,7 +40,7 @@ use serde::Serialize;
 
 use super::EvaluateError;
 use super::cv::CvReport;
-use super::plan::{Plan, Recordings, validate};
+use super::plan::{Plan, Recordings, Related, validate};
 use crate::classify::TrainingExample;
 use crate::dataset::{self, Keep, Options, Skipped, Unusable, meta_text};
 use crate::profile::{Analysis, LoadedProfile, Profile};
@@ -447,7 +447,13 @@ fn validate_point(
         None => None,
     };
     let examples = examples_for(&p.analysis, data, cache)?;
-    validate(p, examples, groups.as_deref(), &plan)
+    let segments = data.segments();
+    validate(
+        p,
+        examples,
+        Related::new(groups.as_deref(), &segments),
+        &plan,
+    )
 }
 
 /// Evaluate one key over its values (a one-key [`sweep_grid`]).

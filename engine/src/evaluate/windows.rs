@@ -12,10 +12,11 @@
 
 use serde::Serialize;
 
-use super::cv::{CvReport, Folds, fold_runs, make_folds, pool};
+use super::cv::{CvReport, Dealt, Folds, deal, fold_runs, pool};
 use super::{EvaluateError, PredictionRow, Report, count};
 use crate::classify::{Model, RecordingPrediction, TrainingExample};
 use crate::dataset::Entry;
+use crate::folds::Shared;
 use crate::profile::{Analysis, Classifier, Evaluation, SplitMethod};
 
 /// One recording with the feature vectors of its sub-windows.
@@ -146,16 +147,18 @@ pub fn split_recordings(
 /// [`make_folds`] with one entry per recording.
 pub fn recording_folds(
     recs: &[WindowedRecording],
+    shared: &Shared,
     method: SplitMethod,
     folds: usize,
     seed: u64,
-) -> Result<Folds, EvaluateError> {
+) -> Result<Dealt, EvaluateError> {
     let labels: Vec<&str> = recs.iter().map(|r| r.label.as_str()).collect();
     let groups: Option<Vec<String>> = recs.iter().map(|r| r.group.clone()).collect();
     let grouped = recs.first().is_some_and(|r| r.group.is_some());
-    make_folds(
+    deal(
         &labels,
         if grouped { groups.as_deref() } else { None },
+        shared,
         method,
         folds,
         seed,
@@ -254,7 +257,7 @@ pub struct WindowCvReport {
 #[allow(clippy::too_many_arguments)]
 pub fn cross_validate_recordings(
     recs: &[WindowedRecording],
-    folds: &Folds,
+    folds: &Dealt,
     profile_name: &str,
     analysis: &Analysis,
     classifier: &Classifier,
@@ -281,7 +284,7 @@ pub fn cross_validate_recordings(
     let labels: Vec<String> = recs.iter().map(|r| r.label.clone()).collect();
     let train = recs.iter().map(|r| r.file.clone()).collect();
     Ok(WindowCvReport {
-        report: pool(labels, train, runs, method, seed),
+        report: pool(labels, train, runs, folds, method, seed),
         windows,
     })
 }
@@ -399,10 +402,11 @@ mod tests {
                 return Ok(());
             }
             let m = if method == 1 { SplitMethod::KFold } else { SplitMethod::LeaveOneOut };
-            let Ok(rf) = recording_folds(&recs, m, folds, seed) else {
+            let Ok(rf) = recording_folds(&recs, &Shared::none(recs.len()), m, folds, seed) else {
                 // Too few recordings or groups for these folds: refused, not leaked.
                 return Ok(());
             };
+            let rf = rf.folds;
             let wf = window_folds(&rf, &recs);
             let mut tested = vec![0usize; examples.len()];
             for (fold, rfold) in wf.iter().zip(&rf) {
@@ -483,16 +487,22 @@ mod thesis_tests {
                 ..Overrides::default()
             },
         );
+        let related = |g| crate::evaluate::plan::Related {
+            groups: Some(g),
+            segments: None,
+        };
         let per_rec = samples.groups("seed").unwrap();
         let per_window = features.groups("seed").unwrap();
         let one =
-            validate_with_votes(&profile, from_samples.clone(), Some(&per_rec), &plan).unwrap();
-        let two =
-            validate_with_votes(&profile, from_samples.clone(), Some(&per_window), &plan).unwrap();
+            validate_with_votes(&profile, from_samples.clone(), related(&per_rec), &plan).unwrap();
+        let two = validate_with_votes(&profile, from_samples.clone(), related(&per_window), &plan)
+            .unwrap();
         assert_eq!(one, two);
         assert_eq!(one.report.report.tested(), recs.len());
         assert_eq!(one.windows.as_ref().map(Vec::len), Some(recs.len()));
-        assert!(validate_with_votes(&profile, from_samples, Some(&per_rec[1..]), &plan).is_err());
+        assert!(
+            validate_with_votes(&profile, from_samples, related(&per_rec[1..]), &plan).is_err()
+        );
     }
 
     #[test]
@@ -527,7 +537,8 @@ mod thesis_tests {
         let got: Vec<&str> = test.iter().map(|r| r.file.as_str()).collect();
         assert_eq!(got, want);
 
-        let folds = recording_folds(&recs, SplitMethod::KFold, 5, 7).unwrap();
+        let folds =
+            recording_folds(&recs, &Shared::none(recs.len()), SplitMethod::KFold, 5, 7).unwrap();
         let one = cross_validate_recordings(
             &recs,
             &folds,

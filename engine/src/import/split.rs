@@ -24,43 +24,8 @@ const MIN_HOP_PART: f64 = 0.1;
 pub const MARK: &str = "-seg";
 
 /// The metadata keys each trial gets: its number, start and length.
-pub const KEYS: [&str; 3] = ["segment", "segment_start_s", "segment_length_s"];
-
-/// Where a trial lies in the long recording it was cut from, as its
-/// metadata says ([`KEYS`] and `source`): read by `profile new` (the time
-/// split's gap) and `tune` (its inner folds), so both judge overlap alike.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Segment {
-    pub source: String,
-    /// Seconds from the source's first sample.
-    pub start: f64,
-    pub length: f64,
-}
-
-impl Segment {
-    /// The segment a recording's metadata describes, each value as text
-    /// (`meta("segment_start_s")`); `None` when a key is missing.
-    pub fn of(meta: impl Fn(&str) -> Option<String>) -> Option<Segment> {
-        Some(Segment {
-            source: meta("source")?,
-            start: meta(KEYS[1])?.parse().ok()?,
-            length: meta(KEYS[2])?.parse().ok()?,
-        })
-    }
-
-    /// How far two segments may overlap and still only meet end to start
-    /// (float noise in `j * hop`): this part of the longer one's length.
-    pub const TOUCH: f64 = 1e-9;
-
-    /// Whether the two share signal: the same source, overlapping in time
-    /// (segments that only meet end to start do not).
-    pub fn overlaps(&self, other: &Segment) -> bool {
-        let touch = Self::TOUCH * self.length.max(other.length);
-        self.source == other.source
-            && self.start < other.start + other.length - touch
-            && other.start < self.start + self.length - touch
-    }
-}
+pub use crate::folds::SEGMENT_KEYS as KEYS;
+pub use crate::folds::Segment;
 
 /// `--split` and `--split-hop`, checked: how to cut each input.
 #[derive(Debug, Clone, Copy, PartialEq)]
