@@ -102,6 +102,11 @@ impl Shared {
         self.spans.is_empty()
     }
 
+    /// The most segments any one source has among the items.
+    pub fn longest_source(&self) -> usize {
+        self.by_source.values().map(Vec::len).max().unwrap_or(0)
+    }
+
     /// Whether some source was cut into more than one of these items: its
     /// segments are not independent, and a split must deal them in time.
     pub fn has_segments(&self) -> bool {

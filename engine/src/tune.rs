@@ -42,9 +42,10 @@ use thiserror::Error;
 
 use crate::classify::{ClassifyError, Model, TrainingExample, plural};
 use crate::dataset::{DatasetError, Entry};
-use crate::evaluate::cv::{Folds, make_folds};
+use crate::evaluate::cv::{Dealt, deal, make_folds};
 use crate::evaluate::plan::{Overrides, Plan};
 use crate::evaluate::{EvaluateError, PredictionRow, Report, count, split};
+use crate::folds::Shared;
 use crate::import::Segment;
 use crate::profile::options::same_grid;
 use crate::profile::{Analysis, Profile, SplitMethod};
@@ -304,34 +305,51 @@ pub fn outer_parts(
             .enumerate()
             .map(|(i, s)| (s.file.as_str(), i))
             .collect();
-        let pick = |v: &[TrainingExample]| v.iter().map(|e| index[e.file.as_str()]).collect();
+        let pick = |v: &[TrainingExample]| -> Vec<usize> {
+            v.iter().map(|e| index[e.file.as_str()]).collect()
+        };
+        let test = pick(&sp.test);
+        // Trials overlapping a tested one never train (segments of one recording).
+        let gone = shared_of(scans, &all).neighbours(&test);
         return Ok(vec![Part {
-            train: pick(&sp.train),
-            test: pick(&sp.test),
+            train: pick(&sp.train)
+                .into_iter()
+                .filter(|i| gone.binary_search(i).is_err())
+                .collect(),
+            test,
         }]);
     }
-    let folds = make_folds(
+    let dealt = deal(
         &data.label_refs(&all),
         data.group_of(&all).as_deref(),
+        &shared_of(scans, &all),
         plan.method,
         plan.folds,
         plan.seed,
     )?;
-    Ok(folds_to_parts(&all, &folds))
+    Ok(dealt_to_parts(&all, &dealt))
 }
 
-/// Folds (positions in `within`) as parts over `within`'s indices.
-fn folds_to_parts(within: &[usize], folds: &Folds) -> Vec<Part> {
-    folds
+/// The segments of `within`'s scans, in its order ([`Shared`]).
+fn shared_of(scans: &[Entry], within: &[usize]) -> Shared {
+    Shared::new(within.iter().map(|&i| span_of(&scans[i])).collect())
+}
+
+/// Folds (positions in `within`) as parts over `within`'s indices, each
+/// fold's purged positions (overlapping a tested one) trained on by none.
+fn dealt_to_parts(within: &[usize], dealt: &Dealt) -> Vec<Part> {
+    dealt
+        .folds
         .iter()
-        .map(|f| {
-            let mut test_pos = vec![false; within.len()];
-            for &p in f {
-                test_pos[p] = true;
+        .zip(&dealt.purged)
+        .map(|(f, gone)| {
+            let mut out = vec![false; within.len()];
+            for &p in f.iter().chain(gone) {
+                out[p] = true;
             }
             Part {
                 train: (0..within.len())
-                    .filter(|&p| !test_pos[p])
+                    .filter(|&p| !out[p])
                     .map(|p| within[p])
                     .collect(),
                 test: f.iter().map(|&p| within[p]).collect(),
@@ -346,105 +364,20 @@ fn span_of(e: &Entry) -> Option<Segment> {
     Segment::of(|key| e.meta_text(key)).filter(|s| s.start.is_finite() && s.length.is_finite())
 }
 
-/// The spans of `train`'s recordings (in its order) when every one is a
-/// trial of a long recording and two of them overlap (`import --split`
-/// with a `--split-hop` below `--split`); `None` otherwise.
-fn overlapping_trials(scans: &[Entry], train: &[usize]) -> Option<Vec<Segment>> {
-    let spans: Vec<Segment> = train
-        .iter()
-        .map(|&i| span_of(&scans[i]))
-        .collect::<Option<_>>()?;
-    let mut order: Vec<usize> = (0..spans.len()).collect();
-    order.sort_by(|&a, &b| {
-        (&spans[a].source, spans[a].start)
-            .partial_cmp(&(&spans[b].source, spans[b].start))
-            .unwrap_or(std::cmp::Ordering::Equal)
-    });
-    order
-        .windows(2)
-        .any(|w| spans[w[0]].overlaps(&spans[w[1]]))
-        .then_some(spans)
-}
-
-/// Inner folds over overlapping trials: each source's trials in time
-/// order cut into `folds` consecutive blocks, fold `f` testing block `f`
-/// of every source and training on the rest but the trials that overlap
-/// one it tests (as a purged time-series split): shuffled folds would
-/// test a trial beside its own overlapping neighbour and flatter the
-/// settings that memorise.
-fn purged_blocks(train: &[usize], spans: &[Segment], folds: usize) -> Result<Vec<Part>, TuneError> {
-    let mut by_source: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
-    for (p, s) in spans.iter().enumerate() {
-        by_source.entry(&s.source).or_default().push(p);
-    }
-    let mut fold_of = vec![0; spans.len()];
-    for positions in by_source.values_mut() {
-        positions.sort_by(|&a, &b| spans[a].start.total_cmp(&spans[b].start));
-        let n = positions.len();
-        for (i, &p) in positions.iter().enumerate() {
-            fold_of[p] = i * folds / n;
-        }
-    }
-    let mut parts = Vec::with_capacity(folds);
-    for f in 0..folds {
-        let test: Vec<usize> = (0..spans.len()).filter(|&p| fold_of[p] == f).collect();
-        // Each source's block is consecutive in time: a trial before it
-        // overlaps one of its trials when it ends after the block's first
-        // start, one after it when it starts before the block's last end.
-        let mut left_out = vec![false; spans.len()];
-        for positions in by_source.values() {
-            let in_block = |p: usize| fold_of[p] == f;
-            let (Some(a), Some(b)) = (
-                positions.iter().position(|&p| in_block(p)),
-                positions.iter().rposition(|&p| in_block(p)),
-            ) else {
-                continue;
-            };
-            let eps = Segment::TOUCH
-                * positions
-                    .iter()
-                    .map(|&p| spans[p].length)
-                    .fold(0.0, f64::max);
-            let first_start = spans[positions[a]].start;
-            let last_end = positions[a..=b]
-                .iter()
-                .map(|&p| spans[p].start + spans[p].length)
-                .fold(f64::NEG_INFINITY, f64::max);
-            for &p in &positions[..a] {
-                left_out[p] = spans[p].start + spans[p].length > first_start + eps;
-            }
-            for &p in &positions[b + 1..] {
-                left_out[p] = spans[p].start < last_end - eps;
-            }
-        }
-        let train_f: Vec<usize> = (0..spans.len())
-            .filter(|&p| fold_of[p] != f && !left_out[p])
-            .collect();
-        if test.is_empty() {
-            continue;
-        }
-        if train_f.is_empty() {
-            return Err(plan_error(format!(
-                "a training part's {} overlapping trials leave an inner fold nothing to train on \
-                 once the trials overlapping its test ones are left out: import with a longer \
-                 --split-hop, or give the training part more",
-                spans.len()
-            )));
-        }
-        parts.push(Part {
-            train: train_f.iter().map(|&p| train[p]).collect(),
-            test: test.iter().map(|&p| train[p]).collect(),
-        });
-    }
-    Ok(parts)
+/// Whether two of `train`'s recordings are overlapping trials of one long
+/// recording (`import --split` with a `--split-hop` below `--split`).
+fn overlapping_trials(scans: &[Entry], train: &[usize]) -> bool {
+    shared_of(scans, train).overlapping()
 }
 
 /// The inner folds of a training part: stratified, grouped with groups,
 /// [`INNER_FOLDS`] of them or as many as there are recordings or groups.
 /// Without groups, over trials that overlap in time (`import --split`
 /// with `--split-hop`): consecutive blocks of each source's trials, the
-/// trials overlapping a fold's test ones left out of its training
-/// ([`purged_blocks`]).
+/// trials overlapping a fold's test ones left out of its training, as
+/// every split deals them ([`deal`]: shuffled folds would test a trial
+/// beside its own overlapping neighbour and flatter the settings that
+/// memorise).
 pub fn inner_parts(
     scans: &[Entry],
     group_by: Option<&str>,
@@ -452,21 +385,26 @@ pub fn inner_parts(
     seed: u64,
 ) -> Result<Vec<Part>, TuneError> {
     let data = Data::new(scans, group_by)?;
-    if group_by.is_none()
-        && let Some(spans) = overlapping_trials(scans, train)
-    {
-        let longest = spans
-            .iter()
-            .fold(BTreeMap::<&str, usize>::new(), |mut m, s| {
-                *m.entry(&s.source).or_default() += 1;
-                m
-            })
-            .into_values()
-            .max()
-            .unwrap_or(0);
-        let folds = INNER_FOLDS.min(longest);
-        if folds >= 2 {
-            return purged_blocks(train, &spans, folds);
+    if group_by.is_none() {
+        let shared = shared_of(scans, train);
+        if shared.overlapping() {
+            let folds = INNER_FOLDS.min(shared.longest_source());
+            if folds >= 2 {
+                let dealt = deal(
+                    &data.label_refs(train),
+                    None,
+                    &shared,
+                    SplitMethod::KFold,
+                    folds,
+                    seed,
+                )
+                .map_err(|e| {
+                    plan_error(format!(
+                        "a training part's overlapping trials cannot be folded in time: {e}"
+                    ))
+                })?;
+                return Ok(dealt_to_parts(train, &dealt));
+            }
         }
     }
     let groups = data.group_of(train);
@@ -505,7 +443,7 @@ pub fn inner_parts(
         folds,
         seed,
     )?;
-    Ok(folds_to_parts(train, &f))
+    Ok(dealt_to_parts(train, &Dealt::plain(f)))
 }
 
 /// The settings to score: the whole grid within the budget, else whole
@@ -746,7 +684,7 @@ pub fn tune(
         method,
         inner_folds: inner[final_part].len(),
         inner_folds_in_time: group_by.is_none()
-            && overlapping_trials(scans, &parts[final_part].train).is_some(),
+            && overlapping_trials(scans, &parts[final_part].train),
         outer_accuracy: outer.accuracy,
         outer,
         chosen: scored(chosen, final_part),

@@ -9,7 +9,7 @@ use crate::profile::LoadedProfile;
 /// spread and the macro-F1.
 pub fn table(outcome: &Outcome) -> String {
     match outcome {
-        Outcome::Holdout(h) => h.report.table(),
+        Outcome::Holdout(h) => h.table(),
         Outcome::Validated(v) => v.report.table(),
         Outcome::Sweep(s) => s.table(),
     }

@@ -374,7 +374,7 @@ pub fn validate_with_votes(
     super::check_two_labels(&examples)?;
     check_comparisons(examples.len(), profile.analysis.feature_count())?;
     if plan.method == SplitMethod::Holdout {
-        return holdout(profile, examples, plan).map(|h| h.pooled(plan.seed));
+        return holdout(profile, examples, related, plan).map(|h| h.pooled(plan.seed));
     }
     if profile.analysis.windows.is_some() {
         return validate_windows(profile, examples, related, plan);
@@ -407,6 +407,10 @@ pub struct Holdout {
     /// What the model says of its k, when it is not the profile's.
     #[serde(skip)]
     pub k_notice: Option<String>,
+    /// Training recordings left out: they overlap a tested one (segments
+    /// of one recording).
+    #[serde(skip_serializing_if = "is_zero")]
+    pub left_out: usize,
     /// Every recording split, training ones first: labels and files.
     #[serde(skip)]
     split_labels: Vec<String>,
@@ -414,22 +418,70 @@ pub struct Holdout {
     split_files: Vec<String>,
 }
 
+fn is_zero(n: &usize) -> bool {
+    *n == 0
+}
+
 impl Holdout {
     /// As a one-fold cross-validation's report (what sweeps and the
     /// validated forms show).
     fn pooled(self, seed: u64) -> Validated {
         let run = (self.report, self.k, self.k_fallback);
+        let dealt = cv::Dealt {
+            folds: vec![Vec::new()],
+            purged: vec![(0..self.left_out).collect()],
+            in_time: false,
+        };
         Validated {
             report: cv::pool(
                 self.split_labels,
                 self.split_files,
                 vec![run],
-                &cv::Dealt::plain(vec![Vec::new()]),
+                &dealt,
                 "holdout",
                 seed,
             ),
             windows: self.windows,
         }
+    }
+
+    /// The report's text: Table 4.1, and what was left out of training.
+    pub fn table(&self) -> String {
+        let mut t = self.report.table();
+        if self.left_out > 0 {
+            t.push_str(&format!(
+                "segments of one recording: left out of training {} that overlap a tested one \
+                 (they share its samples)\n",
+                crate::classify::plural(self.left_out, "segment", "segments")
+            ));
+        }
+        t
+    }
+}
+
+/// The indices of `train` (into `files`, training ones first, then
+/// `tests` of them) that overlap a tested one: left out of a holdout's
+/// training.
+fn purged_of_holdout(related: Related, files: &[&str], train: usize) -> Vec<usize> {
+    let shared = related.shared(files.iter().copied());
+    let test: Vec<usize> = (train..files.len()).collect();
+    shared.neighbours(&test)
+}
+
+/// Refuses a holdout whose training part, once the overlapping segments
+/// are left out, holds nothing of a label it tests.
+fn check_trainable<'a>(
+    train: impl Iterator<Item = &'a str>,
+    mut test: impl Iterator<Item = &'a str>,
+) -> Result<(), EvaluateError> {
+    let trained: std::collections::BTreeSet<&str> = train.collect();
+    match test.find(|l| !trained.contains(l)) {
+        None => Ok(()),
+        Some(l) => Err(EvaluateError::Folds(format!(
+            "the holdout's every {l:?} training recording overlaps one it tests (trials cut from \
+             one recording share samples), so nothing of {l:?} is left to learn from: set \
+             [evaluation] gap_per_class, import with a --split-hop of --split or more, or record more"
+        ))),
     }
 }
 
@@ -437,6 +489,7 @@ impl Holdout {
 pub fn holdout(
     profile: &Profile,
     examples: Vec<TrainingExample>,
+    related: Related,
     plan: &Plan,
 ) -> Result<Holdout, EvaluateError> {
     let mut eval = profile.evaluation.clone();
@@ -444,31 +497,57 @@ pub fn holdout(
     let train_model = |train: Vec<TrainingExample>| {
         Model::train_adapting_k(&profile.name, &profile.analysis, &profile.classifier, train)
     };
-    let (report, windows, model, split_labels, split_files) = if profile.analysis.windows.is_some()
-    {
-        let recs = win::recordings_of(examples, None)?;
-        let (train, test) = win::split_recordings(&recs, &eval)?;
-        let model = train_model(win::window_examples(&train))?;
-        let r = win::evaluate_recordings(&model, &test)?;
-        let all = || train.iter().chain(&test);
-        let labels = all().map(|r| r.label.clone()).collect();
-        let files = all().map(|r| r.file.clone()).collect();
-        (r.report, Some(r.windows), model, labels, files)
-    } else {
-        let split = super::split(examples, &eval)?;
-        let all = || split.train.iter().chain(&split.test);
-        let labels = all().map(|e| e.label.clone()).collect();
-        let files = all().map(|e| e.file.clone()).collect();
-        let model = train_model(split.train)?;
-        let report = super::evaluate(&model, &split.test)?;
-        (report, None, model, labels, files)
-    };
+    let (report, windows, model, split_labels, split_files, left_out) =
+        if profile.analysis.windows.is_some() {
+            let recs = win::recordings_of(examples, None)?;
+            let (mut train, test) = win::split_recordings(&recs, &eval)?;
+            let files: Vec<&str> = train.iter().chain(&test).map(|r| r.file.as_str()).collect();
+            let gone = purged_of_holdout(related, &files, train.len());
+            let left_out = gone.len();
+            for &i in gone.iter().rev() {
+                train.remove(i);
+            }
+            check_trainable(
+                train.iter().map(|r| r.label.as_str()),
+                test.iter().map(|r| r.label.as_str()),
+            )?;
+            let model = train_model(win::window_examples(&train))?;
+            let r = win::evaluate_recordings(&model, &test)?;
+            let all = || train.iter().chain(&test);
+            let labels = all().map(|r| r.label.clone()).collect();
+            let files = all().map(|r| r.file.clone()).collect();
+            (r.report, Some(r.windows), model, labels, files, left_out)
+        } else {
+            let mut split = super::split(examples, &eval)?;
+            let files: Vec<&str> = split
+                .train
+                .iter()
+                .chain(&split.test)
+                .map(|e| e.file.as_str())
+                .collect();
+            let gone = purged_of_holdout(related, &files, split.train.len());
+            let left_out = gone.len();
+            for &i in gone.iter().rev() {
+                split.train.remove(i);
+            }
+            check_trainable(
+                split.train.iter().map(|e| e.label.as_str()),
+                split.test.iter().map(|e| e.label.as_str()),
+            )?;
+            let all = || split.train.iter().chain(&split.test);
+            let labels = all().map(|e| e.label.clone()).collect();
+            let files = all().map(|e| e.file.clone()).collect();
+            let model = train_model(split.train)?;
+            let report = super::evaluate(&model, &split.test)?;
+            (report, None, model, labels, files, left_out)
+        };
     Ok(Holdout {
         report,
         windows,
         k: model.classifier.k,
         k_notice: model.k_notice(),
         k_fallback: model.k_fallback,
+        left_out,
         split_labels,
         split_files,
     })

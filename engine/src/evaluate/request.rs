@@ -352,12 +352,14 @@ fn thesis_holdout(
     } else {
         None
     };
+    let segments = data.segments();
+    let related = Related::new(None, &segments);
     let outcome = if fell_back.is_some() {
-        let segments = data.segments();
-        let related = Related::new(None, &segments);
         Outcome::Validated(validate_with_votes(&lp.profile, examples, related, &plan)?)
     } else {
-        Outcome::Holdout(holdout(&lp.profile, examples, &plan).map_err(|e| not_enough(e, req))?)
+        Outcome::Holdout(
+            holdout(&lp.profile, examples, related, &plan).map_err(|e| not_enough(e, req))?,
+        )
     };
     Ok(Evaluation {
         outcome,
