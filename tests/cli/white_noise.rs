@@ -146,6 +146,27 @@ fn overlapping_segments_of_white_noise_score_chance_under_every_method() {
         // 117 outer tests: chance plus 3.3 standard errors is 48 % (the
         // issue measured 71.8 % before).
         assert!(outer < 0.48, "seed {seed} tune k-fold outer {outer}");
+        // Sub-windows, each recording classified by its windows' vote.
+        let win = d.join("windows.toml");
+        fs::write(
+            &win,
+            text.replace(
+                "# windows = { length = 0.320, hop = 0.160 }",
+                "windows = { length = 0.320, hop = 0.160 }",
+            ),
+        )
+        .unwrap();
+        assert!(fs::read_to_string(&win).unwrap().contains("\nwindows = {"));
+        for method in [&["--folds", "5"][..], &["--loo"]] {
+            let mut args = vec!["evaluate", rec.as_str(), "-p", p(&win), "--json"];
+            args.extend_from_slice(method);
+            let v = json_of(&args);
+            assert!(
+                !leaks(&v),
+                "seed {seed} windows {method:?}: {}",
+                v["accuracy"]
+            );
+        }
         // The text says how the segments were kept apart.
         let r = run(&["evaluate", &rec, "-p", &profile, "--folds", "5"]);
         assert!(
