@@ -418,3 +418,20 @@ fn doctor_names_a_dataset_symlink_that_leads_nowhere() {
         "{r:?}"
     );
 }
+
+/// A trial too short to hold a sample says it holds none, never "-0".
+#[test]
+fn a_split_too_short_for_a_sample_says_it_holds_none() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = dir.path().join("S1/long.csv");
+    trace(&src, 2, 5);
+    let r = import(&[
+        p(&src),
+        "--out",
+        p(&dir.path().join("o")),
+        "--split",
+        "1e-300",
+    ]);
+    assert_eq!(r.code, Some(2), "{r:?}");
+    assert!(r.stderr.contains("holds 0 sample(s)"), "{r:?}");
+}
