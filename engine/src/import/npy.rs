@@ -252,8 +252,11 @@ impl Literal<'_> {
 /// Width in bytes and kind (`i`, `u`, `f`) of a dtype such as `<f8`.
 fn element(descr: &str) -> Option<(usize, char)> {
     let d = descr.trim_start_matches(['<', '>', '|', '=']);
-    let kind = d.chars().next()?;
-    let width: usize = d[1..].parse().ok()?;
+    let mut chars = d.chars();
+    // A character, not a byte: a descr such as 'Đ4' is refused, not split
+    // inside its first character.
+    let kind = chars.next()?;
+    let width: usize = chars.as_str().parse().ok()?;
     let ok = match kind {
         'i' | 'u' => matches!(width, 1 | 2 | 4 | 8),
         'f' => matches!(width, 4 | 8),
