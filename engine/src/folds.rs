@@ -63,6 +63,9 @@ pub struct Shared {
     spans: Vec<Option<Segment>>,
     /// Each source's items, in time order.
     by_source: BTreeMap<String, Vec<usize>>,
+    /// Each item's place in its source's list, and that source's longest
+    /// segment (how far back an overlapping one may start).
+    place: Vec<Option<(usize, f64)>>,
 }
 
 impl Shared {
@@ -78,15 +81,23 @@ impl Shared {
                 by_source.entry(s.source.clone()).or_default().push(i);
             }
         }
+        let start = |i: usize| spans[i].as_ref().map_or(0.0, |s| s.start);
+        let mut place = vec![None; spans.len()];
         for items in by_source.values_mut() {
-            items.sort_by(|&a, &b| {
-                let (a, b) = (spans[a].as_ref(), spans[b].as_ref());
-                a.map(|s| s.start)
-                    .unwrap_or(0.0)
-                    .total_cmp(&b.map(|s| s.start).unwrap_or(0.0))
-            });
+            items.sort_by(|&a, &b| start(a).total_cmp(&start(b)));
+            let longest = items
+                .iter()
+                .filter_map(|&i| spans[i].as_ref().map(|s| s.length))
+                .fold(0.0, f64::max);
+            for (p, &i) in items.iter().enumerate() {
+                place[i] = Some((p, longest));
+            }
         }
-        Shared { spans, by_source }
+        Shared {
+            spans,
+            by_source,
+            place,
+        }
     }
 
     /// Items that are no segments at all: nothing shared.
@@ -123,8 +134,13 @@ impl Shared {
     }
 
     /// The items outside `test` that overlap one in `test`: what a fold
-    /// testing `test` must leave out of its training.
+    /// testing `test` must leave out of its training. Each tested segment's
+    /// neighbours are found by walking its source's list (in time order)
+    /// only as far as an overlap can reach: linear in what is near it.
     pub fn neighbours(&self, test: &[usize]) -> Vec<usize> {
+        if self.by_source.is_empty() {
+            return Vec::new();
+        }
         let mut tested = vec![false; self.spans.len()];
         for &t in test {
             if t < tested.len() {
@@ -132,24 +148,43 @@ impl Shared {
             }
         }
         let mut out = Vec::new();
-        for items in self.by_source.values() {
-            for &i in items {
-                if tested[i] {
-                    continue;
-                }
-                let Some(si) = &self.spans[i] else { continue };
-                // Sorted by start: only near neighbours can overlap, but a
-                // long segment may reach far; test every tested one of this
-                // source (sources hold few hundred segments).
-                if items
-                    .iter()
-                    .any(|&t| tested[t] && self.spans[t].as_ref().is_some_and(|st| st.overlaps(si)))
+        for &t in test {
+            let (Some(Some(st)), Some(Some((p, longest)))) = (self.spans.get(t), self.place.get(t))
+            else {
+                continue;
+            };
+            let items = &self.by_source[&st.source];
+            let mut near = |i: usize| {
+                if let Some(si) = &self.spans[i]
+                    && !tested[i]
+                    && si.overlaps(st)
                 {
                     out.push(i);
                 }
+            };
+            for &i in items[..*p].iter().rev() {
+                // Sorted by start: one starting a longest segment or more
+                // before this one ends before it starts.
+                if self.spans[i]
+                    .as_ref()
+                    .is_some_and(|s| s.start + longest <= st.start)
+                {
+                    break;
+                }
+                near(i);
+            }
+            for &i in &items[p + 1..] {
+                if self.spans[i]
+                    .as_ref()
+                    .is_some_and(|s| s.start >= st.start + st.length)
+                {
+                    break;
+                }
+                near(i);
             }
         }
         out.sort_unstable();
+        out.dedup();
         out
     }
 

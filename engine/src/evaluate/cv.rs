@@ -87,18 +87,27 @@ pub fn deal(
         make_folds(labels, groups, method, folds, seed)?
     };
     let purged = shared.purge(&f);
+    // Only a fold that left something out can have lost a label's every
+    // training recording (without it, `every_label_testable` holds); counted
+    // per label, so leave-one-out over thousands stays linear per fold.
+    let mut total: BTreeMap<&str, usize> = BTreeMap::new();
+    for l in labels {
+        *total.entry(l).or_default() += 1;
+    }
     for (k, (test, gone)) in f.iter().zip(&purged).enumerate() {
-        let mut out = vec![false; labels.len()];
-        for &i in test.iter().chain(gone) {
-            out[i] = true;
+        if gone.is_empty() {
+            continue;
         }
-        let trained: std::collections::BTreeSet<&str> = (0..labels.len())
-            .filter(|&i| !out[i])
-            .map(|i| labels[i])
-            .collect();
-        if let Some(&t) = test.iter().find(|&&t| !trained.contains(labels[t])) {
+        let mut away: BTreeMap<&str, usize> = BTreeMap::new();
+        for &i in test.iter().chain(gone) {
+            *away.entry(labels[i]).or_default() += 1;
+        }
+        if let Some(&t) = test.iter().find(|&&t| away[labels[t]] >= total[labels[t]]) {
             return Err(EvaluateError::Folds(format!(
-                "fold {} of {}: every {:?} recording it could train on overlaps one it tests                  (trials cut from one recording share samples), so nothing of {:?} is left to                  learn from: import with a --split-hop of --split or more, use fewer folds, or                  record more",
+                "fold {} of {}: every {:?} recording it could train on overlaps one it tests \
+                 (trials cut from one recording share samples), so nothing of {:?} is left to \
+                 learn from: import with a --split-hop of --split or more, use fewer folds, or \
+                 record more",
                 k + 1,
                 f.len(),
                 labels[t],
