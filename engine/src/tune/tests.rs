@@ -426,3 +426,18 @@ fn overlapping_trials_are_folded_in_time_and_their_neighbours_left_out() {
     assert!(r.inner_folds_in_time);
     assert!(!run(&p, &touching, 48, 0).inner_folds_in_time);
 }
+
+#[test]
+fn one_group_is_told_to_change_group_by_not_folds() {
+    let p = profile("method = \"k-fold\"\nfolds = 3\ngroup_by = \"rig\"");
+    let mut s = drifting();
+    for e in &mut s {
+        e.meta.push(("rig".into(), toml::Value::String("a".into())));
+    }
+    let plan = Plan::new(&p, &Overrides::default());
+    let e = check_plan(&s, &plan).unwrap_err().to_string();
+    assert!(
+        e.contains("give group_by a key with two values") && !e.contains("1 or fewer"),
+        "{e}"
+    );
+}
