@@ -385,28 +385,27 @@ pub fn check_output(out: &Path, inputs: &[PathBuf], existing: Existing) -> Resul
 /// True when `path` is a regular file whose first line is the recording
 /// format line, as text or gzip-compressed.
 pub fn is_recording(path: &Path) -> bool {
-    let Ok(file) = open_input(path) else {
-        return false;
-    };
-    let mut head = Vec::with_capacity(64);
-    let mut magic = [0u8; 2];
+    read_head(path, FORMAT_LINE.len() as u64).is_some_and(|head| head == FORMAT_LINE.as_bytes())
+}
+
+/// The first `max` bytes of a regular file's text ([`open_input`]), plain
+/// or gzip-compressed (unpacked, never past `max`); `None` when it cannot
+/// be opened or read.
+pub fn read_head(path: &Path, max: u64) -> Option<Vec<u8>> {
+    use std::io::BufRead;
+    let file = open_input(path).ok()?;
     let mut reader = io::BufReader::new(file);
-    let gzipped = {
-        use std::io::BufRead;
-        let buf = reader.fill_buf().unwrap_or(&[]);
-        let n = buf.len().min(2);
-        magic[..n].copy_from_slice(&buf[..n]);
-        magic == [0x1f, 0x8b]
-    };
-    let want = FORMAT_LINE.len() as u64;
-    let read = if gzipped {
+    let gzipped = reader.fill_buf().ok()?.starts_with(&[0x1f, 0x8b]);
+    let mut head = Vec::new();
+    if gzipped {
         flate2::read::MultiGzDecoder::new(reader)
-            .take(want)
+            .take(max)
             .read_to_end(&mut head)
+            .ok()?;
     } else {
-        reader.take(want).read_to_end(&mut head)
-    };
-    read.is_ok() && head == FORMAT_LINE.as_bytes()
+        reader.take(max).read_to_end(&mut head).ok()?;
+    }
+    Some(head)
 }
 
 /// One writer at a time in a folder: an exclusive lock (`flock`) on a

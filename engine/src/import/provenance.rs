@@ -12,7 +12,6 @@
 //! is the input's path as given and its content matches (imports older
 //! than these keys: the path as given alone). Never prints.
 
-use std::io::{BufRead, Read};
 use std::path::{Path, PathBuf};
 
 use sha2::{Digest, Sha256};
@@ -113,19 +112,7 @@ fn hex(bytes: &[u8]) -> String {
 /// first 64 KiB (plain or gzipped), through the one reader; `None` when
 /// `path` is not a regular file or not a recording.
 fn header(path: &Path) -> Option<toml::Table> {
-    const HEAD: u64 = 64 << 10;
-    let file = crate::io::open_input(path).ok()?;
-    let mut reader = std::io::BufReader::new(file);
-    let gzipped = reader.fill_buf().ok()?.starts_with(&[0x1f, 0x8b]);
-    let mut head = Vec::new();
-    if gzipped {
-        flate2::read::MultiGzDecoder::new(reader)
-            .take(HEAD)
-            .read_to_end(&mut head)
-            .ok()?;
-    } else {
-        reader.take(HEAD).read_to_end(&mut head).ok()?;
-    }
+    let head = crate::io::read_head(path, 64 << 10)?;
     let text = String::from_utf8_lossy(&head);
     let mut lines = text.lines();
     if lines.next()? != crate::io::FORMAT_LINE {
