@@ -2,7 +2,7 @@
 """Test data of other rigs' character (issue 13), written deterministically:
 not committed, generated. Needs numpy and scipy.
 
-    contrib/rig-sets.py OUT_DIR [--seed S] [--only noise|sound|fingertip|long]
+    contrib/rig-sets.py OUT_DIR [--seed S] [--only noise|sound|fingertip|long] [--trials N]
 
 OUT_DIR/noise/<label>/<label>-trialNN.csv
     A stationary-noise set: 12 materials of one family x 8 trials, 2 s each
@@ -139,18 +139,19 @@ def sound_set(out, seed):
             wavfile.write(out / label / f"{label}-clip{c + 1}.wav", rate, pcm)
 
 
-def fingertip_set(out, seed):
+def fingertip_set(out, seed, trials=10):
     rng = np.random.default_rng([seed, 2])
     rate = 2200
     # The slow drift is the rig's (skin, sensor coupling), shared by all
-    # materials recorded that day, plus a little of each trial's own.
-    day_tilt = np.cumsum(rng.normal(0.015, 0.01, 10))
-    day_gain_db = np.linspace(0, 6, 10) + rng.normal(0, 1, 10)
+    # materials recorded that day, plus a little of each trial's own; over
+    # more trials the same drift, spread over them.
+    day_tilt = np.cumsum(rng.normal(0.015, 0.01, trials)) * (10 / trials)
+    day_gain_db = np.linspace(0, 6, trials) + rng.normal(0, 1, trials)
     for i in range(20):
         m = material(rng, 40.0, 700.0)
         label = f"F{i + 1:02d}"
         (out / label).mkdir(parents=True, exist_ok=True)
-        for trial in range(10):
+        for trial in range(trials):
             crng = np.random.default_rng([seed, 2, i, trial])
             speed = crng.uniform(40, 120)
             gain = 10 ** ((day_gain_db[trial] + crng.normal(0, 2)) / 20)
@@ -205,13 +206,15 @@ def main():
     p.add_argument("out", type=Path)
     p.add_argument("--seed", type=int, default=13)
     p.add_argument("--only", choices=["noise", "sound", "fingertip", "long"])
+    p.add_argument("--trials", type=int, default=10,
+                   help="fingertip trials per material (10; 50 is the size of the real 1000-trial set)")
     args = p.parse_args()
     if args.only in (None, "noise"):
         noise_set(args.out / "noise", args.seed)
     if args.only in (None, "sound"):
         sound_set(args.out / "sound", args.seed)
     if args.only in (None, "fingertip"):
-        fingertip_set(args.out / "fingertip", args.seed)
+        fingertip_set(args.out / "fingertip", args.seed, args.trials)
     if args.only in (None, "long"):
         long_set(args.out / "long", args.seed)
 

@@ -36,6 +36,7 @@ pub mod options;
 pub mod path;
 pub mod simulator;
 pub mod textures;
+pub mod tuned;
 
 /// The one label rule, owned by the recording format.
 pub use crate::recording::check_label;
@@ -100,6 +101,8 @@ pub struct LoadedProfile {
     /// The folder relative paths in the profile resolve against.
     pub base_dir: PathBuf,
     pub sha256: String,
+    /// Tune's mark, in a profile `tune` wrote.
+    pub tuned_on: Option<tuned::TunedOn>,
 }
 
 /// A profile that cannot be used: where, which key, and why.
@@ -225,6 +228,7 @@ impl LoadedProfile {
             origin: origin.to_string(),
             base_dir: base_dir.to_path_buf(),
             sha256: sha256_hex(text.as_bytes()),
+            tuned_on: tuned::TunedOn::find(text),
         })
     }
 

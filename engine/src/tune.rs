@@ -6,15 +6,18 @@
 //! Inside each outer training part, every setting of the search
 //! ([`space::space`], sampled by [`Options::budget`]) is scored by 5-fold
 //! cross-validation over that part only: recordings, never sub-windows,
-//! are dealt into the inner folds (stratified; whole groups with
-//! `group_by`), and the score is the mean of the folds' accuracies. The
-//! best setting (ties to the simplest, [`space::Setting::simplicity`]) is
-//! then trained on the whole outer training part and tested once on its
-//! outer test part; the outer accuracy, pooled over the outer test parts,
-//! is the estimate reported, never an inner score. For k-fold and
-//! leave-one-out the setting written to the profile is chosen by one more
-//! search over every recording (scikit-learn's refit): the outer estimate
-//! is of that procedure.
+//! are dealt into the inner folds, as the outer split deals them
+//! ([`InnerSplit`]): forward in time under a time split, whole groups with
+//! `group_by`, blocks in time over overlapping trials, stratified and
+//! shuffled otherwise; the score is the mean of the folds' accuracies. The
+//! best setting (equal accuracies to the wider margin, then the larger
+//! share of true votes, measured in the same folds, then the simplest,
+//! [`space::Setting::simplicity`]) is then trained on the whole outer
+//! training part and tested once on its outer test part; the outer
+//! accuracy, pooled over the outer test parts, is the estimate reported,
+//! never an inner score. For k-fold and leave-one-out the setting written
+//! to the profile is chosen by one more search over every recording
+//! (scikit-learn's refit): the outer estimate is of that procedure.
 //!
 //! Speed: the recordings are read once; each grid (window, spacing,
 //! sub-windows) two or more feature settings share is resampled once for
@@ -42,16 +45,17 @@ use thiserror::Error;
 
 use crate::classify::{ClassifyError, Model, TrainingExample, plural};
 use crate::dataset::{DatasetError, Entry};
-use crate::evaluate::cv::{Dealt, deal, make_folds};
+use crate::evaluate::cv::{Dealt, deal, deal_forward, make_folds};
 use crate::evaluate::plan::{Overrides, Plan};
 use crate::evaluate::{EvaluateError, PredictionRow, Report, count, split};
 use crate::folds::Shared;
 use crate::import::Segment;
 use crate::profile::options::same_grid;
-use crate::profile::{Analysis, Profile, SplitMethod};
+use crate::profile::tuned::{TunedOn, fingerprint};
+use crate::profile::{Analysis, Metric, Profile, SplitMethod};
 use score::{
-    Fold, Pairwise, RESAMPLED_MOST, Resampled, extract, extract_resampled, fold_correct, par_map,
-    resample, resampled_points,
+    Fold, Pairwise, RESAMPLED_MOST, Resampled, Voting, extract, extract_resampled, par_map,
+    resample, resampled_points, score_fold,
 };
 use space::{Described, Setting, grid};
 
@@ -97,12 +101,18 @@ pub struct Options {
     pub threads: usize,
 }
 
-/// A setting with its inner score.
+/// A setting with its inner scores ([`InnerScore`]).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Scored {
     pub options: Described,
     /// Mean accuracy over the inner folds (0..1).
     pub inner_accuracy: f64,
+    /// Mean margin of the inner folds' test windows (-1..1): how much
+    /// nearer the nearest of their own label than of another.
+    pub inner_margin: f64,
+    /// Mean share of the neighbour votes the inner folds' test recordings
+    /// gave their own label (0..1).
+    pub inner_true_votes: f64,
 }
 
 /// A search's outcome; its JSON is `tune --json`.
@@ -120,9 +130,11 @@ pub struct TuneReport {
     /// The outer validation: "holdout", "5-fold", "leave-one-out", …
     pub method: String,
     pub inner_folds: usize,
-    /// Whether the inner folds were blocks in time with the trials that
-    /// overlap a test one left out of training (trials cut with a
-    /// `--split-hop` below `--split`), not shuffled folds.
+    /// How the inner folds were made.
+    pub inner_split: InnerSplit,
+    /// Whether the inner folds were in time: forward (under a time split)
+    /// or blocks with the trials that overlap a test one left out of
+    /// training (trials cut with a `--split-hop` below `--split`).
     pub inner_folds_in_time: bool,
     /// The outer estimate: the chosen settings tested on what each search
     /// never saw, pooled (0..1).
@@ -136,6 +148,8 @@ pub struct TuneReport {
     /// For k-fold and leave-one-out: each outer fold's own choice and its
     /// test accuracy.
     pub outer_folds: Vec<OuterFold>,
+    /// What was searched, as the tuned profile records it (its mark).
+    pub tuned_on: TunedOn,
     #[serde(skip)]
     pub chosen_setting: Option<Setting>,
 }
@@ -364,47 +378,95 @@ fn span_of(e: &Entry) -> Option<Segment> {
     Segment::of(|key| e.meta_text(key)).filter(|s| s.start.is_finite() && s.length.is_finite())
 }
 
-/// Whether two of `train`'s recordings are overlapping trials of one long
-/// recording (`import --split` with a `--split-hop` below `--split`).
-fn overlapping_trials(scans: &[Entry], train: &[usize]) -> bool {
-    shared_of(scans, train).overlapping()
+/// How a search's inner folds deal its training part.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum InnerSplit {
+    /// Stratified folds, shuffled with the seed (the outer split is shuffled).
+    Shuffled,
+    /// Whole groups (`group_by`).
+    Grouped,
+    /// Consecutive blocks of each source's overlapping trials, the trials
+    /// overlapping a fold's test ones left out of its training.
+    Blocks,
+    /// Forward in time, as a time split tests: each fold trains on the
+    /// earlier trials of each label and tests the next ones ([`deal_forward`]).
+    Forward,
 }
 
-/// The inner folds of a training part: stratified, grouped with groups,
-/// [`INNER_FOLDS`] of them or as many as there are recordings or groups.
-/// Without groups, over trials that overlap in time (`import --split`
-/// with `--split-hop`): consecutive blocks of each source's trials, the
-/// trials overlapping a fold's test ones left out of its training, as
-/// every split deals them ([`deal`]: shuffled folds would test a trial
-/// beside its own overlapping neighbour and flatter the settings that
-/// memorise).
+impl InnerSplit {
+    /// How the folds were made, for the report and the tuned profile.
+    pub fn describe(self) -> &'static str {
+        match self {
+            InnerSplit::Shuffled => "stratified, shuffled",
+            InnerSplit::Grouped => "whole groups",
+            InnerSplit::Blocks => "blocks in time, overlapping trials left out",
+            InnerSplit::Forward => {
+                "forward in time: each trains on the earlier trials of each label and tests the next"
+            }
+        }
+    }
+
+    /// How the inner folds of a search under `plan` deal a training part:
+    /// forward in time when the outer split is a time split (a holdout in
+    /// file-name order), so the inner folds test the drift the outer one
+    /// does; whole groups with `group_by`; else blocks in time over
+    /// overlapping trials, shuffled otherwise ([`inner_parts`] decides
+    /// between those two per part).
+    pub fn of(plan: &Plan) -> InnerSplit {
+        if plan.group_by.is_some() {
+            InnerSplit::Grouped
+        } else if plan.method == SplitMethod::Holdout && plan.holdout_shuffle.is_none() {
+            InnerSplit::Forward
+        } else {
+            InnerSplit::Shuffled
+        }
+    }
+}
+
+/// The inner folds of a training part, [`INNER_FOLDS`] of them or as many
+/// as there are recordings or groups: forward in time when `split` says so;
+/// grouped with groups; without groups, over trials that overlap in time
+/// (`import --split` with `--split-hop`), consecutive blocks of each
+/// source's trials, the trials overlapping a fold's test ones left out of
+/// its training, as every split deals them ([`deal`]: shuffled folds would
+/// test a trial beside its own overlapping neighbour and flatter the
+/// settings that memorise); stratified and shuffled otherwise. Returns the
+/// parts and how they were made.
 pub fn inner_parts(
     scans: &[Entry],
     group_by: Option<&str>,
     train: &[usize],
     seed: u64,
-) -> Result<Vec<Part>, TuneError> {
+    split: InnerSplit,
+) -> Result<(Vec<Part>, InnerSplit), TuneError> {
     let data = Data::new(scans, group_by)?;
-    if group_by.is_none() {
-        let shared = shared_of(scans, train);
-        if shared.overlapping() {
-            let folds = INNER_FOLDS.min(shared.longest_source());
-            if folds >= 2 {
-                let dealt = deal(
-                    &data.label_refs(train),
-                    None,
-                    &shared,
-                    SplitMethod::KFold,
-                    folds,
-                    seed,
-                )
-                .map_err(|e| {
-                    plan_error(format!(
-                        "a training part's overlapping trials cannot be folded in time: {e}"
-                    ))
-                })?;
-                return Ok(dealt_to_parts(train, &dealt));
-            }
+    let shared = shared_of(scans, train);
+    if split == InnerSplit::Forward && group_by.is_none() {
+        let dealt = deal_forward(&data.label_refs(train), &shared, INNER_FOLDS).map_err(|e| {
+            plan_error(format!(
+                "the time split's training part cannot be folded forward in time: {e}"
+            ))
+        })?;
+        return Ok((dealt_to_parts(train, &dealt), InnerSplit::Forward));
+    }
+    if group_by.is_none() && shared.overlapping() {
+        let folds = INNER_FOLDS.min(shared.longest_source());
+        if folds >= 2 {
+            let dealt = deal(
+                &data.label_refs(train),
+                None,
+                &shared,
+                SplitMethod::KFold,
+                folds,
+                seed,
+            )
+            .map_err(|e| {
+                plan_error(format!(
+                    "a training part's overlapping trials cannot be folded in time: {e}"
+                ))
+            })?;
+            return Ok((dealt_to_parts(train, &dealt), InnerSplit::Blocks));
         }
     }
     let groups = data.group_of(train);
@@ -419,21 +481,14 @@ pub fn inner_parts(
     };
     let folds = INNER_FOLDS.min(units);
     if folds < 2 {
+        let (one, many) = if groups.is_some() {
+            ("group", "groups")
+        } else {
+            ("recording", "recordings")
+        };
         return Err(plan_error(format!(
             "a training part has {}: the search needs at least 2 to score settings inside it; give the training part more",
-            plural(
-                units,
-                if groups.is_some() {
-                    "group"
-                } else {
-                    "recording"
-                },
-                if groups.is_some() {
-                    "groups"
-                } else {
-                    "recordings"
-                }
-            )
+            plural(units, one, many)
         )));
     }
     let f = make_folds(
@@ -443,7 +498,12 @@ pub fn inner_parts(
         folds,
         seed,
     )?;
-    Ok(dealt_to_parts(train, &Dealt::plain(f)))
+    let made = if groups.is_some() {
+        InnerSplit::Grouped
+    } else {
+        InnerSplit::Shuffled
+    };
+    Ok((dealt_to_parts(train, &Dealt::plain(f)), made))
 }
 
 /// The settings to score: the whole grid within the budget, else whole
@@ -464,15 +524,191 @@ fn sample(grid: Vec<Setting>, budget: usize, seed: u64) -> Vec<Setting> {
     out
 }
 
-/// The best of scored settings: the highest score, ties to the simplest.
-fn best(settings: &[Setting], scores: &[f64]) -> usize {
-    (0..settings.len())
-        .min_by(|&a, &b| {
-            scores[b]
-                .total_cmp(&scores[a])
-                .then_with(|| settings[a].simplicity().cmp(&settings[b].simplicity()))
-        })
-        .unwrap_or(0)
+/// A setting's scores in one search: the mean over the inner folds of each
+/// fold's accuracy, and of the finer scores that break ties between equal
+/// accuracies (each a mean per tested recording: [`score::FoldScore`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct InnerScore {
+    pub accuracy: f64,
+    pub margin: f64,
+    pub true_share: f64,
+}
+
+impl InnerScore {
+    /// Better first: the higher accuracy, then the wider margin, then the
+    /// larger share of votes for the true label.
+    fn better(&self, other: &InnerScore) -> std::cmp::Ordering {
+        other
+            .accuracy
+            .total_cmp(&self.accuracy)
+            .then(other.margin.total_cmp(&self.margin))
+            .then(other.true_share.total_cmp(&self.true_share))
+    }
+}
+
+/// The settings in order, best first: by [`InnerScore::better`], then the
+/// simplest ([`Setting::simplicity`]).
+fn ranked(settings: &[Setting], scores: &[InnerScore]) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..settings.len()).collect();
+    order.sort_by(|&a, &b| {
+        scores[a]
+            .better(&scores[b])
+            .then_with(|| settings[a].simplicity().cmp(&settings[b].simplicity()))
+    });
+    order
+}
+
+/// The best of scored settings ([`ranked`]'s first).
+fn best(settings: &[Setting], scores: &[InnerScore]) -> usize {
+    ranked(settings, scores).first().copied().unwrap_or(0)
+}
+
+/// One search's inputs shared by every part: the scans, their classes, the
+/// settings and each part's inner folds.
+struct Search<'a> {
+    scans: &'a [Entry],
+    data: &'a Data<'a>,
+    settings: &'a [Setting],
+    inner: &'a [Vec<Part>],
+    threads: usize,
+}
+
+impl Search<'_> {
+    /// Every setting's [`InnerScore`] in every part (`[part][setting]`):
+    /// feature settings on one grid one after another, a grid two or more
+    /// of them share resampled once and kept while they are scored (unless
+    /// it is over [`RESAMPLED_MOST`] points); each feature setting's
+    /// vectors made once and scored with every classifier setting.
+    fn score_all(
+        &self,
+        by_features: &BTreeMap<Vec<usize>, Vec<usize>>,
+        progress: &(dyn Fn(usize, usize) + Sync),
+    ) -> Result<Vec<Vec<InnerScore>>, TuneError> {
+        let (scans, settings) = (self.scans, self.settings);
+        let mut scores = vec![vec![InnerScore::default(); settings.len()]; self.inner.len()];
+        let mut grids: Vec<(&Analysis, usize)> = Vec::new();
+        let mut ordered: Vec<(usize, &Vec<usize>)> = by_features
+            .values()
+            .map(|members| {
+                let a = &settings[members[0]].analysis;
+                let g = match grids.iter().position(|(g, _)| same_grid(g, a)) {
+                    Some(g) => g,
+                    None => {
+                        grids.push((a, 0));
+                        grids.len() - 1
+                    }
+                };
+                grids[g].1 += 1;
+                (g, members)
+            })
+            .collect();
+        ordered.sort_by_key(|&(g, _)| g);
+        let shared: Vec<bool> = grids
+            .iter()
+            .map(|&(a, count)| count > 1 && resampled_points(scans, a) <= RESAMPLED_MOST)
+            .collect();
+        let mut kept: (Option<usize>, Resampled) = (None, Vec::new());
+        let mut done = 0;
+        progress(0, settings.len());
+        for (g, members) in ordered {
+            let analysis = &settings[members[0]].analysis;
+            let features = if shared[g] {
+                if kept.0 != Some(g) {
+                    kept.1.clear(); // one grid's points in memory at a time
+                    kept = (Some(g), resample(scans, analysis, self.threads)?);
+                }
+                extract_resampled(scans, &kept.1, analysis, self.threads)?
+            } else {
+                extract(scans, analysis, self.threads)?
+            };
+            self.score_feature_setting(&features, members, &mut scores);
+            done += members.len();
+            progress(done, settings.len());
+        }
+        Ok(scores)
+    }
+
+    /// Adds to `scores` the inner scores of `members` (settings sharing
+    /// these features): one task per (part, inner fold, metric,
+    /// standardisation), each k and vote weighting counted from one
+    /// ranking of neighbours.
+    fn score_feature_setting(
+        &self,
+        features: &score::Features,
+        members: &[usize],
+        scores: &mut [Vec<InnerScore>],
+    ) {
+        let settings = self.settings;
+        let mut kinds: Vec<(Metric, bool)> = members
+            .iter()
+            .map(|&i| {
+                let c = &settings[i].classifier;
+                (c.metric, c.standardize)
+            })
+            .collect();
+        kinds.sort_by_key(|&(m, s)| (m as u8, s));
+        kinds.dedup();
+        // Every recording an inner fold trains or tests on.
+        let mut searched: Vec<usize> = self
+            .inner
+            .iter()
+            .flatten()
+            .flat_map(|p| p.train.iter().chain(&p.test).copied())
+            .collect();
+        searched.sort_unstable();
+        searched.dedup();
+        // One table of window pairs per metric scored unscaled.
+        let tables: Vec<(Metric, Option<Pairwise>)> = kinds
+            .iter()
+            .filter(|&&(_, standardize)| !standardize)
+            .map(|&(m, _)| (m, Pairwise::new(features, &searched, m, self.threads)))
+            .collect();
+        let table_of = |m| tables.iter().find(|t| t.0 == m).and_then(|t| t.1.as_ref());
+        let mut tasks = Vec::new();
+        for (p, folds) in self.inner.iter().enumerate() {
+            for f in 0..folds.len() {
+                for &kind in &kinds {
+                    tasks.push((p, f, kind));
+                }
+            }
+        }
+        let results = par_map(&tasks, self.threads, |&(p, f, (metric, standardize))| {
+            let voters: Vec<usize> = members
+                .iter()
+                .copied()
+                .filter(|&i| {
+                    let c = &settings[i].classifier;
+                    c.metric == metric && c.standardize == standardize
+                })
+                .collect();
+            let kw: Vec<_> = voters
+                .iter()
+                .map(|&i| (settings[i].classifier.k, settings[i].classifier.weights))
+                .collect();
+            let part = &self.inner[p][f];
+            let fold = Fold {
+                train: &part.train,
+                test: &part.test,
+            };
+            let voting = Voting {
+                classes: &self.data.classes,
+                n_classes: self.data.labels.len(),
+                metric,
+                standardize,
+            };
+            let got = score_fold(features, &voting, &fold, &kw, table_of(metric));
+            (p, voters, got, part.test.len().max(1) as f64)
+        });
+        for (p, voters, got, tested) in results {
+            let n_folds = self.inner[p].len() as f64;
+            for (i, g) in voters.into_iter().zip(got) {
+                let s = &mut scores[p][i];
+                s.accuracy += g.correct as f64 / tested / n_folds;
+                s.margin += g.margin / tested / n_folds;
+                s.true_share += g.true_share / tested / n_folds;
+            }
+        }
+    }
 }
 
 /// Run the search on the scans (read with [`crate::dataset::Keep::Samples`],
@@ -498,10 +734,13 @@ pub fn tune(
             test: Vec::new(),
         });
     }
-    let inner: Vec<Vec<Part>> = parts
+    let split = InnerSplit::of(&plan);
+    let (inner, made): (Vec<Vec<Part>>, Vec<InnerSplit>) = parts
         .iter()
-        .map(|p| inner_parts(scans, group_by, &p.train, options.seed))
-        .collect::<Result<_, _>>()?;
+        .map(|p| inner_parts(scans, group_by, &p.train, options.seed, split))
+        .collect::<Result<Vec<_>, _>>()?
+        .into_iter()
+        .unzip();
     let all = grid((&profile.analysis, &profile.classifier));
     if all.is_empty() {
         return Err(plan_error(
@@ -509,134 +748,36 @@ pub fn tune(
         ));
     }
     let settings = sample(all.clone(), options.budget.max(1), options.seed);
-    // scores[part][setting]
-    let mut scores = vec![vec![0.0; settings.len()]; parts.len()];
     let mut by_features: BTreeMap<Vec<usize>, Vec<usize>> = BTreeMap::new();
     for (i, s) in settings.iter().enumerate() {
         by_features.entry(s.feature_key()).or_default().push(i);
     }
-    // Every recording an inner fold trains or tests on.
-    let mut searched: Vec<usize> = parts.iter().flat_map(|p| p.train.clone()).collect();
-    searched.sort_unstable();
-    searched.dedup();
-    // Feature settings on one grid one after another: a grid two or more
-    // of them share is resampled once and kept while they are scored
-    // (unless it is over RESAMPLED_MOST points).
-    let mut grids: Vec<(&Analysis, usize)> = Vec::new();
-    let mut ordered: Vec<(usize, &Vec<usize>)> = by_features
-        .values()
-        .map(|members| {
-            let a = &settings[members[0]].analysis;
-            let g = match grids.iter().position(|(g, _)| same_grid(g, a)) {
-                Some(g) => g,
-                None => {
-                    grids.push((a, 0));
-                    grids.len() - 1
-                }
-            };
-            grids[g].1 += 1;
-            (g, members)
-        })
-        .collect();
-    ordered.sort_by_key(|&(g, _)| g);
-    let shared: Vec<bool> = grids
-        .iter()
-        .map(|&(a, count)| count > 1 && resampled_points(scans, a) <= RESAMPLED_MOST)
-        .collect();
-    let mut kept: (Option<usize>, Resampled) = (None, Vec::new());
-    let mut done = 0;
-    progress(0, settings.len());
-    for (g, members) in ordered {
-        let analysis = &settings[members[0]].analysis;
-        let features = if shared[g] {
-            if kept.0 != Some(g) {
-                kept.1.clear(); // one grid's points in memory at a time
-                kept = (Some(g), resample(scans, analysis, options.threads)?);
-            }
-            extract_resampled(scans, &kept.1, analysis, options.threads)?
-        } else {
-            extract(scans, analysis, options.threads)?
-        };
-        // One task per (outer part, inner fold, metric, standardize).
-        let mut kinds: Vec<(crate::profile::Metric, bool)> = members
-            .iter()
-            .map(|&i| {
-                let c = &settings[i].classifier;
-                (c.metric, c.standardize)
-            })
-            .collect();
-        kinds.sort_by_key(|&(m, s)| (m as u8, s));
-        kinds.dedup();
-        // One table of window pairs per metric scored unscaled.
-        let tables: Vec<(crate::profile::Metric, Option<Pairwise>)> = kinds
-            .iter()
-            .filter(|&&(_, standardize)| !standardize)
-            .map(|&(m, _)| (m, Pairwise::new(&features, &searched, m, options.threads)))
-            .collect();
-        let table_of = |m| tables.iter().find(|t| t.0 == m).and_then(|t| t.1.as_ref());
-        let mut tasks = Vec::new();
-        for (p, folds) in inner.iter().enumerate() {
-            for f in 0..folds.len() {
-                for &kind in &kinds {
-                    tasks.push((p, f, kind));
-                }
-            }
-        }
-        let results = par_map(&tasks, options.threads, |&(p, f, (metric, standardize))| {
-            let voters: Vec<usize> = members
-                .iter()
-                .copied()
-                .filter(|&i| {
-                    let c = &settings[i].classifier;
-                    c.metric == metric && c.standardize == standardize
-                })
-                .collect();
-            let kw: Vec<_> = voters
-                .iter()
-                .map(|&i| (settings[i].classifier.k, settings[i].classifier.weights))
-                .collect();
-            let fold = Fold {
-                train: &inner[p][f].train,
-                test: &inner[p][f].test,
-            };
-            let correct = fold_correct(
-                &features,
-                &data.classes,
-                data.labels.len(),
-                &fold,
-                metric,
-                standardize,
-                &kw,
-                table_of(metric),
-            );
-            let tested = inner[p][f].test.len().max(1) as f64;
-            (p, voters, correct, tested)
-        });
-        for (p, voters, correct, tested) in results {
-            let n_folds = inner[p].len() as f64;
-            for (i, c) in voters.into_iter().zip(correct) {
-                scores[p][i] += c as f64 / tested / n_folds;
-            }
-        }
-        done += members.len();
-        progress(done, settings.len());
-    }
+    let search = Search {
+        scans,
+        data: &data,
+        settings: &settings,
+        inner: &inner,
+        threads: options.threads,
+    };
+    let scores = search.score_all(&by_features, progress)?;
     let scored = |i: usize, p: usize| Scored {
         options: settings[i].describe(),
-        inner_accuracy: scores[p][i],
+        inner_accuracy: scores[p][i].accuracy,
+        inner_margin: scores[p][i].margin,
+        inner_true_votes: scores[p][i].true_share,
     };
     // Each outer part's choice, trained on its training part and tested
     // once on its test part.
     let mut predictions = Vec::new();
     let mut outer_folds = Vec::new();
-    let mut made: BTreeMap<Vec<usize>, score::Features> = BTreeMap::new();
+    let mut made_features: BTreeMap<Vec<usize>, score::Features> = BTreeMap::new();
     for (p, part) in parts.iter().enumerate() {
         if part.test.is_empty() {
             continue;
         }
         let chosen = best(&settings, &scores[p]);
         let setting = &settings[chosen];
-        let features = match made.entry(setting.feature_key()) {
+        let features = match made_features.entry(setting.feature_key()) {
             std::collections::btree_map::Entry::Occupied(e) => e.into_mut(),
             std::collections::btree_map::Entry::Vacant(e) => {
                 e.insert(extract(scans, &setting.analysis, options.threads)?)
@@ -652,41 +793,34 @@ pub fn tune(
         predictions.extend(rows);
     }
     let final_part = parts.len() - 1;
-    let chosen = best(&settings, &scores[final_part]);
-    let mut order: Vec<usize> = (0..settings.len()).collect();
-    order.sort_by(|&a, &b| {
-        scores[final_part][b]
-            .total_cmp(&scores[final_part][a])
-            .then_with(|| settings[a].simplicity().cmp(&settings[b].simplicity()))
-    });
+    let order = ranked(&settings, &scores[final_part]);
+    let chosen = order[0];
     let train_files = parts[0]
         .train
         .iter()
         .map(|&i| scans[i].file.clone())
         .collect();
     let outer = count(&data.labels, train_files, predictions);
+    let estimate = outer.accuracy;
     let method = match plan.method {
         SplitMethod::Holdout => "holdout".to_string(),
         SplitMethod::KFold => format!("{}-fold", plan.folds),
         SplitMethod::LeaveOneOut if group_by.is_some() => "leave-one-group-out".to_string(),
         SplitMethod::LeaveOneOut => "leave-one-out".to_string(),
     };
-    let feature_settings = by_features.len();
-    let feature_settings_scored = by_features
-        .values()
-        .map(|m| settings[m[0]].describe_features())
-        .collect();
     Ok(TuneReport {
         configurations: settings.len(),
         grid: all.len(),
-        feature_settings,
-        feature_settings_scored,
+        feature_settings: by_features.len(),
+        feature_settings_scored: by_features
+            .values()
+            .map(|m| settings[m[0]].describe_features())
+            .collect(),
         method,
         inner_folds: inner[final_part].len(),
-        inner_folds_in_time: group_by.is_none()
-            && overlapping_trials(scans, &parts[final_part].train),
-        outer_accuracy: outer.accuracy,
-        outer,
+        inner_split: made[final_part],
+        inner_folds_in_time: matches!(made[final_part], InnerSplit::Blocks | InnerSplit::Forward),
+        outer_accuracy: estimate,
         chosen: scored(chosen, final_part),
         table: order
             .iter()
@@ -697,6 +831,14 @@ pub fn tune(
             Vec::new()
         } else {
             outer_folds
+        },
+        outer,
+        tuned_on: TunedOn {
+            recordings: scans.len(),
+            fingerprint: fingerprint(scans.iter().map(|e| (e.label.as_str(), e.file.as_str()))),
+            validation: plan.describe(),
+            holdout: plan.method == SplitMethod::Holdout,
+            outer_estimate: estimate,
         },
         chosen_setting: Some(settings[chosen].clone()),
     })

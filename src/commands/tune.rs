@@ -146,16 +146,12 @@ pub fn run(a: TuneArgs) -> Result<(), Failure> {
 fn print_report(r: &TuneReport, a: &TuneArgs) {
     let pct = |x: f64| format!("{:.1} %", 100.0 * x);
     crate::outln!(
-        "{} of {} settings ({} feature settings) scored by {}-fold cross-validation{} inside each training part; outer validation: {}",
+        "{} of {} settings ({} feature settings) scored by {} inner folds ({}) inside each training part; outer validation: {}",
         r.configurations,
         r.grid,
         r.feature_settings,
         r.inner_folds,
-        if r.inner_folds_in_time {
-            " (blocks in time, overlapping trials left out)"
-        } else {
-            ""
-        },
+        r.inner_split.describe(),
         r.method
     );
     let chosen: Vec<String> = r
@@ -189,13 +185,23 @@ fn print_report(r: &TuneReport, a: &TuneArgs) {
         "wrote {} (the chosen lines marked `# tune`, the top settings in a comment)",
         a.out.display()
     );
-    crate::outln!(
-        "next: hapticlab evaluate {} -p {}",
-        a.paths
-            .iter()
-            .map(|p| p.display().to_string())
-            .collect::<Vec<_>>()
-            .join(" "),
-        a.out.display()
-    );
+    let dirs = a
+        .paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(" ");
+    if r.tuned_on.holdout {
+        crate::outln!(
+            "quote the outer estimate; next: hapticlab evaluate {dirs} -p {} (the same held-out part: the same figure)",
+            a.out.display()
+        );
+    } else {
+        crate::outln!(
+            "quote the outer estimate ({}): the lines written were chosen on every one of these recordings, so `evaluate` of {} on them flatters; next, on recordings the search never saw: hapticlab evaluate NEW_DIR -p {}",
+            pct(r.outer_accuracy),
+            a.out.display(),
+            a.out.display()
+        );
+    }
 }

@@ -43,6 +43,35 @@ pub fn k_text(lp: &LoadedProfile, ev: &Evaluation) -> String {
 /// used, what was evaluated, and why the method is not the profile's when
 /// it fell back.
 pub fn header(lp: &LoadedProfile, ev: &Evaluation) -> String {
+    match tuned_note(lp, ev) {
+        Some(note) => format!("{}\n{note}", method_line(lp, ev)),
+        None => method_line(lp, ev),
+    }
+}
+
+/// Which figure to quote when the profile was tuned on these recordings:
+/// the same held-out part gives tune's outer estimate; any other split
+/// tests recordings the search chose the lines on, and flatters.
+fn tuned_note(lp: &LoadedProfile, ev: &Evaluation) -> Option<String> {
+    let t = lp.tuned_on.as_ref().filter(|_| ev.tuned_on_these)?;
+    let estimate = format!("{:.1} %", 100.0 * t.outer_estimate);
+    Some(
+        if t.holdout && ev.fell_back.is_none() && t.validation == ev.plan.describe() {
+            format!(
+                "tuned on these recordings; this holdout's test part was never seen by the search, so this is tune's outer estimate ({estimate})"
+            )
+        } else {
+            format!(
+                "note: this profile was tuned on these recordings ({}): its lines were chosen on them, so the figure below flatters; quote tune's outer estimate, {estimate}",
+                t.validation
+            )
+        },
+    )
+}
+
+/// The method line: the profile, the k and the method actually used, what
+/// was evaluated, and why the method is not the profile's when it fell back.
+fn method_line(lp: &LoadedProfile, ev: &Evaluation) -> String {
     let p = &lp.profile;
     let fell_back = ev
         .fell_back

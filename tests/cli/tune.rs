@@ -92,7 +92,10 @@ fn tune_writes_a_profile_check_accepts_and_evaluate_scores_as_the_outer_estimate
     let (stdout, v) = tune_json(&rec, &prof, &out);
 
     assert_eq!(v["configurations"], 96, "{v}");
-    assert_eq!(v["inner_folds"], 5, "{v}");
+    // A time split: the inner folds go forward in time over the 5
+    // training trials of each label (4 folds, each testing the next trial).
+    assert_eq!(v["inner_folds"], 4, "{v}");
+    assert_eq!(v["inner_split"], "forward", "{v}");
     assert_eq!(v["method"], "holdout", "{v}");
     assert_eq!(v["outer"]["test"].as_array().map(Vec::len), Some(15), "{v}");
     let outer = v["outer_accuracy"].as_f64().expect("outer_accuracy");
@@ -116,7 +119,7 @@ fn tune_writes_a_profile_check_accepts_and_evaluate_scores_as_the_outer_estimate
     let right = (outer * 15.0).round() as usize;
     assert!(
         text.contains(&format!(
-            "# Outer estimate: {} ({right}/15 test recordings). The inner scores below are not an estimate."
+            "# Outer estimate: {} ({right}/15 test recordings): the figure to quote. The inner scores below are not an estimate."
         , pct(outer))),
         "{text}"
     );
@@ -138,6 +141,13 @@ fn tune_writes_a_profile_check_accepts_and_evaluate_scores_as_the_outer_estimate
     assert!(
         r.stdout.contains(&format!("accuracy: {right}/15")),
         "evaluate with the written profile is not tune's outer estimate ({right}/15): {r:?}"
+    );
+    assert!(
+        r.stdout.contains(&format!(
+            "this holdout's test part was never seen by the search, so this is tune's outer estimate ({})",
+            pct(outer)
+        )),
+        "{r:?}"
     );
 
     // The same seed: the same bytes, printed and written.
@@ -228,4 +238,50 @@ fn tune_refuses_plans_that_cannot_test_in_one_line() {
         assert!(message.contains(todo), "{name}: says what to do: {r:?}");
         assert!(!out.exists(), "{name}: nothing written");
     }
+}
+
+#[test]
+fn after_a_k_fold_search_the_figure_to_quote_is_the_outer_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = recordings(&dir.path().join("rec"), &["A", "B", "C"], 6, 6);
+    let prof = profile(dir.path(), "folds", "method = \"k-fold\"\nfolds = 3");
+    let out = dir.path().join("tuned.toml");
+    let r = run(&[
+        "tune",
+        p(&rec),
+        "-p",
+        p(&prof),
+        "--out",
+        p(&out),
+        "--budget",
+        "48",
+    ]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    // The hint names the figure to quote, not an evaluate that flatters.
+    let hint = r.stdout.lines().last().unwrap_or_default();
+    assert!(
+        hint.starts_with("quote the outer estimate (") && hint.contains("flatters"),
+        "{r:?}"
+    );
+    assert!(hint.contains("hapticlab evaluate NEW_DIR -p"), "{r:?}");
+    let text = fs::read_to_string(&out).unwrap();
+    assert!(text.contains("# tuned_on = { "), "{text}");
+    assert!(
+        text.contains("so `hapticlab evaluate` of this profile on"),
+        "{text}"
+    );
+    // evaluate on the recordings searched says its figure flatters...
+    let r = run(&["evaluate", p(&rec), "-p", p(&out)]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(
+        r.stdout
+            .contains("note: this profile was tuned on these recordings (3-fold cross-validation"),
+        "{r:?}\n{text}"
+    );
+    assert!(r.stdout.contains("quote tune's outer estimate, "), "{r:?}");
+    // ...and on others (here one fewer) it does not.
+    fs::remove_file(rec.join("A").join("A-trial06.csv")).unwrap();
+    let r = run(&["evaluate", p(&rec), "-p", p(&out)]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(!r.stdout.contains("tuned on these"), "{r:?}");
 }

@@ -34,6 +34,9 @@ pub type Folds = Vec<Vec<usize>>;
 #[derive(Debug, Clone, PartialEq)]
 pub struct Dealt {
     pub folds: Folds,
+    /// Per fold, the items its training leaves out besides its test ones:
+    /// those sharing samples with a tested one, and, forward in time
+    /// ([`deal_forward`]), the later ones.
     pub purged: Vec<Vec<usize>>,
     /// Whether segments of one recording were dealt as blocks in time.
     pub in_time: bool,
@@ -88,31 +91,11 @@ pub fn deal(
     };
     let purged = shared.purge(&f);
     // Only a fold that left something out can have lost a label's every
-    // training recording (without it, `every_label_testable` holds); counted
-    // per label, so leave-one-out over thousands stays linear per fold.
-    let mut total: BTreeMap<&str, usize> = BTreeMap::new();
-    for l in labels {
-        *total.entry(l).or_default() += 1;
-    }
+    // training recording (without it, `every_label_testable` holds).
+    let total = label_counts(labels, 0..labels.len());
     for (k, (test, gone)) in f.iter().zip(&purged).enumerate() {
-        if gone.is_empty() {
-            continue;
-        }
-        let mut away: BTreeMap<&str, usize> = BTreeMap::new();
-        for &i in test.iter().chain(gone) {
-            *away.entry(labels[i]).or_default() += 1;
-        }
-        if let Some(&t) = test.iter().find(|&&t| away[labels[t]] >= total[labels[t]]) {
-            return Err(EvaluateError::Folds(format!(
-                "fold {} of {}: every {:?} recording it could train on overlaps one it tests \
-                 (trials cut from one recording share samples), so nothing of {:?} is left to \
-                 learn from: import with a --split-hop of --split or more, use fewer folds, or \
-                 record more",
-                k + 1,
-                f.len(),
-                labels[t],
-                labels[t]
-            )));
+        if !gone.is_empty() {
+            check_trainable(labels, &total, test, gone, (k, f.len()))?;
         }
     }
     Ok(Dealt {
@@ -120,6 +103,133 @@ pub fn deal(
         purged,
         in_time,
     })
+}
+
+/// How many of `items` carry each label.
+fn label_counts<'a>(
+    labels: &[&'a str],
+    items: impl IntoIterator<Item = usize>,
+) -> BTreeMap<&'a str, usize> {
+    let mut total: BTreeMap<&str, usize> = BTreeMap::new();
+    for i in items {
+        *total.entry(labels[i]).or_default() += 1;
+    }
+    total
+}
+
+/// Refuses fold `k` of `of` when a label it tests has no item left to train
+/// on once its test items and `gone` (those overlapping one it tests) are
+/// out of the `total` it could train on. Counted per label, so
+/// leave-one-out over thousands stays linear per fold.
+fn check_trainable(
+    labels: &[&str],
+    total: &BTreeMap<&str, usize>,
+    test: &[usize],
+    gone: &[usize],
+    (k, of): (usize, usize),
+) -> Result<(), EvaluateError> {
+    let away = label_counts(labels, test.iter().chain(gone).copied());
+    match test
+        .iter()
+        .find(|&&t| away[labels[t]] >= total.get(labels[t]).copied().unwrap_or(0))
+    {
+        Some(&t) => Err(EvaluateError::Folds(format!(
+            "fold {} of {of}: every {:?} recording it could train on overlaps one it tests \
+             (trials cut from one recording share samples), so nothing of {:?} is left to \
+             learn from: import with a --split-hop of --split or more, use fewer folds, or \
+             record more",
+            k + 1,
+            labels[t],
+            labels[t]
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// Folds forward in time, as a time split tests (and as scikit-learn's
+/// `TimeSeriesSplit`, stratified): each label's items, in the order given
+/// (the earliest first), are cut into `folds + 1` consecutive blocks; fold
+/// `j` tests block `j` of every label and trains on the blocks before it
+/// only. `purged` holds, per fold, every item its training leaves out: the
+/// later blocks, and the earlier items that overlap one it tests
+/// ([`Shared`]). Fewer folds when a label has too few items, or when
+/// overlapping items would leave a fold nothing of a label to train on
+/// (larger blocks reach further back); refused when even one fold cannot.
+pub fn deal_forward(
+    labels: &[&str],
+    shared: &Shared,
+    folds: usize,
+) -> Result<Dealt, EvaluateError> {
+    let mut by: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
+    for (i, l) in labels.iter().enumerate() {
+        by.entry(l).or_default().push(i);
+    }
+    let fewest = by.values().map(Vec::len).min().unwrap_or(0);
+    if fewest < 2 {
+        return Err(EvaluateError::Folds(format!(
+            "folds forward in time need at least 2 recordings of each label to train on one \
+             and test the next, and {} has {}",
+            by.iter()
+                .find(|(_, v)| v.len() == fewest)
+                .map_or(String::new(), |(l, _)| format!("{l:?}")),
+            fewest
+        )));
+    }
+    let most = folds.clamp(1, fewest - 1);
+    let mut refused = None;
+    for m in (1..=most).rev() {
+        match forward_blocks(labels, &by, shared, m) {
+            Ok(d) => return Ok(d),
+            Err(e) => refused = refused.or(Some(e)),
+        }
+    }
+    Err(refused.unwrap_or(EvaluateError::NoExamples))
+}
+
+/// [`deal_forward`]'s `m` folds over `by` (each label's items in time order).
+fn forward_blocks(
+    labels: &[&str],
+    by: &BTreeMap<&str, Vec<usize>>,
+    shared: &Shared,
+    m: usize,
+) -> Result<Dealt, EvaluateError> {
+    let mut block = vec![0usize; labels.len()];
+    for items in by.values() {
+        let n = items.len();
+        for (p, &i) in items.iter().enumerate() {
+            block[i] = p * (m + 1) / n;
+        }
+    }
+    let total = label_counts(labels, 0..labels.len());
+    let mut out = Dealt {
+        folds: Vec::with_capacity(m),
+        purged: Vec::with_capacity(m),
+        in_time: true,
+    };
+    for j in 1..=m {
+        let test: Vec<usize> = (0..labels.len()).filter(|&i| block[i] == j).collect();
+        let mut gone: Vec<usize> = (0..labels.len()).filter(|&i| block[i] > j).collect();
+        // What overlaps a tested item and would otherwise train.
+        let near: Vec<usize> = shared
+            .neighbours(&test)
+            .into_iter()
+            .filter(|&i| block[i] < j)
+            .collect();
+        if !near.is_empty() {
+            check_trainable(
+                labels,
+                &total,
+                &test,
+                &[&gone[..], &near[..]].concat(),
+                (j - 1, m),
+            )?;
+            gone.extend(near);
+            gone.sort_unstable();
+        }
+        out.folds.push(test);
+        out.purged.push(gone);
+    }
+    Ok(out)
 }
 
 /// Folds for k-fold (`folds` of them) or leave-one-out, over examples with
@@ -662,5 +772,71 @@ impl CvReport {
                 n as f64 / self.folds.len().max(1) as f64
             )),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::folds::Segment;
+
+    #[test]
+    fn forward_folds_train_on_earlier_trials_only() {
+        // Two labels, 6 trials each, interleaved as files sort.
+        let labels: Vec<&str> = (0..12)
+            .map(|i| if i % 2 == 0 { "a" } else { "b" })
+            .collect();
+        let d = deal_forward(&labels, &Shared::none(12), 5).unwrap();
+        // 5 folds of 6 blocks of one trial each: fold j tests trial j of
+        // each label and trains on trials 0..j.
+        assert_eq!(d.folds.len(), 5);
+        assert!(d.in_time);
+        for (j, (test, gone)) in d.folds.iter().zip(&d.purged).enumerate() {
+            let j = j + 1;
+            assert_eq!(test, &vec![2 * j, 2 * j + 1]);
+            let train: Vec<usize> = (0..12)
+                .filter(|i| !test.contains(i) && !gone.contains(i))
+                .collect();
+            assert_eq!(train, (0..2 * j).collect::<Vec<_>>(), "fold {j}");
+        }
+        // Fewer folds than asked when a label has few trials.
+        let three: Vec<&str> = vec!["a", "a", "a", "b", "b", "b", "b"];
+        assert_eq!(
+            deal_forward(&three, &Shared::none(7), 5)
+                .unwrap()
+                .folds
+                .len(),
+            2
+        );
+        let e = deal_forward(&["a", "a", "b"], &Shared::none(3), 5).unwrap_err();
+        assert!(e.to_string().contains("\"b\" has 1"), "{e}");
+    }
+
+    #[test]
+    fn forward_folds_leave_out_overlapping_trials_and_widen_blocks() {
+        // One source per label, 4 half-overlapping 1 s trials each.
+        let seg = |source: &str, t: usize| {
+            Some(Segment {
+                source: source.into(),
+                start: t as f64 * 0.5,
+                length: 1.0,
+            })
+        };
+        let labels = ["a", "a", "a", "a", "b", "b", "b", "b"];
+        let spans = (0..8).map(|i| seg(labels[i], i % 4)).collect::<Vec<_>>();
+        let shared = Shared::new(spans);
+        // Three folds (blocks of one trial) would leave fold 1 nothing to
+        // train on (its only earlier trial overlaps the tested one): two,
+        // the first block two trials long.
+        let d = deal_forward(&labels, &shared, 3).unwrap();
+        assert_eq!(d.folds, vec![vec![2, 6], vec![3, 7]]);
+        // Fold 1 trains on 0 and 4 (1 and 5 overlap 2 and 6; 3 and 7 are
+        // later); fold 2 on 0, 1, 4 and 5.
+        assert_eq!(d.purged, vec![vec![1, 3, 5, 7], vec![2, 6]]);
+        // Two half-overlapping trials each: nothing can be tested forward.
+        let two = ["a", "a", "b", "b"];
+        let spans = (0..4).map(|i| seg(two[i], i % 2)).collect();
+        let e = deal_forward(&two, &Shared::new(spans), 3).unwrap_err();
+        assert!(e.to_string().contains("overlaps one it tests"), "{e}");
     }
 }

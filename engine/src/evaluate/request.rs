@@ -137,6 +137,22 @@ pub struct Evaluation {
     pub simulated: Option<Simulated>,
     /// Recordings left out (incomplete).
     pub skipped: Vec<Skipped>,
+    /// Whether these are the recordings the profile was tuned on (its
+    /// `tune` mark's fingerprint: [`crate::profile::tuned`]).
+    pub tuned_on_these: bool,
+}
+
+/// Whether the recordings are those the profile's `tune` mark names.
+fn tuned_on_these(lp: &LoadedProfile, data: &Recordings) -> bool {
+    lp.tuned_on.as_ref().is_some_and(|t| {
+        t.recordings == data.counts().0
+            && t.fingerprint
+                == crate::profile::tuned::fingerprint(
+                    data.scans
+                        .iter()
+                        .map(|e| (e.label.as_str(), e.file.as_str())),
+                )
+    })
 }
 
 impl Outcome {
@@ -253,6 +269,7 @@ pub fn run(
                 per_point: true,
             }),
             skipped: Vec::new(),
+            tuned_on_these: false,
         });
     }
     // Samples are kept only when a sweep extracts features again per value;
@@ -284,6 +301,7 @@ pub fn run(
             recordings,
             windows,
             simulated,
+            tuned_on_these: tuned_on_these(lp, &data),
             skipped: data.skipped,
         });
     }
@@ -308,6 +326,7 @@ pub fn run(
         recordings,
         windows,
         simulated,
+        tuned_on_these: tuned_on_these(lp, &data),
         skipped: data.skipped,
     })
 }
@@ -368,6 +387,7 @@ fn thesis_holdout(
         recordings,
         windows,
         simulated: None,
+        tuned_on_these: tuned_on_these(lp, &data),
         skipped: data.skipped,
     })
 }

@@ -53,6 +53,34 @@ fn rounded(x: f64, digits: u32, how: fn(f64) -> f64) -> (f64, i32) {
     (v, e)
 }
 
+/// `x` rounded up to `digits` significant digits, with its shortest text
+/// (trailing zeros dropped: `1 / 2200` to 6 digits is `0.000454546`, and
+/// `1 / 1000` stays `0.001`): a value a person can read that TOML reads
+/// back exactly, and never below `x`.
+pub fn ceil_significant(x: f64, digits: u32) -> (f64, String) {
+    if !(x.is_finite() && x > 0.0) {
+        return (x, float(x));
+    }
+    let (v, e) = rounded(x, digits, f64::ceil);
+    let decimals = (-e).max(0) as usize;
+    let mut text = format!("{v:.decimals$}");
+    if text.contains('.') {
+        text.truncate(text.trim_end_matches('0').len());
+        if text.ends_with('.') {
+            text.push('0');
+        }
+    } else {
+        text.push_str(".0");
+    }
+    let read: f64 = text.parse().unwrap_or(v);
+    // Float noise in the scaling can land a hair below x: one more step up.
+    if read < x {
+        let step = 10f64.powi(e);
+        return ceil_significant(read + step / 2.0, digits);
+    }
+    (read, text)
+}
+
 fn round3(x: f64, how: fn(f64) -> f64) -> (f64, String) {
     if !(x.is_finite() && x > 0.0) {
         return (x, float(x));
@@ -107,6 +135,26 @@ pub fn fitting_bands(a: &Analysis) -> Option<Bands> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_sample_period_is_written_readably_and_never_below_itself() {
+        for (rate, text) in [
+            (2200.0, "0.000454546"),
+            (1000.0, "0.001"),
+            (100.0, "0.01"),
+            (44100.0, "0.0000226758"),
+            (3.0, "0.333334"),
+            (0.5, "2.0"),
+        ] {
+            let (v, t) = ceil_significant(1.0 / rate, 6);
+            assert_eq!(t, text, "{rate} Hz");
+            assert_eq!(t.parse::<f64>().unwrap(), v);
+            assert!(
+                v >= 1.0 / rate && v <= 1.0 / rate * (1.0 + 1e-5),
+                "{rate} Hz: {v}"
+            );
+        }
+    }
 
     #[test]
     fn three_digits_read_back_as_written() {

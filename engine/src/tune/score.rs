@@ -1,7 +1,7 @@
 //! The fast path of the search: feature vectors made once per feature
 //! setting ([`extract`]), and one fold scored for every classifier setting
 //! that shares a metric and a standardisation from one table of
-//! neighbours ([`fold_correct`]): each test window's training windows
+//! neighbours ([`score_fold`]): each test window's training windows
 //! ranked once, nearest first, serve every k and both vote weights. The
 //! vote is the classifier's own ([`crate::classify::rank_classes`]) and a
 //! recording's sub-windows vote as in [`crate::classify::vote`], so a
@@ -12,7 +12,7 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use crate::analysis::FeatureExtractor;
-use crate::classify::{Scaling, dot, rank_classes, rank_value};
+use crate::classify::{Scaling, dot, rank_classes, rank_value, to_distance};
 use crate::dataset::{DatasetError, Entry};
 use crate::profile::{Analysis, Metric, Weights};
 
@@ -229,90 +229,128 @@ pub struct Fold<'a> {
     pub test: &'a [usize],
 }
 
-/// For each `(k, weights)`, how many of the fold's test recordings the
-/// k-NN with `metric` (on features standardised by the training windows'
-/// mean and deviation when `standardize`) trained on the fold's training
-/// recordings classifies right, each recording by its sub-windows' vote.
-/// `pairwise`, the metric's table over (at least) the fold's recordings,
-/// serves a fold that does not standardise.
-#[allow(clippy::too_many_arguments)]
-pub fn fold_correct(
-    features: &Features,
-    classes: &[usize],
-    n_classes: usize,
-    fold: &Fold,
-    metric: Metric,
-    standardize: bool,
-    voters: &[(usize, Weights)],
-    pairwise: Option<&Pairwise>,
-) -> Vec<usize> {
-    let mut rows: Vec<&[f64]> = Vec::new();
-    let mut row_class: Vec<usize> = Vec::new();
-    // Each training window's index in the table, when the table serves.
-    let mut row_at: Vec<usize> = Vec::new();
-    let mut table = pairwise.filter(|_| !standardize);
-    for &r in fold.train {
-        for (w, window) in features[r].iter().enumerate() {
-            rows.push(window);
-            row_class.push(classes[r]);
-            if let Some(t) = table {
-                match t.at(r, w) {
-                    Some(i) => row_at.push(i),
-                    None => table = None,
+/// What a fold says of one classifier setting: how many of its test
+/// recordings it classifies right, and two finer scores summed over them,
+/// which break ties between settings whose counts are equal (saturated
+/// inner folds) by how clearly they were right rather than by sampling
+/// luck: the margin of each test window (how much nearer its nearest
+/// training window of its own label is than the nearest of another,
+/// relative to both: -1 to 1; the mean over its sub-windows), and the
+/// share of its neighbour votes (over all its sub-windows) that went to
+/// its own label.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct FoldScore {
+    pub correct: usize,
+    pub margin: f64,
+    pub true_share: f64,
+}
+
+/// A test window's margin: `(other - own) / (other + own)` of the distances
+/// to its nearest training window of its own label and of another (1 with
+/// none of another, -1 with none of its own, 0 when both are at distance 0).
+fn margin(metric: Metric, ranked: &[(f64, usize)], class: &[usize], truth: usize) -> f64 {
+    let (mut own, mut other) = (f64::INFINITY, f64::INFINITY);
+    for &(r, i) in ranked {
+        let d = to_distance(metric, r);
+        if class[i] == truth {
+            own = own.min(d);
+        } else {
+            other = other.min(d);
+        }
+    }
+    match (own.is_finite(), other.is_finite()) {
+        (true, true) if own + other > 0.0 => (other - own) / (other + own),
+        (true, true) => 0.0,
+        (true, false) => 1.0,
+        (false, _) => -1.0,
+    }
+}
+
+/// The labels a fold is scored against and how its k-NN measures.
+pub struct Voting<'a> {
+    /// Each recording's class (an index below `n_classes`).
+    pub classes: &'a [usize],
+    pub n_classes: usize,
+    pub metric: Metric,
+    /// Features standardised by the training windows' mean and deviation.
+    pub standardize: bool,
+}
+
+/// A fold's training windows, as the k-NN searches them.
+struct TrainingRows<'a> {
+    rows: Vec<&'a [f64]>,
+    class: Vec<usize>,
+    /// Each row's index in the table, when the table serves every
+    /// training and test window (`None` otherwise).
+    table: Option<(&'a Pairwise, Vec<usize>)>,
+}
+
+impl<'a> TrainingRows<'a> {
+    fn gather(
+        features: &'a Features,
+        voting: &Voting,
+        fold: &Fold,
+        pairwise: Option<&'a Pairwise>,
+    ) -> TrainingRows<'a> {
+        let mut rows: Vec<&[f64]> = Vec::new();
+        let mut class: Vec<usize> = Vec::new();
+        let mut row_at: Vec<usize> = Vec::new();
+        let mut table = pairwise.filter(|_| !voting.standardize);
+        for &r in fold.train {
+            for (w, window) in features[r].iter().enumerate() {
+                rows.push(window);
+                class.push(voting.classes[r]);
+                if let Some(t) = table {
+                    match t.at(r, w) {
+                        Some(i) => row_at.push(i),
+                        None => table = None,
+                    }
                 }
             }
         }
-    }
-    if fold
-        .test
-        .iter()
-        .any(|&t| table.is_some_and(|p| p.at(t, 0).is_none()))
-    {
-        table = None;
-    }
-    let d = rows.first().map_or(0, |r| r.len());
-    let scaling = standardize.then(|| Scaling::fit(&rows));
-    // The fold's own copy of its training windows, when no table serves.
-    let copies = if table.is_some() { 0 } else { rows.len() };
-    let mut matrix = vec![0.0; copies * d];
-    for (out, row) in matrix.chunks_exact_mut(d.max(1)).zip(&rows) {
-        match &scaling {
-            Some(s) => s.apply(row, out),
-            None => out.copy_from_slice(row),
+        if fold
+            .test
+            .iter()
+            .any(|&t| table.is_some_and(|p| p.at(t, 0).is_none()))
+        {
+            table = None;
+        }
+        TrainingRows {
+            rows,
+            class,
+            table: table.map(|t| (t, row_at)),
         }
     }
-    let norms: Vec<f64> = if metric == Metric::Cosine {
-        matrix
-            .chunks_exact(d.max(1))
-            .map(|r| dot(r, r).sqrt())
-            .collect()
-    } else {
-        vec![0.0; rows.len()]
-    };
-    let k_most = voters
-        .iter()
-        .map(|v| v.0)
-        .max()
-        .unwrap_or(1)
-        .clamp(1, rows.len().max(1));
-    // Each test window's k_most nearest training windows, nearest first
-    // (ties in training order, as the model's search), in test order.
+}
+
+/// Each test window's `k_most` nearest training windows, nearest first
+/// (ties in training order, as the model's search), and its [`margin`], in
+/// test order.
+fn nearest_windows(
+    features: &Features,
+    voting: &Voting,
+    fold: &Fold,
+    train: &TrainingRows,
+    k_most: usize,
+) -> Vec<(Vec<(f64, usize)>, f64)> {
     let test_windows: Vec<(usize, usize)> = fold
         .test
         .iter()
         .flat_map(|&t| (0..features[t].len()).map(move |w| (t, w)))
         .collect();
     let by = |a: &(f64, usize), b: &(f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
-    let keep_nearest = |mut ranked: Vec<(f64, usize)>| {
+    let metric = voting.metric;
+    let keep_nearest = |mut ranked: Vec<(f64, usize)>, t: usize| {
+        let m = margin(metric, &ranked, &train.class, voting.classes[t]);
         if k_most < ranked.len() {
             ranked.select_nth_unstable_by(k_most, by);
             ranked.truncate(k_most);
         }
         ranked.sort_unstable_by(by);
-        ranked
+        (ranked, m)
     };
-    let nearest: Vec<Vec<(f64, usize)>> = match table {
-        Some(p) => test_windows
+    if let Some((p, row_at)) = &train.table {
+        return test_windows
             .iter()
             .map(|&(t, w)| {
                 let q_at = p.at(t, w).unwrap_or(0);
@@ -323,52 +361,89 @@ pub fn fold_correct(
                         .enumerate()
                         .map(|(i, &at)| (from[at], i))
                         .collect(),
+                    t,
                 )
             })
-            .collect(),
-        None => {
-            let mut out = Vec::with_capacity(test_windows.len());
-            for block in test_windows.chunks(QUERY_BLOCK) {
-                let queries: Vec<Vec<f64>> = block
-                    .iter()
-                    .map(|&(t, w)| {
-                        let window = &features[t][w];
-                        match &scaling {
-                            Some(s) => {
-                                let mut q = vec![0.0; d];
-                                s.apply(window, &mut q);
-                                q
-                            }
-                            None => window.clone(),
-                        }
-                    })
-                    .collect();
-                let q_norms: Vec<f64> = queries
-                    .iter()
-                    .map(|q| {
-                        if metric == Metric::Cosine {
-                            dot(q, q).sqrt()
-                        } else {
-                            0.0
-                        }
-                    })
-                    .collect();
-                // Each training window once per block of queries, rather
-                // than once per query: the same values, a fraction of the
-                // memory traffic when the windows are long spectra.
-                let mut ranked: Vec<Vec<(f64, usize)>> =
-                    vec![Vec::with_capacity(rows.len()); queries.len()];
-                for (i, (row, &n)) in matrix.chunks_exact(d.max(1)).zip(&norms).enumerate() {
-                    for ((q, &q_norm), r) in queries.iter().zip(&q_norms).zip(ranked.iter_mut()) {
-                        r.push((rank_value(metric, q, q_norm, row, n), i));
-                    }
-                }
-                out.extend(ranked.into_iter().map(keep_nearest));
-            }
-            out
+            .collect();
+    }
+    let d = train.rows.first().map_or(0, |r| r.len());
+    let scaling = voting.standardize.then(|| Scaling::fit(&train.rows));
+    // The fold's own copy of its training windows.
+    let mut matrix = vec![0.0; train.rows.len() * d];
+    for (out, row) in matrix.chunks_exact_mut(d.max(1)).zip(&train.rows) {
+        match &scaling {
+            Some(s) => s.apply(row, out),
+            None => out.copy_from_slice(row),
+        }
+    }
+    let norm = |v: &[f64]| {
+        if metric == Metric::Cosine {
+            dot(v, v).sqrt()
+        } else {
+            0.0
         }
     };
-    let mut correct = vec![0usize; voters.len()];
+    let norms: Vec<f64> = matrix.chunks_exact(d.max(1)).map(norm).collect();
+    let mut out = Vec::with_capacity(test_windows.len());
+    for block in test_windows.chunks(QUERY_BLOCK) {
+        let queries: Vec<Vec<f64>> = block
+            .iter()
+            .map(|&(t, w)| {
+                let window = &features[t][w];
+                match &scaling {
+                    Some(s) => {
+                        let mut q = vec![0.0; d];
+                        s.apply(window, &mut q);
+                        q
+                    }
+                    None => window.clone(),
+                }
+            })
+            .collect();
+        let q_norms: Vec<f64> = queries.iter().map(|q| norm(q)).collect();
+        // Each training window once per block of queries, rather than once
+        // per query: the same values, a fraction of the memory traffic when
+        // the windows are long spectra.
+        let mut ranked: Vec<Vec<(f64, usize)>> =
+            vec![Vec::with_capacity(train.rows.len()); queries.len()];
+        for (i, (row, &n)) in matrix.chunks_exact(d.max(1)).zip(&norms).enumerate() {
+            for ((q, &q_norm), r) in queries.iter().zip(&q_norms).zip(ranked.iter_mut()) {
+                r.push((rank_value(metric, q, q_norm, row, n), i));
+            }
+        }
+        out.extend(
+            ranked
+                .into_iter()
+                .zip(block)
+                .map(|(r, &(t, _))| keep_nearest(r, t)),
+        );
+    }
+    out
+}
+
+/// For each `(k, weights)`, what the k-NN with the voting's metric (on
+/// standardised features when it says so) trained on the fold's training
+/// recordings scores on its test recordings ([`FoldScore`]), each
+/// recording by its sub-windows' vote. `pairwise`, the metric's table over
+/// (at least) the fold's recordings, serves a fold that does not
+/// standardise.
+pub fn score_fold(
+    features: &Features,
+    voting: &Voting,
+    fold: &Fold,
+    voters: &[(usize, Weights)],
+    pairwise: Option<&Pairwise>,
+) -> Vec<FoldScore> {
+    let train = TrainingRows::gather(features, voting, fold, pairwise);
+    let k_most = voters
+        .iter()
+        .map(|v| v.0)
+        .max()
+        .unwrap_or(1)
+        .clamp(1, train.rows.len().max(1));
+    let nearest = nearest_windows(features, voting, fold, &train, k_most);
+    let n_classes = voting.n_classes;
+    let mut out = vec![FoldScore::default(); voters.len()];
     // Per voter: sub-windows won and neighbour votes, per class.
     let mut won = vec![vec![0usize; n_classes]; voters.len()];
     let mut votes = vec![vec![0usize; n_classes]; voters.len()];
@@ -377,20 +452,29 @@ pub fn fold_correct(
         for v in won.iter_mut().chain(votes.iter_mut()) {
             v.iter_mut().for_each(|x| *x = 0);
         }
-        for _ in 0..features[t].len() {
-            let ranked = &nearest[at];
+        let windows = features[t].len();
+        let mut margins = 0.0;
+        for _ in 0..windows {
+            let (ranked, m) = &nearest[at];
+            margins += m;
             at += 1;
             for (v, &(k, weights)) in voters.iter().enumerate() {
                 let k = k.clamp(1, ranked.len().max(1));
-                let (order, count) =
-                    rank_classes(metric, weights, &ranked[..k], &row_class, n_classes);
+                let (order, count) = rank_classes(
+                    voting.metric,
+                    weights,
+                    &ranked[..k],
+                    &train.class,
+                    n_classes,
+                );
                 won[v][order[0]] += 1;
                 for (c, n) in count.iter().enumerate() {
                     votes[v][c] += n;
                 }
             }
         }
-        for v in 0..voters.len() {
+        let truth = voting.classes[t];
+        for (v, score) in out.iter_mut().enumerate() {
             // Most sub-windows, then most neighbour votes, then the first label.
             let best = (0..n_classes)
                 .max_by(|&a, &b| {
@@ -400,17 +484,84 @@ pub fn fold_correct(
                         .then(b.cmp(&a))
                 })
                 .unwrap_or(0);
-            if best == classes[t] {
-                correct[v] += 1;
+            if best == truth {
+                score.correct += 1;
+            }
+            score.margin += margins / windows.max(1) as f64;
+            let cast: usize = votes[v].iter().sum();
+            if cast > 0 {
+                score.true_share += votes[v][truth] as f64 / cast as f64;
             }
         }
     }
-    correct
+    out
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`FoldScore`]'s margin and true share summed over `test`, each
+    /// window against every training window, unscaled, by brute force.
+    fn naive_finer(
+        features: &Features,
+        classes: &[usize],
+        train: &[usize],
+        test: &[usize],
+        metric: Metric,
+        k: usize,
+    ) -> (f64, f64) {
+        let norm = |v: &[f64]| {
+            if metric == Metric::Cosine {
+                dot(v, v).sqrt()
+            } else {
+                0.0
+            }
+        };
+        let (mut margin_sum, mut share_sum) = (0.0, 0.0);
+        for &t in test {
+            let (mut m, mut own_votes, mut cast) = (0.0, 0, 0);
+            for q in &features[t] {
+                let mut d: Vec<(f64, usize, usize)> = Vec::new();
+                for &r in train {
+                    for row in &features[r] {
+                        let rv = rank_value(metric, q, norm(q), row, norm(row));
+                        d.push((rv, d.len(), classes[r]));
+                    }
+                }
+                let dist = |c: bool| {
+                    d.iter()
+                        .filter(|x| (x.2 == classes[t]) == c)
+                        .map(|x| to_distance(metric, x.0))
+                        .fold(f64::INFINITY, f64::min)
+                };
+                let (own, other) = (dist(true), dist(false));
+                m += if own + other > 0.0 {
+                    (other - own) / (other + own)
+                } else {
+                    0.0
+                };
+                d.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+                let k = k.min(d.len());
+                own_votes += d[..k].iter().filter(|x| x.2 == classes[t]).count();
+                cast += k;
+            }
+            margin_sum += m / features[t].len() as f64;
+            share_sum += own_votes as f64 / cast as f64;
+        }
+        (margin_sum, share_sum)
+    }
+
+    #[test]
+    fn a_margin_says_how_much_nearer_its_own_label_is() {
+        let class = [0, 1, 0];
+        let m = |r: &[(f64, usize)]| margin(Metric::Manhattan, r, &class, 0);
+        assert_eq!(m(&[(1.0, 0), (3.0, 1)]), 0.5);
+        assert_eq!(m(&[(3.0, 0), (1.0, 1), (2.0, 2)]), -1.0 / 3.0);
+        assert_eq!(m(&[(0.0, 0), (0.0, 1)]), 0.0);
+        assert_eq!(m(&[(2.0, 0), (5.0, 2)]), 1.0, "no other label");
+        assert_eq!(m(&[(2.0, 1)]), -1.0, "none of its own");
+    }
     use crate::classify::{Model, TrainingExample};
     use crate::profile::{Classifier, Metric, Weights};
 
@@ -464,30 +615,18 @@ mod tests {
                     train: &train,
                     test: &test,
                 };
-                let got = fold_correct(
-                    &features,
-                    &classes,
-                    3,
-                    &fold,
+                let voting = Voting {
+                    classes: &classes,
+                    n_classes: 3,
                     metric,
                     standardize,
-                    &voters,
-                    None,
-                );
+                };
+                let got = score_fold(&features, &voting, &fold, &voters, None);
                 // A table of every pair (or of more recordings than the
                 // fold's) counts the same.
                 let all: Vec<usize> = (0..60).rev().collect();
                 let table = Pairwise::new(&features, &all, metric, 2).unwrap();
-                let tabled = fold_correct(
-                    &features,
-                    &classes,
-                    3,
-                    &fold,
-                    metric,
-                    standardize,
-                    &voters,
-                    Some(&table),
-                );
+                let tabled = score_fold(&features, &voting, &fold, &voters, Some(&table));
                 assert_eq!(got, tabled, "{metric:?} std {standardize}");
                 for (v, &(k, weights)) in voters.iter().enumerate() {
                     let c = Classifier {
@@ -513,9 +652,19 @@ mod tests {
                         })
                         .count();
                     assert_eq!(
-                        got[v], want,
+                        got[v].correct, want,
                         "{metric:?} std {standardize} k {k} {weights:?}"
                     );
+                    if !standardize {
+                        let (margin, share) =
+                            naive_finer(&features, &classes, &train, &test, metric, k);
+                        assert!(
+                            (got[v].margin - margin).abs() < 1e-9
+                                && (got[v].true_share - share).abs() < 1e-9,
+                            "{metric:?} k {k}: {:?} vs {margin} {share}",
+                            got[v]
+                        );
+                    }
                 }
             }
         }

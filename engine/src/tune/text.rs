@@ -134,15 +134,10 @@ fn comment_block(r: &TuneReport, about: &str) -> String {
     );
     let _ = writeln!(
         w,
-        "# search scored by {}-fold cross-validation inside the training part only, the best then",
-        r.inner_folds
+        "# search scored by {} inner folds ({}) inside the training part only, the best then",
+        r.inner_folds,
+        r.inner_split.describe()
     );
-    if r.inner_folds_in_time {
-        let _ = writeln!(
-            w,
-            "# (the trials overlap: each fold a block in time, the trials overlapping its test ones left out),"
-        );
-    }
     let _ = writeln!(
         w,
         "# tested once on what [evaluation] ({}) holds out.",
@@ -150,11 +145,27 @@ fn comment_block(r: &TuneReport, about: &str) -> String {
     );
     let _ = writeln!(
         w,
-        "# Outer estimate: {} ({}/{} test recordings). The inner scores below are not an estimate.",
+        "# Outer estimate: {} ({}/{} test recordings): the figure to quote. The inner scores below are not an estimate.",
         pct(r.outer_accuracy),
         r.outer.correct(),
         r.outer.tested()
     );
+    if r.tuned_on.holdout {
+        let _ = writeln!(
+            w,
+            "# `hapticlab evaluate` of this profile on these recordings tests the same held-out part: the same figure."
+        );
+    } else {
+        let _ = writeln!(
+            w,
+            "# These lines were chosen on every one of these recordings, so `hapticlab evaluate` of this profile on"
+        );
+        let _ = writeln!(
+            w,
+            "# them flatters (it says so): quote the outer estimate, or evaluate on recordings the search never saw."
+        );
+    }
+    let _ = writeln!(w, "{}", r.tuned_on.line());
     let _ = writeln!(
         w,
         "# Best settings by inner score (mean accuracy over the inner folds):"

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use super::cautions::{self, per_label};
 use super::survey::{self, Survey};
-use crate::profile::fitted::fitting_bands;
+use crate::profile::fitted::{ceil_significant, fitting_bands};
 use crate::profile::options::Group;
 use crate::profile::{Analysis, Classifier, Metric, SpectrumKind, Taper, check_options};
 
@@ -78,7 +78,16 @@ fn spacing_of(s: &Survey, axis: &str, time: bool) -> (f64, String, String) {
         } else {
             format!("one sample period, 1 / {} Hz", shown(slowest))
         };
-        return (1.0 / slowest, float(1.0 / slowest), why);
+        // Six digits, rounded up (`0.000454546` for 2.2 kHz, not the
+        // float noise of `0.00045454545454545455`): a hair coarser than
+        // the samples, never finer.
+        let (spacing, text) = ceil_significant(1.0 / slowest, 6);
+        let why = if spacing == 1.0 / slowest {
+            why
+        } else {
+            format!("{why}, rounded up to six digits")
+        };
+        return (spacing, text, why);
     }
     let step = s.step.get(axis).copied().unwrap_or(0.0);
     if step * 10.0 <= 0.0003 {
