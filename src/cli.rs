@@ -36,3 +36,9 @@ impl Cli {
         self.command.unwrap_or(Command::Console(self.console))
     }
 }
+
+/// The whole command line's clap definition, for what is generated from it
+/// (`hapticlab completions`, `hapticlab man`).
+pub fn definition() -> clap::Command {
+    <Cli as clap::CommandFactory>::command()
+}

@@ -7,6 +7,7 @@ mod common;
 
 mod bad_recordings;
 mod cli;
+mod completions_man;
 mod console_windows;
 mod doctor;
 mod evaluate_windows;
