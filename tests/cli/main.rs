@@ -34,5 +34,6 @@ mod sweep_grid;
 mod sweep_simulated;
 mod tune;
 mod validation;
+mod version;
 mod white_noise;
 mod windows;
