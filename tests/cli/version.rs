@@ -133,3 +133,40 @@ fn files_from_before_the_commit_was_recorded_still_read() {
     assert_eq!(r.code, Some(0), "{r:?}");
     assert!(r.stdout.contains("S2"), "{r:?}");
 }
+
+/// An imported recording says which hapticlab wrote it too, and `--meta`
+/// cannot say otherwise.
+#[test]
+fn an_imported_recording_carries_the_version_line() {
+    let line = software();
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("S1/trial.csv");
+    fs::create_dir_all(csv.parent().unwrap()).unwrap();
+    let rows: String = (0..64)
+        .map(|i| format!("{}\n", (i as f64 * 0.3).sin()))
+        .collect();
+    fs::write(&csv, format!("acc\n{rows}")).unwrap();
+    let out = dir.path().join("rec");
+    let r = run(&["import", p(&csv), "--rate", "100", "--out", p(&out)]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let text = fs::read_to_string(out.join("S1/trial.csv")).unwrap();
+    assert!(
+        text.lines()
+            .any(|l| l == format!("# software = \"{line}\"")),
+        "{text}"
+    );
+    let again = dir.path().join("rec2");
+    let r = run(&[
+        "import",
+        p(&csv),
+        "--rate",
+        "100",
+        "--out",
+        p(&again),
+        "--meta",
+        "software=mine",
+    ]);
+    assert_eq!(r.code, Some(2), "{r:?}");
+    assert!(r.stderr.contains("--meta software"), "{r:?}");
+    assert!(!again.exists(), "{r:?}");
+}
