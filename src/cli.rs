@@ -1,5 +1,5 @@
 //! The command line's top (clap derive): the program's name, help and
-//! version, and its [`Command`]. Each command's arguments live with the
+//! version (with the commit it was built from), and its [`Command`]. Each command's arguments live with the
 //! command in `commands/<name>.rs`; the console's are also accepted without
 //! a command (`hapticlab --dataset DIR`), as the console is the default.
 
@@ -11,7 +11,8 @@ use crate::commands::console::ConsoleArgs;
 #[derive(Debug, Parser)]
 #[command(
     name = "hapticlab",
-    version,
+    // With the commit it was built from: `hapticlab 0.1.0 (commit 67c70ce)`.
+    version = crate::version::VERSION,
     about = "Haptic texture classification with a Novint Falcon (or its simulation)",
     long_about = "Haptic texture classification with a Novint Falcon (or its physical simulation): \
                   stroke a texture along a waypoint path, record the probe's trace, and name the \
@@ -35,4 +36,10 @@ impl Cli {
     pub fn command(self) -> Command {
         self.command.unwrap_or(Command::Console(self.console))
     }
+}
+
+/// The whole command line's clap definition, for what is generated from it
+/// (`hapticlab completions`, `hapticlab man`).
+pub fn definition() -> clap::Command {
+    <Cli as clap::CommandFactory>::command()
 }

@@ -12,6 +12,7 @@ use crate::support::Failure;
 
 pub mod check;
 pub mod classify;
+pub mod completions;
 pub mod console;
 pub mod devices;
 pub mod doctor;
@@ -19,6 +20,7 @@ pub mod evaluate;
 pub mod features;
 pub mod import;
 pub mod inspect;
+pub mod man;
 pub mod plot;
 pub mod profile;
 pub mod replay;
@@ -108,6 +110,16 @@ pub enum Command {
     /// Check profiles: parse and validate every value.
     #[command(after_help = "Example:\n  hapticlab check profiles/*.toml")]
     Check(check::CheckArgs),
+    /// Print the shell completion script for bash, zsh, fish, elvish or powershell.
+    #[command(
+        after_help = "Install (bash, zsh, fish):\n  hapticlab completions bash > ~/.local/share/bash-completion/completions/hapticlab\n  hapticlab completions zsh > ~/.zfunc/_hapticlab   # with fpath+=~/.zfunc before compinit in ~/.zshrc\n  hapticlab completions fish > ~/.config/fish/completions/hapticlab.fish\n\nExample:\n  hapticlab completions bash > hapticlab.bash"
+    )]
+    Completions(completions::CompletionsArgs),
+    /// Print the manual page (roff), or write one page per command with --out DIR.
+    #[command(
+        after_help = "Install:\n  hapticlab man > ~/.local/share/man/man1/hapticlab.1\n  hapticlab man --out ~/.local/share/man/man1   # and hapticlab-evaluate.1, … for each command\n\nExamples:\n  hapticlab man > hapticlab.1\n  hapticlab man --out man"
+    )]
+    Man(man::ManArgs),
 }
 
 /// Run one command.
@@ -129,5 +141,7 @@ pub fn run(cmd: Command) -> Result<(), Failure> {
         Command::Plot(a) => plot::run(&a),
         Command::Import(a) => import::run(a),
         Command::Inspect(a) => inspect::run(a),
+        Command::Completions(a) => completions::run(a),
+        Command::Man(a) => man::run(a),
     }
 }

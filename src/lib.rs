@@ -12,7 +12,7 @@
 
 pub use hapticlab_engine::{
     acquire, analysis, classify, clock, dataset, device, evaluate, folds, import, io, predictor,
-    profile, recorder, recording, servo, triggers, tune,
+    profile, recorder, recording, servo, triggers, tune, version,
 };
 
 pub mod cli;

@@ -105,7 +105,7 @@ pub fn scan_metadata(
     }
     meta.push((
         "software".to_string(),
-        Value::String(format!("hapticlab {}", env!("CARGO_PKG_VERSION"))),
+        Value::String(crate::version::SOFTWARE.into()),
     ));
     if let Some(rig) = rig {
         let path = rig.path;

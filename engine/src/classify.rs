@@ -64,7 +64,8 @@ pub struct TrainingExample {
 pub struct Model {
     /// Always [`MODEL_FORMAT`].
     pub format: String,
-    /// The hapticlab version that trained it.
+    /// The hapticlab version that trained it, with its commit
+    /// ([`crate::version::VERSION`]; models from before say `0.1.0`).
     pub software_version: String,
     /// The name of the profile it was trained under.
     pub profile: String,
@@ -523,7 +524,7 @@ impl Model {
         });
         let mut model = Model {
             format: MODEL_FORMAT.to_string(),
-            software_version: env!("CARGO_PKG_VERSION").to_string(),
+            software_version: crate::version::VERSION.to_string(),
             profile: profile_name.to_string(),
             analysis: analysis.clone(),
             classifier,

@@ -488,6 +488,12 @@ fn stage(
     let mut imp = parse_file(bytes, &origin, &ext, args)?;
     let label = label_of(f, &origin, args, imp.label.take())?;
     imp.meta.extend(source.meta());
+    // Which hapticlab wrote it, as every recording says (and `--meta
+    // software=…` is refused as a key the import writes).
+    imp.meta.push((
+        "software".to_string(),
+        toml::Value::String(crate::version::SOFTWARE.into()),
+    ));
     check_written_names(&imp, extra, &origin, args)?;
     imp.meta.extend(extra.iter().cloned());
     let Some(length) = args.split else {

@@ -17,7 +17,8 @@
 //!                                  samples to disk; other rigs' files (CSV, text, WAV, NumPy,
 //!                                  MATLAB) to recordings
 //! recording · profile              ground: recording format v1 (and the files a command may read
-//!                                  and write); the TOML schema, its checks, the list of options
+//!                                  and write); the TOML schema, its checks, the list of options;
+//!                                  version: the package version and the commit it was built from
 //! ```
 //!
 //! It knows nothing of any user interface: it never prints, reads the
@@ -43,3 +44,4 @@ pub mod recording;
 pub mod servo;
 pub mod triggers;
 pub mod tune;
+pub mod version;

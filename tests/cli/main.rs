@@ -7,6 +7,7 @@ mod common;
 
 mod bad_recordings;
 mod cli;
+mod completions_man;
 mod console_windows;
 mod doctor;
 mod evaluate_windows;
@@ -33,5 +34,6 @@ mod sweep_grid;
 mod sweep_simulated;
 mod tune;
 mod validation;
+mod version;
 mod white_noise;
 mod windows;

@@ -129,6 +129,9 @@ fn tune_writes_a_profile_check_accepts_and_evaluate_scores_as_the_outer_estimate
     );
     assert!(text.contains(&format!("# {:>7}", pct(inner))), "{text}");
     assert!(text.contains("  # tune\n"), "{text}");
+    // The code that chose it, as `--version` names it.
+    let software = format!("# software = \"{}\"\n", crate::version::software());
+    assert!(text.contains(&software), "{software}{text}");
 
     let r = run(&["check", p(&out)]);
     assert_eq!(

@@ -13,7 +13,7 @@ const FRONT_END_CRATES: [&str; 4] = ["clap", "ratatui", "crossterm", "indicatif"
 /// layer's ground modules listed before it and any module of a lower layer.
 /// Written as in engine/src/lib.rs's doc comment.
 const LAYERS: [&[&str]; 8] = [
-    &["io", "recording", "profile", "folds"],
+    &["version", "io", "recording", "profile", "folds"],
     &["clock", "analysis", "triggers", "recorder", "import"],
     &["device", "classify"],
     &["dataset", "servo"],

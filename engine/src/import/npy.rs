@@ -566,7 +566,7 @@ pub fn parse_npz_file(bytes: &[u8], origin: &str, args: &Request) -> Result<Impo
 /// Whether a scalar array or variable named `k` can be metadata: a key
 /// `--meta` would take, and none the import sets itself.
 fn scalar_key(k: &str) -> bool {
-    const SET: [&str; 4] = ["source", "device", "wav_format", "full_scale"];
+    const SET: [&str; 5] = ["source", "device", "wav_format", "full_scale", "software"];
     super::parse_meta(&format!("{k}=0")).is_ok()
         && !SET.contains(&k)
         && !super::split::KEYS.contains(&k)

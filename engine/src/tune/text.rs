@@ -127,6 +127,8 @@ fn comment_block(r: &TuneReport, about: &str) -> String {
     let mut w = String::new();
     let pct = |x: f64| format!("{:.1} %", 100.0 * x);
     let _ = writeln!(w, "\n# --- hapticlab tune: {about} ---");
+    // Which code chose it, as a recording's `software` key says.
+    let _ = writeln!(w, "# software = {:?}", crate::version::SOFTWARE);
     let _ = writeln!(
         w,
         "# The lines marked `# tune` were chosen by nested validation: {} of the {} settings of the",

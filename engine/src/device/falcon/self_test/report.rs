@@ -143,7 +143,7 @@ pub struct Report {
 impl Report {
     pub(super) fn new(profile: &str) -> Report {
         Report {
-            hapticlab: env!("CARGO_PKG_VERSION").into(),
+            hapticlab: crate::version::VERSION.into(),
             platform: format!("{} {}", std::env::consts::OS, std::env::consts::ARCH),
             profile: profile.into(),
             device: String::new(),
