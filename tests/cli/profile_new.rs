@@ -438,3 +438,24 @@ fn trials_numbered_without_leading_zeros_are_warned_about() {
         "{text}"
     );
 }
+
+#[test]
+fn many_recordings_per_label_still_start_at_1_nn_and_2_2_khz_reads_as_written() {
+    // 12 recordings a label at 2.2 kHz: 5-NN lost to 1-NN on every
+    // generated set with many trials (the README), so the first choice
+    // stays 1-NN; the spacing is one period to six digits, rounded up.
+    let dir = tempfile::tempdir().unwrap();
+    let rec = dir.path().join("rec");
+    folder(&rec, 12, |_| (2200, 2200.0, String::new()));
+    let out = dir.path().join("p.toml");
+    let r = run(&["profile", "new", "--from", p(&rec), "--out", p(&out)]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let text = fs::read_to_string(&out).unwrap();
+    assert!(text.contains("\nk = 1 "), "{text}");
+    assert!(text.contains("the nearest recording decides"), "{text}");
+    assert!(text.contains("\nspacing = 0.000454546 "), "{text}");
+    assert!(text.contains("rounded up to six digits"), "{text}");
+    assert!(!text.contains("4545454545"), "{text}");
+    let r = run(&["check", p(&out)]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+}

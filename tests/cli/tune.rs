@@ -64,6 +64,20 @@ fn profile(dir: &Path, name: &str, evaluation: &str) -> PathBuf {
 
 const TIME_SPLIT: &str = "method = \"holdout\"\ntrain_per_class = 5\ntest_per_class = 5";
 
+/// `tune` with a budget of 48 settings (one feature setting).
+fn tune_48(rec: &Path, prof: &Path, out: &Path) -> crate::common::run::Run {
+    run(&[
+        "tune",
+        p(rec),
+        "-p",
+        p(prof),
+        "--out",
+        p(out),
+        "--budget",
+        "48",
+    ])
+}
+
 fn tune_json(rec: &Path, prof: &Path, out: &Path) -> (String, serde_json::Value) {
     let r = run(&[
         "tune",
@@ -224,16 +238,7 @@ fn tune_refuses_plans_that_cannot_test_in_one_line() {
         let rec = recordings(&dir.path().join(name), labels, trials, trials);
         let prof = profile(dir.path(), name, evaluation);
         let out = dir.path().join(format!("{name}-tuned.toml"));
-        let r = run(&[
-            "tune",
-            p(&rec),
-            "-p",
-            p(&prof),
-            "--out",
-            p(&out),
-            "--budget",
-            "48",
-        ]);
+        let r = tune_48(&rec, &prof, &out);
         assert_eq!(r.code, Some(2), "{name}: {r:?}");
         let message = r.stderr.trim();
         assert_eq!(message.lines().count(), 1, "{name}: one line: {r:?}");
@@ -249,16 +254,7 @@ fn after_a_k_fold_search_the_figure_to_quote_is_the_outer_one() {
     let rec = recordings(&dir.path().join("rec"), &["A", "B", "C"], 6, 6);
     let prof = profile(dir.path(), "folds", "method = \"k-fold\"\nfolds = 3");
     let out = dir.path().join("tuned.toml");
-    let r = run(&[
-        "tune",
-        p(&rec),
-        "-p",
-        p(&prof),
-        "--out",
-        p(&out),
-        "--budget",
-        "48",
-    ]);
+    let r = tune_48(&rec, &prof, &out);
     assert_eq!(r.code, Some(0), "{r:?}");
     // The hint names the figure to quote, not an evaluate that flatters.
     let hint = r.stdout.lines().last().unwrap_or_default();

@@ -8,11 +8,15 @@ use std::fmt::Write as _;
 use std::fs;
 use std::path::Path;
 
+use hapticlab::console::dataset::evaluate_dataset;
+use hapticlab::profile::LoadedProfile;
+
 use crate::common::{json_of, p, run};
 
 /// Three labels of uniform white noise, one 20 s trace each at 100 Hz,
-/// imported as 1 s trials every 0.5 s; and `profile new`'s profile.
-fn noise(dir: &Path, seed: u64) -> (String, String) {
+/// imported as 1 s trials every `hop` seconds (0.5: overlapping; 1:
+/// adjacent); and `profile new`'s profile.
+fn noise_cut(dir: &Path, seed: u64, hop: &str) -> (String, String) {
     let mut files = Vec::new();
     for (l, label) in ["A", "B", "C"].iter().enumerate() {
         let mut s = String::from("acc\n");
@@ -36,7 +40,7 @@ fn noise(dir: &Path, seed: u64) -> (String, String) {
         "--split",
         "1",
         "--split-hop",
-        "0.5",
+        hop,
         "--out",
         p(&rec),
     ];
@@ -47,6 +51,26 @@ fn noise(dir: &Path, seed: u64) -> (String, String) {
     let r = run(&["profile", "new", "--from", p(&rec), "--out", p(&profile)]);
     assert_eq!(r.code, Some(0), "{r:?}");
     (p(&rec).to_string(), p(&profile).to_string())
+}
+
+fn noise(dir: &Path, seed: u64) -> (String, String) {
+    noise_cut(dir, seed, "0.5")
+}
+
+/// The console's `e` on the folder with the profile: its accuracy and how
+/// many recordings it tested.
+fn console_e(rec: &str, profile: &str) -> (f64, usize) {
+    let text = fs::read_to_string(profile).unwrap();
+    let lp = LoadedProfile::from_str(&text, profile, Path::new(".")).unwrap();
+    let e = evaluate_dataset(&lp, Path::new(rec)).unwrap_or_else(|e| panic!("{profile}: {e}"));
+    (e.report.accuracy, e.report.predictions.len())
+}
+
+/// Whether an accuracy over `tested` tests is above chance (a third) by
+/// more than 3.3 standard errors.
+fn above_chance(accuracy: f64, tested: usize) -> bool {
+    let p = 1.0 / 3.0;
+    accuracy > p + 3.3 * (p * (1.0 - p) / tested as f64).sqrt()
 }
 
 /// Whether `v` (an `evaluate --json` report) scores above chance (a third)
@@ -60,9 +84,7 @@ fn leaks(v: &serde_json::Value) -> bool {
         .iter()
         .flat_map(|r| r.as_array().unwrap().iter().map(|c| c.as_u64().unwrap()))
         .sum();
-    let p = 1.0 / 3.0;
-    let bound = p + 3.3 * (p * (1.0 - p) / tested as f64).sqrt();
-    v["accuracy"].as_f64().unwrap() > bound
+    above_chance(v["accuracy"].as_f64().unwrap(), tested as usize)
 }
 
 #[test]
@@ -75,6 +97,10 @@ fn overlapping_segments_of_white_noise_score_chance_under_every_method() {
             &["--folds", "5"][..],
             &["--loo"],
             &["--folds", "3", "--seed", "4"],
+            // Grouped by a key every segment has its own value of: the
+            // groups alone would not keep neighbours apart.
+            &["--folds", "5", "--group-by", "segment"],
+            &["--loo", "--group-by", "segment"],
         ] {
             let mut args = vec!["evaluate", rec.as_str(), "-p", profile.as_str(), "--json"];
             args.extend_from_slice(method);
@@ -182,5 +208,35 @@ fn overlapping_segments_of_white_noise_score_chance_under_every_method() {
             // 117 tests a point: chance plus 3.3 standard errors is 48 %.
             assert!(acc < 0.48, "seed {seed} sweep {point}");
         }
+        // The console's `e`: the profile's holdout (with and without the
+        // gap) and k-fold, through the same evaluation (it falls back when
+        // a plan cannot test, as --fallback).
+        for pr in [profile.as_str(), p(&nogap), p(&kfold)] {
+            let (accuracy, tested) = console_e(&rec, pr);
+            assert!(
+                !above_chance(accuracy, tested),
+                "seed {seed} console e {pr}: {accuracy} of {tested}"
+            );
+        }
+    }
+}
+
+#[test]
+fn adjacent_segments_of_white_noise_score_chance_too() {
+    let dir = tempfile::tempdir().unwrap();
+    for seed in [3, 4] {
+        let d = dir.path().join(format!("s{seed}"));
+        let (rec, profile) = noise_cut(&d, seed, "1");
+        for method in [&["--folds", "5"][..], &["--loo"], &[]] {
+            let mut args = vec!["evaluate", rec.as_str(), "-p", profile.as_str(), "--json"];
+            args.extend_from_slice(method);
+            let v = json_of(&args);
+            assert!(!leaks(&v), "seed {seed} {method:?}: {}", v["accuracy"]);
+        }
+        let (accuracy, tested) = console_e(&rec, &profile);
+        assert!(
+            !above_chance(accuracy, tested),
+            "seed {seed} console e: {accuracy}"
+        );
     }
 }

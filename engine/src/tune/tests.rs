@@ -2,6 +2,7 @@
 //! choices are made on training folds only, groups and sub-windows stay on
 //! one side, a seed gives one answer, and plans that cannot test are refused.
 
+use super::parts::span_of;
 use super::score::{Fold, Voting, extract, score_fold};
 use super::*;
 use crate::dataset::Entry;
