@@ -66,6 +66,8 @@
 //! and analysed alike; the feature vector is their features concatenated.
 
 mod bands;
+pub mod kernels;
+pub mod quantiles;
 mod resample;
 mod spectrum;
 

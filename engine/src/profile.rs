@@ -29,6 +29,7 @@ pub mod controller;
 pub mod device;
 pub mod evaluation;
 pub mod falcon_reach;
+pub mod families;
 pub mod fitted;
 pub mod hardware;
 pub mod locate;
