@@ -43,6 +43,7 @@ use crate::profile::{Analysis, Classifier, Metric, Weights};
 
 mod k_choice;
 mod model_file;
+pub mod ridge;
 use k_choice::{inner_folds, recording_numbers, select_k, smallest_class};
 mod vote;
 pub use vote::{RecordingPrediction, WindowTally, WindowVote, vote};
