@@ -39,19 +39,20 @@ use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
 use super::quantiles::quantile_sorted;
+use crate::profile::families;
 
 /// Taps of every kernel.
 pub const KERNEL_LENGTH: usize = 9;
 /// The kernels: every choice of 3 of the 9 positions.
-pub const KERNEL_COUNT: usize = 84;
+pub const KERNEL_COUNT: usize = families::KERNEL_COUNT;
 /// At most this many dilations per kernel.
 pub const MAX_DILATIONS: usize = 32;
 /// The features asked for by default (9996 made: a multiple of 84).
-pub const DEFAULT_FEATURES: usize = 10_000;
+pub const DEFAULT_FEATURES: usize = families::DEFAULT_KERNEL_FEATURES;
 /// The fewest points a window may have: one kernel's span.
-pub const MIN_POINTS: usize = KERNEL_LENGTH;
+pub const MIN_POINTS: usize = families::KERNEL_MIN_POINTS;
 /// The most features that may be asked for, per channel.
-pub const MAX_FEATURES: usize = 100_000;
+pub const MAX_FEATURES: usize = families::KERNEL_FEATURES_RANGE[1];
 /// The draws of the training window behind each kernel/dilation's biases.
 const SEED: u64 = 0x006b_6572_6e65_6c73;
 
@@ -116,7 +117,7 @@ impl KernelLayout {
                 "random kernels need windows of at least {MIN_POINTS} points, got {points}"
             ));
         }
-        if !(KERNEL_COUNT..=MAX_FEATURES).contains(&asked) {
+        if !(families::KERNEL_FEATURES_RANGE[0]..=MAX_FEATURES).contains(&asked) {
             return Err(format!(
                 "must be {KERNEL_COUNT} to {MAX_FEATURES} features, got {asked}"
             ));

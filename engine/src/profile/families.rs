@@ -29,6 +29,15 @@ impl FeatureFamily {
     }
 }
 
+/// Random kernels: the features asked for per channel by default.
+pub const DEFAULT_KERNEL_FEATURES: usize = 10_000;
+/// Random kernels: the fewest and most features that may be asked for.
+pub const KERNEL_FEATURES_RANGE: [usize; 2] = [84, 100_000];
+/// Random kernels: their number (every choice of 3 of 9 positions).
+pub const KERNEL_COUNT: usize = 84;
+/// Random kernels: the fewest points a window may have (one kernel's span).
+pub const KERNEL_MIN_POINTS: usize = 9;
+
 /// The deepest level of dyadic intervals (QUANT's default).
 pub const QUANTILE_DEPTH: usize = 6;
 /// One quantile per this many points of an interval (QUANT's default).
