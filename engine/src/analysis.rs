@@ -61,11 +61,21 @@
 //! grid to the sub-window's start and reuses the one FFT plan and buffers,
 //! so a sub-window costs no allocation beyond its output.
 //!
+//! # Other feature families
+//! With `features = "quantiles"` each channel's detrended window becomes
+//! interval quantiles ([`quantiles`], QUANT); with `features = "kernels"`
+//! its detrended points are the features handed on, and the model fits
+//! and applies the random kernels ([`kernels`], MiniRocket), because their
+//! biases are fitted on training windows only. The spectrum is still
+//! computed, for display.
+//!
 //! # Several channels
 //! `channel` and then each of `channels` is resampled along the same axis
 //! and analysed alike; the feature vector is their features concatenated.
 
 mod bands;
+pub mod kernels;
+pub mod quantiles;
 mod resample;
 mod spectrum;
 
@@ -73,9 +83,10 @@ use std::fmt;
 
 use thiserror::Error;
 
-use crate::profile::Analysis;
+use crate::profile::{Analysis, FeatureFamily};
 use crate::profile::{check_options, check_windows};
 use bands::BandFeatures;
+use quantiles::Quantiles;
 use resample::Resampler;
 use spectrum::Spectrum;
 
@@ -212,7 +223,11 @@ pub fn check_settings(settings: &Analysis) -> Result<(), String> {
     crate::profile::check_points(settings).map_err(|(key, reason)| format!("{key}: {reason}"))?;
     let [a, b] = settings.bins;
     let m = settings.dft_points();
-    if settings.band.is_none() && settings.bands.is_none() && (a > b || b > m / 2) {
+    if settings.uses_spectrum()
+        && settings.band.is_none()
+        && settings.bands.is_none()
+        && (a > b || b > m / 2)
+    {
         return Err(format!(
             "analysis.bins must be [first, last] with first <= last <= {}, got {:?}",
             m / 2,
@@ -238,6 +253,8 @@ pub struct FeatureExtractor {
     kept: [usize; 2],
     /// `bands` (and `cepstra`), when set: reduce the linear power to them.
     bands: Option<BandFeatures>,
+    /// `features = "quantiles"`: the interval quantile transform.
+    quantiles: Option<Quantiles>,
     /// One channel's band features.
     band_values: Vec<f64>,
     has_spectrum: bool,
@@ -309,6 +326,7 @@ impl FeatureExtractor {
             kept: settings.kept_bins(),
             band_values: vec![0.0; bands.as_ref().map_or(0, BandFeatures::len)],
             bands,
+            quantiles: (settings.features == FeatureFamily::Quantiles).then(|| Quantiles::new(n)),
             has_spectrum: false,
             sub_windows: settings.sub_windows(),
             in_order: false,
@@ -338,19 +356,9 @@ impl FeatureExtractor {
     /// signal (`settings.features_per_channel()` values).
     pub fn features(&mut self, axis: &[f64], signal: &[f64]) -> Result<&[f64], AnalysisError> {
         self.transform(axis, signal)?;
-        check_finite(self.channel_features())
-    }
-
-    /// The features of the spectrum last transformed: the kept bins, or the
-    /// band energies / cepstra.
-    fn channel_features(&mut self) -> &[f64] {
-        match &mut self.bands {
-            Some(b) => {
-                b.compute(&self.values, &mut self.band_values);
-                &self.band_values
-            }
-            None => &self.values[self.kept[0]..=self.kept[1]],
-        }
+        let per = self.settings.features_per_channel();
+        self.keep_channel(0, per);
+        check_finite(&self.features[..per])
     }
 
     fn transform(&mut self, axis: &[f64], signal: &[f64]) -> Result<(), AnalysisError> {
@@ -413,14 +421,22 @@ impl FeatureExtractor {
     /// Channel `c`'s features (`per` of them) of the spectrum last
     /// transformed, into their place in `self.features`.
     fn keep_channel(&mut self, c: usize, per: usize) {
-        if let Some(b) = &mut self.bands {
-            b.compute(&self.values, &mut self.band_values);
+        let slot = &mut self.features[c * per..(c + 1) * per];
+        match (self.settings.features, &mut self.quantiles) {
+            // The model's kernels transform the detrended points.
+            (FeatureFamily::Kernels, _) => slot.copy_from_slice(&self.detrended),
+            (FeatureFamily::Quantiles, Some(q)) => q.compute(&self.detrended, slot),
+            _ => {
+                if let Some(b) = &mut self.bands {
+                    b.compute(&self.values, &mut self.band_values);
+                }
+                let own = match self.bands {
+                    Some(_) => &self.band_values[..],
+                    None => &self.values[self.kept[0]..=self.kept[1]],
+                };
+                slot.copy_from_slice(own);
+            }
         }
-        let own = match self.bands {
-            Some(_) => &self.band_values[..],
-            None => &self.values[self.kept[0]..=self.kept[1]],
-        };
-        self.features[c * per..(c + 1) * per].copy_from_slice(own);
     }
 
     /// The `[start, end]` of each sub-window along the axis, in order (the

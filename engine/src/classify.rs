@@ -39,16 +39,25 @@ use thiserror::Error;
 use crate::analysis;
 
 pub mod live;
-use crate::profile::{Analysis, Classifier, Metric, Weights};
+use crate::analysis::kernels::KernelTransform;
+use crate::profile::{Analysis, Classifier, FeatureFamily, Method, Metric, Weights};
+use ridge::RidgeFit;
 
 mod k_choice;
 mod model_file;
+pub mod ridge;
 use k_choice::{inner_folds, recording_numbers, select_k, smallest_class};
 mod vote;
 pub use vote::{RecordingPrediction, WindowTally, WindowVote, vote};
 
-/// The `format` tag of a model file this version reads and writes.
+/// The `format` tag of a model file this version reads and writes: a
+/// k-NN over features made without fitting (the spectrum's, the
+/// quantiles'), as every version has written it.
 pub const MODEL_FORMAT: &str = "hapticlab model v1";
+/// The `format` tag of a model that carries what it fitted beyond its
+/// examples: random kernels' biases ([`Model::kernels`]) or a ridge
+/// ([`Model::ridge`]). A v1 file has neither and still loads.
+pub const MODEL_FORMAT_V2: &str = "hapticlab model v2";
 
 /// One labelled feature vector, named by the recording it came from.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -85,6 +94,15 @@ pub struct Model {
     /// scans than k); `classifier.k` was then chosen as by `k = "auto"`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub k_fallback: Option<KFallback>,
+    /// `features = "kernels"`: the random kernels, their biases fitted on
+    /// the examples (the training windows) only. Every window, the
+    /// examples' and a query's, is transformed by them before the
+    /// classifier sees it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kernels: Option<KernelTransform>,
+    /// `method = "ridge"`: the ridge fitted on the (transformed) examples.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ridge: Option<RidgeFit>,
     /// The examples' features as the distance sees them (scaled), row-major.
     #[serde(skip)]
     matrix: Vec<f64>,
@@ -230,6 +248,11 @@ pub enum ClassifyError {
          features are too far from the model's range"
     )]
     Unmeasurable { file: String },
+    #[error(
+        "the ridge's score for {label} is not a finite number: the scan's features are too far \
+         from the model's range"
+    )]
+    ScoreNotFinite { label: String },
     #[error("the model's analysis settings are unusable: {0}")]
     Settings(String),
     #[error(
@@ -278,7 +301,9 @@ fn check_parts(
     if examples.is_empty() {
         return Err(ClassifyError::NoExamples);
     }
-    if classifier.k == 0 {
+    if classifier.method == Method::Ridge {
+        // k is not used.
+    } else if classifier.k == 0 {
         return Err(ClassifyError::KZero);
     }
     if classifier.k > examples.len() {
@@ -473,18 +498,68 @@ pub(crate) fn rank_classes(
     (order, count)
 }
 
-/// Rows of a row-major matrix of feature vectors, scaled as the model does.
-fn prepare(
+/// `features = "kernels"`: the kernels fitted on the examples' windows
+/// (every channel's points, as the analysis hands them on).
+fn fit_kernels(
+    analysis: &Analysis,
     examples: &[TrainingExample],
-    scaling: Option<&Scaling>,
-    metric: Metric,
-) -> (Vec<f64>, Vec<f64>) {
-    let d = examples.first().map_or(0, |e| e.features.len());
-    let mut matrix = vec![0.0; d * examples.len()];
-    for (row, ex) in matrix.chunks_exact_mut(d.max(1)).zip(examples) {
+) -> Result<Option<KernelTransform>, ClassifyError> {
+    if analysis.features != FeatureFamily::Kernels {
+        return Ok(None);
+    }
+    let windows: Vec<&[f64]> = examples.iter().map(|e| e.features.as_slice()).collect();
+    KernelTransform::fit(
+        &windows,
+        analysis.points(),
+        1 + analysis.channels.len(),
+        analysis.kernel_features_asked(),
+    )
+    .map(Some)
+    .map_err(ClassifyError::Settings)
+}
+
+/// The examples as the classifier sees them: transformed by the kernels
+/// when there are some (on every core), else as they are.
+fn fitted_rows(kernels: Option<&KernelTransform>, examples: &[TrainingExample]) -> Vec<Vec<f64>> {
+    let Some(k) = kernels else {
+        return examples.iter().map(|e| e.features.clone()).collect();
+    };
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |t| t.get())
+        .min(examples.len().max(1));
+    let per = examples.len().div_ceil(threads.max(1)).max(1);
+    std::thread::scope(|s| {
+        let parts: Vec<_> = examples
+            .chunks(per)
+            .map(|chunk| {
+                s.spawn(move || {
+                    let mut conv = k.convolution();
+                    chunk
+                        .iter()
+                        .map(|e| {
+                            let mut out = vec![0.0; k.feature_count()];
+                            k.transform(&e.features, &mut conv, &mut out);
+                            out
+                        })
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect();
+        parts
+            .into_iter()
+            .flat_map(|h| h.join().unwrap_or_default())
+            .collect()
+    })
+}
+
+/// Rows of a row-major matrix of feature vectors, scaled as the model does.
+fn prepare(rows: &[Vec<f64>], scaling: Option<&Scaling>, metric: Metric) -> (Vec<f64>, Vec<f64>) {
+    let d = rows.first().map_or(0, Vec::len);
+    let mut matrix = vec![0.0; d * rows.len()];
+    for (row, features) in matrix.chunks_exact_mut(d.max(1)).zip(rows) {
         match scaling {
-            Some(s) => s.apply(&ex.features, row),
-            None => row.copy_from_slice(&ex.features),
+            Some(s) => s.apply(features, row),
+            None => row.copy_from_slice(features),
         }
     }
     let norms = if metric == Metric::Cosine {
@@ -513,31 +588,51 @@ impl Model {
         examples: Vec<TrainingExample>,
     ) -> Result<Model, ClassifyError> {
         let mut classifier = classifier.clone();
-        let auto = classifier.k_is_auto();
+        let ridge = classifier.method == Method::Ridge;
+        let auto = classifier.k_is_auto() && !ridge;
         if auto {
             classifier.k = 1;
         }
         check_parts(analysis, &classifier, &examples)?;
-        let scaling = classifier.standardize.then(|| {
-            let rows: Vec<&[f64]> = examples.iter().map(|e| e.features.as_slice()).collect();
-            Scaling::fit(&rows)
-        });
+        // Fitted on these examples only: the caller's training part.
+        let kernels = fit_kernels(analysis, &examples)?;
+        let labels = sorted_labels(&examples);
+        let rows = fitted_rows(kernels.as_ref(), &examples);
+        let refs: Vec<&[f64]> = rows.iter().map(Vec::as_slice).collect();
+        let scaling = (classifier.standardize && !ridge).then(|| Scaling::fit(&refs));
+        let ridge = if ridge {
+            let classes: Vec<usize> = examples
+                .iter()
+                .map(|e| labels.binary_search(&e.label).unwrap_or(0))
+                .collect();
+            Some(RidgeFit::fit(&refs, &classes, labels.len()).map_err(ClassifyError::Settings)?)
+        } else {
+            None
+        };
+        drop(refs);
+        let format = if kernels.is_some() || ridge.is_some() {
+            MODEL_FORMAT_V2
+        } else {
+            MODEL_FORMAT
+        };
         let mut model = Model {
-            format: MODEL_FORMAT.to_string(),
+            format: format.to_string(),
             software_version: crate::version::VERSION.to_string(),
             profile: profile_name.to_string(),
             analysis: analysis.clone(),
             classifier,
-            labels: sorted_labels(&examples),
+            labels,
             examples,
             scaling,
             k_selection: None,
             k_fallback: None,
+            kernels,
+            ridge,
             matrix: Vec::new(),
             norms: Vec::new(),
             classes: Vec::new(),
         };
-        model.prepare();
+        model.prepare_rows(rows);
         if auto {
             let recording_of = recording_numbers(&model.examples);
             let scores = select_k(
@@ -580,7 +675,11 @@ impl Model {
         let Some((label, fewest)) = smallest_class(&examples) else {
             return Model::train(profile_name, analysis, classifier, examples);
         };
-        if classifier.k_is_auto() || classifier.k == 0 || fewest >= classifier.k {
+        if classifier.method == Method::Ridge
+            || classifier.k_is_auto()
+            || classifier.k == 0
+            || fewest >= classifier.k
+        {
             return Model::train(profile_name, analysis, classifier, examples);
         }
         let mut candidates: Vec<usize> = classifier
@@ -651,6 +750,13 @@ impl Model {
                 profile,
             })
         };
+        if m.method != p.method {
+            return differ("classifier.method", json(&m.method), json(&p.method));
+        }
+        if m.method == Method::Ridge {
+            // Standardised always; k, metric and weights are not used.
+            return Ok(());
+        }
         if m.k != p.k {
             return differ("classifier.k", m.k_text(), p.k_text());
         }
@@ -677,26 +783,67 @@ impl Model {
         Ok(())
     }
 
-    /// Builds the distance-ready copy of the examples.
+    /// Builds the distance-ready copy of the examples (a loaded model's:
+    /// transformed again by its kernels).
     fn prepare(&mut self) {
-        let (matrix, norms) = prepare(
-            &self.examples,
-            self.scaling.as_ref(),
-            self.classifier.metric,
-        );
-        self.matrix = matrix;
-        self.norms = norms;
+        let rows = fitted_rows(self.kernels.as_ref(), &self.examples);
+        self.prepare_rows(rows);
+    }
+
+    /// Builds the distance-ready copy of the examples' fitted rows (none
+    /// for a ridge, which needs only its weights).
+    fn prepare_rows(&mut self, rows: Vec<Vec<f64>>) {
         self.classes = self
             .examples
             .iter()
             .map(|e| self.labels.binary_search(&e.label).unwrap_or(0))
             .collect();
+        if self.ridge.is_some() {
+            self.matrix = Vec::new();
+            self.norms = Vec::new();
+            return;
+        }
+        let (matrix, norms) = prepare(&rows, self.scaling.as_ref(), self.classifier.metric);
+        self.matrix = matrix;
+        self.norms = norms;
+    }
+
+    /// Features the classifier sees per window: the kernels' when the
+    /// model has them, else the query's.
+    pub fn fitted_feature_count(&self) -> usize {
+        self.kernels
+            .as_ref()
+            .map_or(self.feature_count(), KernelTransform::feature_count)
+    }
+
+    /// A ridge's answer: the classes by score, the best first (a tie to
+    /// the label first in order); one vote for the best.
+    fn ridge_prediction(&self, ridge: &RidgeFit, q: &[f64]) -> Result<Prediction, ClassifyError> {
+        let mut scaled = vec![0.0; q.len()];
+        let scores = ridge.scores(q, &mut scaled);
+        if let Some(i) = scores.iter().position(|s| !s.is_finite()) {
+            return Err(ClassifyError::ScoreNotFinite {
+                label: self.labels[i].clone(),
+            });
+        }
+        let mut order: Vec<usize> = (0..scores.len()).collect();
+        order.sort_by(|&a, &b| scores[b].total_cmp(&scores[a]).then(a.cmp(&b)));
+        let votes: Vec<(String, usize)> = order
+            .iter()
+            .enumerate()
+            .map(|(rank, &c)| (self.labels[c].clone(), usize::from(rank == 0)))
+            .collect();
+        Ok(Prediction {
+            label: votes[0].0.clone(),
+            votes,
+            neighbours: Vec::new(),
+        })
     }
 
     /// The first example whose distance-ready features, squared and
     /// summed, are not finite (a distance to it could overflow to NaN).
     fn unmeasurable_example(&self) -> Option<&str> {
-        let d = self.feature_count().max(1);
+        let d = self.fitted_feature_count().max(1);
         self.matrix
             .chunks_exact(d)
             .zip(&self.examples)
@@ -722,6 +869,19 @@ impl Model {
         }
         if self.examples.is_empty() {
             return Err(ClassifyError::NoExamples);
+        }
+        let transformed;
+        let features = match &self.kernels {
+            Some(kernels) => {
+                let mut out = vec![0.0; kernels.feature_count()];
+                kernels.transform(features, &mut kernels.convolution(), &mut out);
+                transformed = out;
+                transformed.as_slice()
+            }
+            None => features,
+        };
+        if let Some(ridge) = &self.ridge {
+            return self.ridge_prediction(ridge, features);
         }
         let k = self.classifier.k.clamp(1, self.examples.len());
         let mut scaled;

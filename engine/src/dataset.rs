@@ -84,7 +84,10 @@ pub fn check_size(recordings: usize, analysis: &Analysis) -> Result<(), DatasetE
         1
     };
     let vectors = recordings.saturating_mul(per_recording);
-    let features = analysis.feature_count();
+    // Random kernels' features are made by the model, but held all the same.
+    let features = analysis
+        .feature_count()
+        .max(analysis.fitted_feature_count());
     let values = vectors.saturating_mul(features);
     if vectors > MAX_VECTORS || values > MAX_VALUES {
         return Err(DatasetError::TooLarge {

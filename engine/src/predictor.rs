@@ -244,7 +244,7 @@ impl<'m> Predictor<'m> {
             Features::Whole(_) => 1,
             Features::Windows(w) => w.len(),
         };
-        let (examples, features) = (self.model.examples.len(), self.model.feature_count());
+        let (examples, features) = (self.model.examples.len(), self.model.fitted_feature_count());
         let work = crate::classify::comparisons(queries, examples, features);
         if work > crate::classify::MAX_COMPARISONS {
             return Err(PredictError::TooMuchWork {

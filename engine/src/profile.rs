@@ -29,6 +29,7 @@ pub mod controller;
 pub mod device;
 pub mod evaluation;
 pub mod falcon_reach;
+pub mod families;
 pub mod fitted;
 pub mod hardware;
 pub mod locate;
@@ -44,13 +45,14 @@ pub use analysis::{
     Analysis, BandScale, Bands, Detrend, LOG_FLOOR, SpectrumKind, Taper, Windows, check_options,
     check_points, check_windows,
 };
-pub use classifier::{Classifier, K_AUTO, Metric, Weights};
+pub use classifier::{Classifier, K_AUTO, Method, Metric, Weights};
 pub use console::{CONSOLE_ACTIONS, ConsoleSettings, KeySpec, NAMED_KEYS, parse_key};
 pub use controller::Controller;
 pub use device::{
     DEVICE_MAX_FORCE_N, Device, DeviceKind, Realtime, WORKSPACE_MAX_M, WORKSPACE_MIN_M,
 };
 pub use evaluation::{Evaluation, SplitMethod};
+pub use families::FeatureFamily;
 pub use locate::{line_col, locate_key};
 pub use path::PathSpec;
 pub use simulator::Simulator;

@@ -141,13 +141,16 @@ fn line(f: &Path, label: Option<&str>, a: &Answer) -> String {
             w.windows.len(),
             votes.join(" ")
         ),
+        // A ridge has no neighbours: its vote is the best score.
         None => format!(
-            "{}: {}{} — votes {}, nearest {:.3e}",
+            "{}: {}{} — votes {}{}",
             f.display(),
             p.label,
             truth,
             votes.join(" "),
-            p.neighbours.first().map_or(f64::NAN, |n| n.distance)
+            p.neighbours
+                .first()
+                .map_or(String::new(), |n| format!(", nearest {:.3e}", n.distance))
         ),
     }
 }

@@ -246,6 +246,8 @@ fn feature_axis(a: &crate::profile::Analysis) -> (usize, &'static str) {
         FeatureNames::Bins { .. } => (a.kept_bins()[0], "feature (DFT bin)"),
         FeatureNames::Bands { .. } => (0, "feature (band)"),
         FeatureNames::Cepstra { first } => (first, "feature (cepstral coefficient)"),
+        FeatureNames::Points => (0, "feature (window point, for random kernels)"),
+        FeatureNames::Quantiles => (0, "feature (interval quantile)"),
     }
 }
 

@@ -52,6 +52,8 @@ pub struct ModelInfo {
     pub examples: usize,
     pub labels: Vec<String>,
     pub k: usize,
+    /// A ridge classifier (no k): `classifier.method = "ridge"`.
+    pub ridge: bool,
     /// Where it came from or was saved.
     pub file: Option<PathBuf>,
     /// Incomplete recordings in the folder that training skipped: with the
@@ -71,6 +73,7 @@ impl ModelInfo {
             examples: model.examples.len(),
             labels: model.labels.clone(),
             k: model.classifier.k,
+            ridge: model.ridge.is_some(),
             file,
             skipped: 0,
             k_notice: model.k_notice(),

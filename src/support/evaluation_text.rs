@@ -3,7 +3,7 @@
 //! header naming the method and the k actually used, and the table.
 
 use crate::evaluate::request::{Evaluation, Outcome};
-use crate::profile::LoadedProfile;
+use crate::profile::{FeatureFamily, LoadedProfile, Method};
 
 /// The report's plain text: Table 4.1, and for cross-validation the
 /// spread and the macro-F1.
@@ -91,9 +91,9 @@ fn method_line(lp: &LoadedProfile, ev: &Evaluation) -> String {
             String::new()
         };
         return format!(
-            "profile {}: k-NN k = {}, {} training and {} test recordings per class{}{}{voted}",
+            "profile {}: {}, {} training and {} test recordings per class{}{}{voted}",
             p.name,
-            k_text(lp, ev),
+            classifier_text(lp, ev),
             e.train_per_class,
             e.test_per_class,
             if e.gap_per_class > 0 {
@@ -108,17 +108,23 @@ fn method_line(lp: &LoadedProfile, ev: &Evaluation) -> String {
                 )),
         );
     }
+    let classifier = match p.classifier.method {
+        Method::Knn => format!(
+            "{} ({:?}, {:?} votes{})",
+            classifier_text(lp, ev),
+            p.classifier.metric,
+            p.classifier.weights,
+            if p.classifier.standardize {
+                ", standardised"
+            } else {
+                ""
+            },
+        ),
+        Method::Ridge => classifier_text(lp, ev),
+    };
     format!(
-        "profile {}: k-NN k = {} ({:?}, {:?} votes{}), {}, {}{}{fell_back}",
+        "profile {}: {classifier}, {}, {}{}{fell_back}",
         p.name,
-        k_text(lp, ev),
-        p.classifier.metric,
-        p.classifier.weights,
-        if p.classifier.standardize {
-            ", standardised"
-        } else {
-            ""
-        },
         ev.plan.describe(),
         source_text(ev),
         if ev.outcome.voted() {
@@ -127,6 +133,21 @@ fn method_line(lp: &LoadedProfile, ev: &Evaluation) -> String {
             ""
         },
     )
+}
+
+/// The classifier as the header names it, after the features when they
+/// are not the spectrum's: `k-NN k = 10`, `random kernels, ridge`.
+fn classifier_text(lp: &LoadedProfile, ev: &Evaluation) -> String {
+    let p = &lp.profile;
+    let features = match p.analysis.features {
+        FeatureFamily::Spectrum => "",
+        FeatureFamily::Kernels => "random kernels, ",
+        FeatureFamily::Quantiles => "interval quantiles, ",
+    };
+    match p.classifier.method {
+        Method::Knn => format!("{features}k-NN k = {}", k_text(lp, ev)),
+        Method::Ridge => format!("{features}ridge (alpha by leave-one-out)"),
+    }
 }
 
 /// The windows of the recordings a holdout used.

@@ -14,6 +14,7 @@ mod evaluate_windows;
 mod falcon_emulator;
 mod falcon_exit;
 mod falcon_self_test;
+mod families;
 mod faults;
 mod first_session;
 mod golden;

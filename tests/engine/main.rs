@@ -16,6 +16,7 @@ mod entries;
 mod analysis;
 mod classify;
 mod evaluate;
+mod families;
 mod fuzz_regressions;
 mod import;
 mod import_hostile;

@@ -11,8 +11,8 @@ use std::path::{Path, PathBuf};
 
 use crate::io::OutputError;
 
-use super::{ClassifyError, MODEL_FORMAT, Model, check_parts, sorted_labels};
-use crate::profile::Analysis;
+use super::{ClassifyError, MODEL_FORMAT, MODEL_FORMAT_V2, Model, check_parts, sorted_labels};
+use crate::profile::{Analysis, FeatureFamily, Method};
 
 impl Model {
     /// Write the model as pretty-printed JSON, streamed to a temporary file
@@ -62,7 +62,7 @@ impl Model {
         let mut de = serde_json::Deserializer::from_reader(first);
         let parsed = Model::deserialize(&mut de).and_then(|m| de.end().map(|()| m));
         let mut model = match parsed {
-            Ok(m) if m.format == MODEL_FORMAT => m,
+            Ok(m) if m.format == MODEL_FORMAT || m.format == MODEL_FORMAT_V2 => m,
             Ok(m) => {
                 return Err(ClassifyError::WrongFormat {
                     path: path.to_path_buf(),
@@ -98,9 +98,11 @@ impl Model {
                 "its labels are not the sorted distinct labels of its examples".to_string(),
             ));
         }
-        match (&model.scaling, model.classifier.standardize) {
+        check_fitted(&model).map_err(invalid)?;
+        let knn = model.classifier.method == Method::Knn;
+        match (&model.scaling, model.classifier.standardize && knn) {
             (Some(sc), true) => {
-                let n = model.feature_count();
+                let n = model.fitted_feature_count();
                 if sc.mean.len() != n
                     || sc.scale.len() != n
                     || sc.scale.iter().any(|v| !(v.is_finite() && *v > 0.0))
@@ -121,7 +123,9 @@ impl Model {
             }
             (Some(_), false) => {
                 return Err(invalid(
-                    "it has a scaling but classifier.standardize = false; train it again".into(),
+                    "it has a scaling but classifier.standardize = false (or a ridge, which \
+                     keeps its own); train it again"
+                        .into(),
                 ));
             }
         }
@@ -152,6 +156,45 @@ impl Model {
     }
 }
 
+/// What a model fitted beyond its examples, checked against its settings:
+/// kernels exactly under `features = "kernels"`, a ridge exactly under
+/// `method = "ridge"`, each of the sizes they give, and neither in a v1
+/// file (which predates them).
+fn check_fitted(model: &Model) -> Result<(), String> {
+    let a = &model.analysis;
+    let wants_kernels = a.features == FeatureFamily::Kernels;
+    let wants_ridge = model.classifier.method == Method::Ridge;
+    if model.format == MODEL_FORMAT && (model.kernels.is_some() || model.ridge.is_some()) {
+        return Err(format!(
+            "a {MODEL_FORMAT:?} file holds no kernels or ridge; its format should be {MODEL_FORMAT_V2:?}"
+        ));
+    }
+    match (&model.kernels, wants_kernels) {
+        (Some(k), true) => k.check(a.points(), 1 + a.channels.len(), a.kernel_features_asked())?,
+        (None, false) => {}
+        (None, true) => {
+            return Err(
+                "analysis.features = \"kernels\" but it has no kernels; train it again".into(),
+            );
+        }
+        (Some(_), false) => {
+            return Err(
+                "it has kernels but analysis.features is not \"kernels\"; train it again".into(),
+            );
+        }
+    }
+    match (&model.ridge, wants_ridge) {
+        (Some(r), true) => r.check(model.fitted_feature_count(), model.labels.len()),
+        (None, false) => Ok(()),
+        (None, true) => {
+            Err("classifier.method = \"ridge\" but it has no ridge; train it again".into())
+        }
+        (Some(_), false) => {
+            Err("it has a ridge but classifier.method is not \"ridge\"; train it again".into())
+        }
+    }
+}
+
 /// The `format` tag of JSON that is not a valid model: an error unless it
 /// is this version's (then the model's own fields are at fault). The rest
 /// of the document is skipped, not kept.
@@ -163,7 +206,7 @@ fn format_tag<R: Read>(r: R, path: &Path) -> Result<(), ClassifyError> {
     match serde_json::from_reader::<_, Tag>(r) {
         Ok(Tag {
             format: Some(serde_json::Value::String(f)),
-        }) if f == MODEL_FORMAT => Ok(()),
+        }) if f == MODEL_FORMAT || f == MODEL_FORMAT_V2 => Ok(()),
         Ok(Tag {
             format: Some(serde_json::Value::String(found)),
         }) => Err(ClassifyError::WrongFormat {

@@ -372,7 +372,7 @@ pub fn validate_with_votes(
     plan: &Plan,
 ) -> Result<Validated, EvaluateError> {
     super::check_two_labels(&examples)?;
-    check_comparisons(examples.len(), profile.analysis.feature_count())?;
+    check_comparisons(examples.len(), profile.analysis.fitted_feature_count())?;
     if plan.method == SplitMethod::Holdout {
         return holdout(profile, examples, related, plan).map(|h| h.pooled(plan.seed));
     }

@@ -7,6 +7,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::families::{FeatureFamily, quantile_feature_count};
 use super::options::{option, words};
 use super::path::PathSpec;
 use super::{Invalid, bad, compact, dist, finite_pos, is_default};
@@ -180,6 +181,16 @@ pub struct Analysis {
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub drop_level: bool,
 
+    /// What the features are: the spectrum's (the default, the thesis's),
+    /// random convolutional kernels, or interval quantiles; see
+    /// [`FeatureFamily`].
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub features: FeatureFamily,
+    /// Random kernels only: the features asked for per channel (default
+    /// 10000; a multiple of 84 is made, 9996 for the default).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kernel_features: Option<usize>,
+
     // --- Sub-windows (issue 13 part 3) ---
     /// Cut the window into sub-windows `length` long every `hop` (axis
     /// unit), each analysed as if it were the window; a recording is
@@ -295,6 +306,8 @@ impl Default for Analysis {
             bands: None,
             cepstra: None,
             drop_level: false,
+            features: FeatureFamily::Spectrum,
+            kernel_features: None,
             windows: None,
         }
     }
@@ -421,8 +434,14 @@ impl Analysis {
             }
         }
     }
-    /// Features per channel.
+    /// Features per channel: as the family makes them (for random kernels,
+    /// the window's points, which the model transforms).
     pub fn features_per_channel(&self) -> usize {
+        match self.features {
+            FeatureFamily::Spectrum => {}
+            FeatureFamily::Kernels => return self.points(),
+            FeatureFamily::Quantiles => return quantile_feature_count(self.points()),
+        }
         if let Some(m) = self.cepstra {
             return m - usize::from(self.drop_level);
         }
@@ -434,6 +453,29 @@ impl Analysis {
     }
     pub fn feature_count(&self) -> usize {
         self.features_per_channel() * (1 + self.channels.len())
+    }
+    /// Features the classifier sees per window: for random kernels the
+    /// ones the model makes of the points (a multiple of 84 per channel),
+    /// else [`Self::feature_count`].
+    pub fn fitted_feature_count(&self) -> usize {
+        match self.features {
+            FeatureFamily::Kernels => {
+                let per = self.kernel_features_asked() / super::families::KERNEL_COUNT
+                    * super::families::KERNEL_COUNT;
+                per * (1 + self.channels.len())
+            }
+            _ => self.feature_count(),
+        }
+    }
+    /// Random kernels: the features asked for per channel.
+    pub fn kernel_features_asked(&self) -> usize {
+        self.kernel_features
+            .unwrap_or(super::families::DEFAULT_KERNEL_FEATURES)
+    }
+    /// Whether the spectrum's options (bins, band, bands, …) make the
+    /// features.
+    pub fn uses_spectrum(&self) -> bool {
+        self.features == FeatureFamily::Spectrum
     }
 }
 
@@ -451,6 +493,7 @@ fn declared(field: &str) -> &'static str {
 pub fn check_options(s: &Analysis) -> Result<(), (String, String)> {
     let bad = |key: &str, reason: String| Err((format!("analysis.{key}"), reason));
     let n = s.points();
+    check_family(s)?;
     if s.spectrum.is_welch() {
         let m = s.dft_points();
         if m < 4 || m > n {
@@ -498,6 +541,60 @@ pub fn check_options(s: &Analysis) -> Result<(), (String, String)> {
                     "holds no DFT bin: bins are {:.4} {unit} apart up to {nyquist:.4} {unit}",
                     s.bin_width()
                 ),
+            );
+        }
+    }
+    Ok(())
+}
+
+/// `features` and the options only one family uses: `Err((key, reason))`.
+fn check_family(s: &Analysis) -> Result<(), (String, String)> {
+    let bad = |key: &str, reason: String| Err((format!("analysis.{key}"), reason));
+    let family = super::options::plain_word(&s.features);
+    if s.kernel_features.is_some() && s.features != FeatureFamily::Kernels {
+        return bad(
+            "kernel_features",
+            format!("is only used with features = \"kernels\", not \"{family}\""),
+        );
+    }
+    if s.uses_spectrum() {
+        return Ok(());
+    }
+    let spectrum_only = [
+        ("band", s.band.is_some()),
+        ("bands", s.bands.is_some()),
+        ("cepstra", s.cepstra.is_some()),
+        ("drop_level", s.drop_level),
+        ("welch_segment", s.welch_segment.is_some()),
+        ("welch_overlap", s.welch_overlap.is_some()),
+    ];
+    if let Some((key, _)) = spectrum_only.iter().find(|(_, set)| *set) {
+        return bad(
+            key,
+            format!("is only used with features = \"spectrum\", not \"{family}\""),
+        );
+    }
+    let n = s.points();
+    if s.features == FeatureFamily::Kernels {
+        let least = super::families::KERNEL_MIN_POINTS;
+        if n < least {
+            return bad(
+                if s.windows.is_some() {
+                    "windows"
+                } else {
+                    "window"
+                },
+                format!(
+                    "holds {n} points; random kernels need at least {least} (a kernel spans 9)"
+                ),
+            );
+        }
+        let asked = s.kernel_features_asked();
+        let [lo, hi] = super::families::KERNEL_FEATURES_RANGE;
+        if !(lo..=hi).contains(&asked) {
+            return bad(
+                "kernel_features",
+                format!("must be {lo} to {hi}, got {asked}"),
             );
         }
     }
@@ -754,7 +851,11 @@ pub(super) fn validate(an: &Analysis, p: Option<&PathSpec>) -> Result<(), Invali
         return bad(key, reason);
     }
     let m = an.dft_points();
-    if an.band.is_none() && an.bands.is_none() && (an.bins[0] > an.bins[1] || an.bins[1] > m / 2) {
+    if an.uses_spectrum()
+        && an.band.is_none()
+        && an.bands.is_none()
+        && (an.bins[0] > an.bins[1] || an.bins[1] > m / 2)
+    {
         return bad(
             "analysis.bins",
             format!(

@@ -28,6 +28,18 @@ pub enum Weights {
     Distance,
 }
 
+/// Which classifier the model is.
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "kebab-case")]
+pub enum Method {
+    /// k nearest neighbours (the thesis).
+    #[default]
+    Knn,
+    /// A ridge classifier, its penalty chosen by leave-one-out on the
+    /// training examples (`k`, `metric` and `weights` are not used).
+    Ridge,
+}
+
 /// `classifier.k = "auto"` is stored as this value of `k`.
 pub const K_AUTO: usize = usize::MAX;
 
@@ -49,6 +61,9 @@ pub struct Classifier {
     /// The values `k = "auto"` tries (default 1, 3, 5, …, 15).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub k_candidates: Option<Vec<usize>>,
+    /// k-NN (the default) or ridge.
+    #[serde(default, skip_serializing_if = "is_default")]
+    pub method: Method,
 }
 
 impl Default for Classifier {
@@ -60,6 +75,7 @@ impl Default for Classifier {
             weights: Weights::Uniform,
             standardize: false,
             k_candidates: None,
+            method: Method::Knn,
         }
     }
 }

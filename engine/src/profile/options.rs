@@ -15,6 +15,7 @@
 use super::Invalid;
 use super::analysis::{Analysis, SpectrumKind};
 use super::classifier::Classifier;
+use super::families::FeatureFamily;
 
 /// A value's kind, as a profile writes it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -80,6 +81,11 @@ pub enum FeatureNames {
     /// Cepstral coefficients `c<first>, …` of the log band energies
     /// (`first` is 1 when the level term c0 is dropped).
     Cepstra { first: usize },
+    /// The window's resampled points, which the model turns into random
+    /// kernel features.
+    Points,
+    /// Interval quantiles (QUANT), numbered from 0.
+    Quantiles,
 }
 
 impl FeatureNames {
@@ -268,6 +274,40 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
         Group::Resampling,
         "remove the mean (or a line) so a tilt or offset is not taken for texture",
         field!(detrend),
+    ),
+    // Before the spectrum's options: it decides whether they are used,
+    // and which labels the features get.
+    opt(
+        "analysis.features",
+        Kind::Choice,
+        &["spectrum", "kernels", "quantiles"],
+        "",
+        true,
+        Group::Spectrum,
+        "spectrum as the thesis; kernels (MiniRocket) or quantiles (QUANT) for vibration or motion a spectrum misses, best with classifier.method = \"ridge\"",
+        field!(features),
+    )
+    .labelled(|a| match a.features {
+        FeatureFamily::Spectrum => None,
+        FeatureFamily::Kernels => Some(FeatureNames::Points),
+        FeatureFamily::Quantiles => Some(FeatureNames::Quantiles),
+    }),
+    opt(
+        "analysis.kernel_features",
+        Kind::Integer,
+        &["84 to 100000"],
+        "",
+        true,
+        Group::Spectrum,
+        "kernels only: features per channel (default 10000; more can help long windows)",
+        (
+            |a| json(&a.kernel_features),
+            |a, b| {
+                a.kernel_features_asked() == b.kernel_features_asked()
+                    || a.features != FeatureFamily::Kernels
+            },
+            |a| toml_value(&a.kernel_features),
+        ),
     ),
     opt(
         "analysis.spectrum",
@@ -506,6 +546,15 @@ pub const CLASSIFIER_OPTIONS: &[ClassifierOption] = &[
         line: |c| toml_value(&c.standardize),
     },
     ClassifierOption {
+        name: "classifier.method",
+        kind: Kind::Choice,
+        allowed: &["knn", "ridge"],
+        advice: "k nearest neighbours (the thesis), or a ridge classifier for many features (kernels, quantiles)",
+        search: &[],
+        value: |c| json(&c.method),
+        line: |c| toml_value(&c.method),
+    },
+    ClassifierOption {
         name: "classifier.k_candidates",
         kind: Kind::List,
         allowed: &["whole numbers >= 1"],
@@ -515,6 +564,11 @@ pub const CLASSIFIER_OPTIONS: &[ClassifierOption] = &[
         line: |c| toml_value(&c.k_candidates),
     },
 ];
+
+/// A choice as a profile writes it, without quotes: `kernels`.
+pub fn plain_word<T: serde::Serialize>(value: &T) -> String {
+    plain(json(value))
+}
 
 /// A JSON value as a report reads it: a word without its quotes, `none`
 /// for an option left out.
@@ -680,6 +734,8 @@ fn field_names(a: &Analysis) -> Vec<&'static str> {
         bands: _,
         cepstra: _,
         drop_level: _,
+        features: _,
+        kernel_features: _,
         windows: _,
     } = a;
     vec![
@@ -698,6 +754,8 @@ fn field_names(a: &Analysis) -> Vec<&'static str> {
         "bands",
         "cepstra",
         "drop_level",
+        "features",
+        "kernel_features",
         "windows",
     ]
 }

@@ -635,6 +635,7 @@ mod tests {
                         weights,
                         standardize,
                         k_candidates: None,
+                        method: crate::profile::Method::Knn,
                     };
                     let mut a = analysis.clone();
                     a.bins = [1, 5];

@@ -49,8 +49,12 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
                 m.k
             ),
             None => format!(
-                "model: k-NN k = {} on {} of {}",
-                m.k,
+                "model: {} on {} of {}",
+                if m.ridge {
+                    "ridge".to_string()
+                } else {
+                    format!("k-NN k = {}", m.k)
+                },
                 plural(m.examples, "recording", "recordings"),
                 m.labels.join(", ")
             ),

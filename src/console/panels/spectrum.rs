@@ -49,7 +49,8 @@ fn value_text(names: &FeatureNames, v: f64) -> String {
         FeatureNames::Bins { value } | FeatureNames::Bands { value, .. } => {
             format!("{value} {v:.2e}")
         }
-        FeatureNames::Cepstra { .. } => format!("{v:.2}"),
+        FeatureNames::Cepstra { .. } | FeatureNames::Quantiles => format!("{v:.2}"),
+        FeatureNames::Points => format!("{v:.2e}"),
     }
 }
 
@@ -60,6 +61,8 @@ fn name(s: &ScanView, i: usize) -> String {
         FeatureNames::Bins { .. } => format!("{}", s.first_bin + i),
         FeatureNames::Bands { edges, .. } => short(edges[i]),
         FeatureNames::Cepstra { first } => format!("c{}", first + i),
+        FeatureNames::Points => format!("{i}"),
+        FeatureNames::Quantiles => format!("q{i}"),
     }
 }
 
@@ -124,6 +127,20 @@ fn titles(s: &ScanView, f: &[f64], per: usize, peak_i: usize) -> Vec<String> {
                 "Cepstra".into(),
             ]
         }
+        // The model's random kernels see these points; the features are
+        // theirs, made per window by the model.
+        FeatureNames::Points => vec![
+            format!("Window: {per} points {in_ch}for the model's random kernels{of}"),
+            format!("Window: {per} points for random kernels"),
+            format!("Window: {per} points"),
+            "Window".into(),
+        ],
+        FeatureNames::Quantiles => vec![
+            format!("Interval quantiles: {per} {in_ch}(signal, differences, spectrum){of}"),
+            format!("Interval quantiles: {per}{of}"),
+            format!("Interval quantiles: {per}"),
+            "Quantiles".into(),
+        ],
     }
 }
 

@@ -1,0 +1,593 @@
+//! Random convolutional kernel features, as MiniRocket (Dempster, Schmidt
+//! and Webb, KDD 2021) describes them, written from the paper.
+//!
+//! What is fixed (a function of the window's length and the feature count
+//! alone, [`KernelLayout`]):
+//! - the 84 kernels of length 9: weights −1 everywhere except three
+//!   positions of weight 2 (every choice of 3 of the 9 positions, in
+//!   lexicographic order), so each kernel's weights sum to zero;
+//! - the dilations `⌊2^e⌋` for `e` evenly spaced from 0 to
+//!   `log2((L − 1) / 8)` (at most 32 values, duplicates merged), each
+//!   getting features in proportion to how often it came up, so that every
+//!   kernel has `features / 84` features in all;
+//! - the padding, alternating over the kernel/dilation combinations: the
+//!   combination of dilation `i` and kernel `k` is padded (zeros beyond the
+//!   window, an output for every point) when `i + k` is even, and otherwise
+//!   takes only the outputs whose nine taps all lie in the window.
+//!
+//! What is fitted ([`KernelTransform::fit`]): the biases. For each
+//! kernel/dilation a training window is drawn at random and the biases of
+//! its features are quantiles of that window's (padded) convolution
+//! output, the quantiles `{f·φ} = f·φ mod 1` (φ the golden ratio, `f` the
+//! feature's number from 1), a low-discrepancy sequence. A model carries the
+//! biases; they must come from training windows only, never from a window
+//! the model will be tested on.
+//!
+//! The feature is the proportion of positive values (PPV) of the output
+//! minus the bias. Each channel is transformed on its own with its own
+//! biases, and the channels' features are concatenated (the simple
+//! multichannel form, not the paper's channel-mixing variant).
+//!
+//! Computed as the paper suggests: per dilation, the sum of the nine
+//! shifted windows (the −1 part, shared by every kernel) and three times
+//! each shifted window; a kernel's output is the first plus three of the
+//! others. Never allocates per call beyond the scratch made once
+//! ([`Convolution`]).
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use super::quantiles::quantile_sorted;
+use crate::profile::families;
+
+/// Taps of every kernel.
+pub const KERNEL_LENGTH: usize = 9;
+/// The kernels: every choice of 3 of the 9 positions.
+pub const KERNEL_COUNT: usize = families::KERNEL_COUNT;
+/// At most this many dilations per kernel.
+pub const MAX_DILATIONS: usize = 32;
+/// The features asked for by default (9996 made: a multiple of 84).
+pub const DEFAULT_FEATURES: usize = families::DEFAULT_KERNEL_FEATURES;
+/// The fewest points a window may have: one kernel's span.
+pub const MIN_POINTS: usize = families::KERNEL_MIN_POINTS;
+/// The most features that may be asked for, per channel.
+pub const MAX_FEATURES: usize = families::KERNEL_FEATURES_RANGE[1];
+/// The draws of the training window behind each kernel/dilation's biases.
+const SEED: u64 = 0x006b_6572_6e65_6c73;
+
+/// The golden ratio, whose multiples modulo 1 give the quantiles.
+const PHI: f64 = 1.618_033_988_749_895;
+
+/// The 84 kernels, each as the positions of its three weights of 2, in
+/// lexicographic order.
+pub fn kernels() -> Vec<[usize; 3]> {
+    let mut all = Vec::with_capacity(KERNEL_COUNT);
+    for a in 0..KERNEL_LENGTH {
+        for b in a + 1..KERNEL_LENGTH {
+            for c in b + 1..KERNEL_LENGTH {
+                all.push([a, b, c]);
+            }
+        }
+    }
+    all
+}
+
+/// The kernel's nine weights (−1, and 2 at its three positions).
+pub fn weights(kernel: [usize; 3]) -> [f64; KERNEL_LENGTH] {
+    let mut w = [-1.0; KERNEL_LENGTH];
+    for p in kernel {
+        w[p] = 2.0;
+    }
+    w
+}
+
+/// The quantile whose value becomes feature `f`'s bias (`f` from 0).
+pub fn bias_quantile(f: usize) -> f64 {
+    ((f + 1) as f64 * PHI).fract()
+}
+
+/// Whether the combination of dilation `i` and kernel `k` is padded.
+pub fn padded(dilation_index: usize, kernel_index: usize) -> bool {
+    (dilation_index + kernel_index).is_multiple_of(2)
+}
+
+/// The features made of `asked`: a multiple of 84 (none below 84).
+pub fn features_made(asked: usize) -> usize {
+    (asked / KERNEL_COUNT) * KERNEL_COUNT
+}
+
+/// The fixed part of the transform: the dilations and how many features
+/// each gives per kernel, for windows of `points`.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KernelLayout {
+    pub points: usize,
+    pub dilations: Vec<usize>,
+    /// Features per kernel at each dilation (the same for every kernel).
+    pub features_per_dilation: Vec<usize>,
+}
+
+impl KernelLayout {
+    /// The layout for windows of `points` (at least 9) and `asked`
+    /// features per channel (84 to [`MAX_FEATURES`]).
+    pub fn new(points: usize, asked: usize) -> Result<KernelLayout, String> {
+        if points < MIN_POINTS {
+            return Err(format!(
+                "random kernels need windows of at least {MIN_POINTS} points, got {points}"
+            ));
+        }
+        if !(families::KERNEL_FEATURES_RANGE[0]..=MAX_FEATURES).contains(&asked) {
+            return Err(format!(
+                "must be {KERNEL_COUNT} to {MAX_FEATURES} features, got {asked}"
+            ));
+        }
+        let per_kernel = asked / KERNEL_COUNT;
+        let steps = per_kernel.min(MAX_DILATIONS);
+        let top = ((points - 1) as f64 / (KERNEL_LENGTH - 1) as f64).log2();
+        let mut dilations: Vec<usize> = Vec::new();
+        let mut counts: Vec<usize> = Vec::new();
+        for s in 0..steps {
+            let e = if steps == 1 {
+                0.0
+            } else {
+                top * s as f64 / (steps - 1) as f64
+            };
+            // The largest dilation keeps the kernel's span within the window.
+            let d = (2f64.powf(e).floor() as usize).clamp(1, (points - 1) / (KERNEL_LENGTH - 1));
+            match dilations.last() {
+                Some(&last) if last == d => *counts.last_mut().expect("a count per dilation") += 1,
+                _ => {
+                    dilations.push(d);
+                    counts.push(1);
+                }
+            }
+        }
+        // In proportion to how often each came up, the remainder one each
+        // from the smallest dilation on.
+        let share = per_kernel as f64 / steps as f64;
+        let mut features_per_dilation: Vec<usize> = counts
+            .iter()
+            .map(|&c| (c as f64 * share).floor() as usize)
+            .collect();
+        let mut left = per_kernel - features_per_dilation.iter().sum::<usize>();
+        let mut i = 0;
+        while left > 0 {
+            features_per_dilation[i] += 1;
+            left -= 1;
+            i = (i + 1) % features_per_dilation.len();
+        }
+        Ok(KernelLayout {
+            points,
+            dilations,
+            features_per_dilation,
+        })
+    }
+
+    /// Features per channel: 84 × the features per kernel.
+    pub fn feature_count(&self) -> usize {
+        KERNEL_COUNT * self.features_per_dilation.iter().sum::<usize>()
+    }
+
+    /// The padding of dilation `d` (half the kernel's span).
+    fn padding(d: usize) -> usize {
+        (KERNEL_LENGTH - 1) * d / 2
+    }
+}
+
+/// Per dilation, the shifted copies of a window a kernel's output is made
+/// of; made once, reused for every window.
+#[derive(Debug, Clone)]
+pub struct Convolution {
+    points: usize,
+    /// `−Σ_j x[t + (j − 4)·d]`: every kernel's −1 part.
+    base: Vec<f64>,
+    /// `3 · x[t + (j − 4)·d]` for `j = 0..9`, one after another.
+    shifted: Vec<f64>,
+    /// One kernel's output.
+    output: Vec<f64>,
+}
+
+impl Convolution {
+    pub fn new(points: usize) -> Convolution {
+        Convolution {
+            points,
+            base: vec![0.0; points],
+            shifted: vec![0.0; points * KERNEL_LENGTH],
+            output: vec![0.0; points],
+        }
+    }
+
+    /// Shifts `x` for dilation `d` (zeros beyond the window).
+    fn dilate(&mut self, x: &[f64], d: usize) {
+        let n = self.points;
+        self.base.fill(0.0);
+        for j in 0..KERNEL_LENGTH {
+            let row = &mut self.shifted[j * n..(j + 1) * n];
+            row.fill(0.0);
+            // x[t + (j − 4)·d] for the t where it lies in the window.
+            let offset = j as isize - (KERNEL_LENGTH / 2) as isize;
+            let shift = offset * d as isize;
+            let (from, to) = if shift >= 0 {
+                (0, n.saturating_sub(shift as usize))
+            } else {
+                ((-shift) as usize, n)
+            };
+            for t in from.min(to)..to {
+                let v = x[(t as isize + shift) as usize];
+                row[t] = 3.0 * v;
+                self.base[t] -= v;
+            }
+        }
+    }
+
+    /// The output of `kernel` at the dilation last dilated, all `points`
+    /// of it (padded).
+    fn convolve(&mut self, kernel: [usize; 3]) -> &[f64] {
+        let n = self.points;
+        let [a, b, c] = kernel.map(|p| &self.shifted[p * n..(p + 1) * n]);
+        for t in 0..n {
+            self.output[t] = self.base[t] + a[t] + b[t] + c[t];
+        }
+        &self.output
+    }
+}
+
+/// The fitted transform: the layout and each channel's biases.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct KernelTransform {
+    pub layout: KernelLayout,
+    /// `biases[c][f]`: channel `c`'s feature `f`.
+    pub biases: Vec<Vec<f64>>,
+}
+
+impl KernelTransform {
+    /// Fits the biases on training windows, each `channels` × `points`
+    /// values (channel after channel), for `asked` features per channel.
+    pub fn fit(
+        windows: &[&[f64]],
+        points: usize,
+        channels: usize,
+        asked: usize,
+    ) -> Result<KernelTransform, String> {
+        let layout = KernelLayout::new(points, asked)?;
+        if windows.is_empty() {
+            return Err("no training windows to fit the kernels' biases on".into());
+        }
+        if let Some(w) = windows.iter().find(|w| w.len() != points * channels) {
+            return Err(format!(
+                "a training window has {} values, not {channels} channel(s) of {points} points",
+                w.len()
+            ));
+        }
+        let kernels = kernels();
+        let mut rng = ChaCha8Rng::seed_from_u64(SEED);
+        let mut conv = Convolution::new(points);
+        let mut sorted = vec![0.0; points];
+        let mut biases = Vec::with_capacity(channels);
+        for c in 0..channels {
+            let mut own = Vec::with_capacity(layout.feature_count());
+            for (&d, &count) in layout.dilations.iter().zip(&layout.features_per_dilation) {
+                for &kernel in &kernels {
+                    let w = windows[rng.random_range(0..windows.len())];
+                    conv.dilate(&w[c * points..(c + 1) * points], d);
+                    sorted.copy_from_slice(conv.convolve(kernel));
+                    sorted.sort_by(f64::total_cmp);
+                    for _ in 0..count {
+                        own.push(quantile_sorted(&sorted, bias_quantile(own.len())));
+                    }
+                }
+            }
+            biases.push(own);
+        }
+        Ok(KernelTransform { layout, biases })
+    }
+
+    pub fn channels(&self) -> usize {
+        self.biases.len()
+    }
+
+    /// Features of a window: every channel's.
+    pub fn feature_count(&self) -> usize {
+        self.channels() * self.layout.feature_count()
+    }
+
+    /// Values of the windows it transforms.
+    pub fn window_len(&self) -> usize {
+        self.channels() * self.layout.points
+    }
+
+    /// Checks a transform read from a file: the layout is the one its
+    /// points and `asked` features give, and every bias is finite.
+    pub fn check(&self, points: usize, channels: usize, asked: usize) -> Result<(), String> {
+        let want = KernelLayout::new(points, asked)?;
+        if self.layout != want {
+            return Err(format!(
+                "its kernel layout is not the one for {points} points and {asked} features"
+            ));
+        }
+        if self.biases.len() != channels
+            || self
+                .biases
+                .iter()
+                .any(|b| b.len() != want.feature_count() || b.iter().any(|v| !v.is_finite()))
+        {
+            return Err(format!(
+                "its kernel biases must be {channels} channel(s) of {} finite numbers",
+                want.feature_count()
+            ));
+        }
+        Ok(())
+    }
+
+    /// Transforms one window (`window_len()` values) into `out`
+    /// (`feature_count()` values), with `conv` made for its points.
+    pub fn transform(&self, window: &[f64], conv: &mut Convolution, out: &mut [f64]) {
+        let n = self.layout.points;
+        let per = self.layout.feature_count();
+        let kernels = kernels();
+        for (c, biases) in self.biases.iter().enumerate() {
+            let x = &window[c * n..(c + 1) * n];
+            let out = &mut out[c * per..(c + 1) * per];
+            let mut f = 0;
+            for (i, (&d, &count)) in self
+                .layout
+                .dilations
+                .iter()
+                .zip(&self.layout.features_per_dilation)
+                .enumerate()
+            {
+                conv.dilate(x, d);
+                let pad = KernelLayout::padding(d);
+                for (k, &kernel) in kernels.iter().enumerate() {
+                    let output = conv.convolve(kernel);
+                    let seen = if padded(i, k) {
+                        output
+                    } else {
+                        &output[pad..n - pad]
+                    };
+                    let len = seen.len() as f64;
+                    for (o, &b) in out[f..f + count].iter_mut().zip(&biases[f..f + count]) {
+                        *o = seen.iter().filter(|&&v| v > b).count() as f64 / len;
+                    }
+                    f += count;
+                }
+            }
+        }
+    }
+
+    /// A scratch [`Convolution`] for this transform's windows.
+    pub fn convolution(&self) -> Convolution {
+        Convolution::new(self.layout.points)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Kernel `kernel` at dilation `d` over `x`, term by term as written:
+    /// `Σ_j w_j x[t + (j − 4)d]`, zero beyond the window.
+    fn naive_convolution(x: &[f64], kernel: [usize; 3], d: usize) -> Vec<f64> {
+        let w = weights(kernel);
+        let n = x.len() as isize;
+        (0..n)
+            .map(|t| {
+                (0..KERNEL_LENGTH)
+                    .map(|j| {
+                        let at = t + (j as isize - 4) * d as isize;
+                        if (0..n).contains(&at) {
+                            w[j] * x[at as usize]
+                        } else {
+                            0.0
+                        }
+                    })
+                    .sum()
+            })
+            .collect()
+    }
+
+    /// The features as the module documentation defines them, one by one.
+    fn naive_features(t: &KernelTransform, window: &[f64]) -> Vec<f64> {
+        let n = t.layout.points;
+        let mut out = Vec::new();
+        for (c, biases) in t.biases.iter().enumerate() {
+            let x = &window[c * n..(c + 1) * n];
+            let mut f = 0;
+            for (i, (&d, &count)) in t
+                .layout
+                .dilations
+                .iter()
+                .zip(&t.layout.features_per_dilation)
+                .enumerate()
+            {
+                for (k, &kernel) in kernels().iter().enumerate() {
+                    let y = naive_convolution(x, kernel, d);
+                    // Unpadded: only outputs whose taps all lie in the window.
+                    let span = 4 * d;
+                    let kept: Vec<f64> = if padded(i, k) {
+                        y
+                    } else {
+                        y[span..n - span].to_vec()
+                    };
+                    for b in &biases[f..f + count] {
+                        let positive = kept.iter().filter(|&&v| v > *b).count();
+                        out.push(positive as f64 / kept.len() as f64);
+                    }
+                    f += count;
+                }
+            }
+        }
+        out
+    }
+
+    /// Windows of small whole numbers: every sum is exact, so the fast
+    /// and the naive convolution agree to the bit and so do the counts.
+    fn integer_windows(count: usize, len: usize, seed: u64) -> Vec<Vec<f64>> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        (0..count)
+            .map(|_| {
+                (0..len)
+                    .map(|_| f64::from(rng.random_range(-20i32..=20)))
+                    .collect()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_84_kernels_are_every_choice_of_three_positions_summing_to_zero() {
+        let k = kernels();
+        assert_eq!(k.len(), KERNEL_COUNT);
+        let mut seen = std::collections::BTreeSet::new();
+        for kernel in &k {
+            assert!(kernel[0] < kernel[1] && kernel[1] < kernel[2] && kernel[2] < 9);
+            assert!(seen.insert(*kernel));
+            assert_eq!(weights(*kernel).iter().sum::<f64>(), 0.0);
+        }
+        assert_eq!(k[0], [0, 1, 2]);
+        assert_eq!(k[83], [6, 7, 8]);
+    }
+
+    #[test]
+    fn dilations_are_exponential_up_to_a_kernel_spanning_the_window() {
+        for (points, asked) in [
+            (100, 10_000),
+            (9, 10_000),
+            (1000, 10_000),
+            (50, 84),
+            (300, 2000),
+        ] {
+            let l = KernelLayout::new(points, asked).unwrap();
+            assert_eq!(l.feature_count(), features_made(asked), "{points} {asked}");
+            assert_eq!(l.dilations[0], 1);
+            assert!(l.dilations.windows(2).all(|w| w[0] < w[1]), "{l:?}");
+            let top = *l.dilations.last().unwrap();
+            assert!(8 * top < points, "{l:?}");
+            // With 32 steps the largest is ⌊(L − 1) / 8⌋ up to the floor
+            // of the power; a single step is dilation 1 alone.
+            if asked >= 32 * KERNEL_COUNT {
+                assert!(2 * top > (points - 1) / 8, "{l:?}");
+            }
+            assert!(l.dilations.len() <= MAX_DILATIONS);
+            assert!(l.features_per_dilation.iter().all(|&c| c > 0), "{l:?}");
+        }
+        // 100 points: 2^e for 32 e from 0 to log2(99/8) = 3.63.
+        let l = KernelLayout::new(100, 10_000).unwrap();
+        assert_eq!(l.dilations, vec![1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12]);
+        assert_eq!(l.features_per_dilation.iter().sum::<usize>(), 119);
+        assert_eq!(features_made(10_000), 9996);
+        // Windows of 9 points: one dilation, 1.
+        assert_eq!(KernelLayout::new(9, 1000).unwrap().dilations, vec![1]);
+        assert!(KernelLayout::new(8, 1000).is_err());
+        assert!(KernelLayout::new(100, 83).is_err());
+    }
+
+    #[test]
+    fn half_the_combinations_are_padded_alternately() {
+        let l = KernelLayout::new(500, 10_000).unwrap();
+        let padded_count = (0..l.dilations.len())
+            .flat_map(|i| (0..KERNEL_COUNT).map(move |k| padded(i, k)))
+            .filter(|&p| p)
+            .count();
+        assert_eq!(padded_count, l.dilations.len() * KERNEL_COUNT / 2);
+        assert!(padded(0, 0) && !padded(0, 1) && !padded(1, 0) && padded(1, 1));
+    }
+
+    #[test]
+    fn the_convolution_is_the_direct_sum() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let x: Vec<f64> = (0..61).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let mut conv = Convolution::new(x.len());
+        for d in [1, 2, 3, 7] {
+            conv.dilate(&x, d);
+            for kernel in kernels() {
+                let fast = conv.convolve(kernel).to_vec();
+                let naive = naive_convolution(&x, kernel, d);
+                for (a, b) in fast.iter().zip(&naive) {
+                    assert!((a - b).abs() < 1e-12, "d {d} {kernel:?}: {a} {b}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn features_match_the_naive_transform_exactly() {
+        for (points, channels, asked, seed) in
+            [(100, 1, 10_000, 1), (37, 2, 840, 2), (9, 1, 168, 3)]
+        {
+            let windows = integer_windows(5, points * channels, seed);
+            let refs: Vec<&[f64]> = windows.iter().map(Vec::as_slice).collect();
+            let t = KernelTransform::fit(&refs, points, channels, asked).unwrap();
+            assert_eq!(t.feature_count(), channels * features_made(asked));
+            let mut conv = t.convolution();
+            let mut out = vec![f64::NAN; t.feature_count()];
+            for w in integer_windows(3, points * channels, seed + 100) {
+                t.transform(&w, &mut conv, &mut out);
+                assert_eq!(out, naive_features(&t, &w), "{points} points");
+            }
+        }
+    }
+
+    #[test]
+    fn biases_are_the_golden_ratio_quantiles_of_a_training_output() {
+        // One training window: every bias comes from its padded output.
+        let x = integer_windows(1, 40, 9).remove(0);
+        let t = KernelTransform::fit(&[&x], 40, 1, 840).unwrap();
+        let mut f = 0;
+        for (&d, &count) in t
+            .layout
+            .dilations
+            .iter()
+            .zip(&t.layout.features_per_dilation)
+        {
+            for kernel in kernels() {
+                let mut y = naive_convolution(&x, kernel, d);
+                y.sort_by(f64::total_cmp);
+                for _ in 0..count {
+                    let q = bias_quantile(f);
+                    // Linear interpolation between the order statistics.
+                    let pos = q * (y.len() - 1) as f64;
+                    let lo = pos.floor() as usize;
+                    let hi = (lo + 1).min(y.len() - 1);
+                    let want = y[lo] + (pos - lo as f64) * (y[hi] - y[lo]);
+                    assert!((t.biases[0][f] - want).abs() < 1e-9, "feature {f}");
+                    f += 1;
+                }
+            }
+        }
+        assert_eq!(f, 840);
+        assert!((bias_quantile(0) - 0.618_033_988_749_895).abs() < 1e-15);
+        assert!((bias_quantile(1) - 0.236_067_977_499_79).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_training_windows_decide_the_biases_and_nothing_else_does() {
+        let a = integer_windows(4, 50, 11);
+        let b = integer_windows(4, 50, 12);
+        let fit = |w: &[Vec<f64>]| {
+            let refs: Vec<&[f64]> = w.iter().map(Vec::as_slice).collect();
+            KernelTransform::fit(&refs, 50, 1, 840).unwrap()
+        };
+        assert!(fit(&a) == fit(&a));
+        assert!(fit(&a).biases != fit(&b).biases);
+        // Any one of the training windows may be drawn: with one window
+        // each, every bias is that window's.
+        let one = fit(&a[..1]);
+        assert!(one.biases != fit(&a[1..2]).biases);
+    }
+
+    #[test]
+    fn bad_training_input_is_refused() {
+        let w = vec![0.0; 20];
+        assert!(KernelTransform::fit(&[], 20, 1, 840).is_err());
+        assert!(KernelTransform::fit(&[&w], 21, 1, 840).is_err());
+        let t = KernelTransform::fit(&[&w], 20, 1, 840).unwrap();
+        assert!(t.check(20, 1, 840).is_ok());
+        assert!(t.check(21, 1, 840).is_err());
+        assert!(t.check(20, 2, 840).is_err());
+        let mut bad = t.clone();
+        bad.biases[0][3] = f64::NAN;
+        assert!(bad.check(20, 1, 840).is_err());
+    }
+}

@@ -1,0 +1,216 @@
+//! Interval quantile features, as QUANT (Dempster, Schmidt and Webb, 2024)
+//! describes them, written from the paper.
+//!
+//! A window of `n` points gives four series: the signal, its first and
+//! second differences, and its magnitude spectrum (`|X_k|`, `k = 0..=n/2`,
+//! the DFT unnormalised). Over each series, dyadic intervals (the whole,
+//! halves, quarters, … down to depth 6, and at each level below the first
+//! the same intervals shifted by half an interval;
+//! [`crate::profile::families::quantile_intervals`]); over each interval of
+//! `w` values, `q = 1 + ⌊(w − 1)/4⌋` quantiles at `0, 1/(q−1), …, 1`
+//! (linear interpolation between order statistics; the median when `q` is
+//! 1; the value when `w` is 1), and every second one (the 2nd, 4th, …) less
+//! the interval's mean. Each channel's features in turn, concatenated.
+//!
+//! Nothing is fitted: a window's features depend on that window alone, so
+//! they are made once per recording like the spectrum's. After
+//! [`Quantiles::new`] it allocates nothing per window.
+
+use crate::profile::families::{
+    QUANTILE_DEPTH, quantile_feature_count, quantile_intervals, quantile_series, quantiles_in,
+};
+
+use super::spectrum::MagnitudeSpectrum;
+
+/// The `q` quantile (0 to 1) of sorted values, by linear interpolation
+/// between the order statistics at `q · (n − 1)` (numpy's default).
+pub fn quantile_sorted(sorted: &[f64], q: f64) -> f64 {
+    let n = sorted.len();
+    if n == 1 {
+        return sorted[0];
+    }
+    let pos = q.clamp(0.0, 1.0) * (n - 1) as f64;
+    let lo = (pos.floor() as usize).min(n - 1);
+    let hi = (lo + 1).min(n - 1);
+    let frac = pos - lo as f64;
+    if frac == 0.0 {
+        sorted[lo]
+    } else {
+        sorted[lo] + frac * (sorted[hi] - sorted[lo])
+    }
+}
+
+/// The interval quantile transform of windows of one length.
+#[derive(Clone)]
+pub struct Quantiles {
+    points: usize,
+    /// Per series, its intervals.
+    intervals: [Vec<[usize; 2]>; 4],
+    spectrum: MagnitudeSpectrum,
+    /// The four series, one after another.
+    series: [Vec<f64>; 4],
+    sorted: Vec<f64>,
+}
+
+impl Quantiles {
+    /// For windows of `points` (at least 4).
+    pub fn new(points: usize) -> Quantiles {
+        let lengths = quantile_series(points);
+        Quantiles {
+            points,
+            intervals: lengths.map(|n| quantile_intervals(n, QUANTILE_DEPTH)),
+            spectrum: MagnitudeSpectrum::new(points),
+            series: lengths.map(|n| vec![0.0; n]),
+            sorted: Vec::with_capacity(points),
+        }
+    }
+
+    /// Features of one channel's window.
+    pub fn len(&self) -> usize {
+        quantile_feature_count(self.points)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// One channel's window (`points` values) into `out` (`len()` values).
+    pub fn compute(&mut self, x: &[f64], out: &mut [f64]) {
+        debug_assert_eq!(x.len(), self.points);
+        let [signal, first, second, magnitude] = &mut self.series;
+        signal.copy_from_slice(x);
+        for (d, w) in first.iter_mut().zip(x.windows(2)) {
+            *d = w[1] - w[0];
+        }
+        for (d, w) in second.iter_mut().zip(first.windows(2)) {
+            *d = w[1] - w[0];
+        }
+        self.spectrum.compute(x, magnitude);
+        let mut f = 0;
+        for (series, intervals) in self.series.iter().zip(&self.intervals) {
+            for &[a, b] in intervals {
+                let part = &series[a..b];
+                let q = quantiles_in(part.len());
+                self.sorted.clear();
+                self.sorted.extend_from_slice(part);
+                self.sorted.sort_by(f64::total_cmp);
+                if part.len() == 1 || q == 1 {
+                    out[f] = quantile_sorted(&self.sorted, 0.5);
+                    f += 1;
+                    continue;
+                }
+                let mean = part.iter().sum::<f64>() / part.len() as f64;
+                for i in 0..q {
+                    let v = quantile_sorted(&self.sorted, i as f64 / (q - 1) as f64);
+                    out[f] = if i % 2 == 1 { v - mean } else { v };
+                    f += 1;
+                }
+            }
+        }
+        debug_assert_eq!(f, out.len());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The quantile by its definition on unsorted values, for checking.
+    fn naive_quantile(values: &[f64], q: f64) -> f64 {
+        let mut v = values.to_vec();
+        v.sort_by(f64::total_cmp);
+        let pos = q * (v.len() - 1) as f64;
+        let lo = pos.floor() as usize;
+        let hi = pos.ceil() as usize;
+        v[lo] + (pos - lo as f64) * (v[hi] - v[lo])
+    }
+
+    /// `|X_k|` by the DFT's definition.
+    fn naive_magnitude(x: &[f64]) -> Vec<f64> {
+        let n = x.len();
+        (0..=n / 2)
+            .map(|k| {
+                let (mut re, mut im) = (0.0, 0.0);
+                for (j, v) in x.iter().enumerate() {
+                    let a = -2.0 * std::f64::consts::PI * (j * k) as f64 / n as f64;
+                    re += v * a.cos();
+                    im += v * a.sin();
+                }
+                re.hypot(im)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn quantiles_interpolate_between_order_statistics() {
+        let v = [1.0, 2.0, 4.0, 8.0];
+        assert_eq!(quantile_sorted(&v, 0.0), 1.0);
+        assert_eq!(quantile_sorted(&v, 1.0), 8.0);
+        assert_eq!(quantile_sorted(&v, 0.5), 3.0);
+        assert!((quantile_sorted(&v, 0.25) - 1.75).abs() < 1e-15);
+        assert_eq!(quantile_sorted(&[5.0], 0.3), 5.0);
+    }
+
+    #[test]
+    fn features_follow_the_definition() {
+        let n = 45;
+        let x: Vec<f64> = (0..n)
+            .map(|j| (j as f64 * 0.7).sin() + 0.3 * (j as f64 * 2.3).cos() + 0.01 * j as f64)
+            .collect();
+        let mut qt = Quantiles::new(n);
+        let mut out = vec![f64::NAN; qt.len()];
+        qt.compute(&x, &mut out);
+        let d1: Vec<f64> = x.windows(2).map(|w| w[1] - w[0]).collect();
+        let d2: Vec<f64> = d1.windows(2).map(|w| w[1] - w[0]).collect();
+        let series = [x.clone(), d1, d2, naive_magnitude(&x)];
+        let mut want = Vec::new();
+        for s in &series {
+            for [a, b] in quantile_intervals(s.len(), 6) {
+                let part = &s[a..b];
+                let q = 1 + (part.len() - 1) / 4;
+                if q == 1 {
+                    want.push(naive_quantile(part, 0.5));
+                    continue;
+                }
+                let mean = part.iter().sum::<f64>() / part.len() as f64;
+                for i in 0..q {
+                    let v = naive_quantile(part, i as f64 / (q - 1) as f64);
+                    want.push(if i % 2 == 1 { v - mean } else { v });
+                }
+            }
+        }
+        assert_eq!(out.len(), want.len());
+        for (i, (a, b)) in out.iter().zip(&want).enumerate() {
+            assert!(
+                (a - b).abs() < 1e-9 * (1.0 + b.abs()),
+                "feature {i}: {a} {b}"
+            );
+        }
+        // The first features: the whole signal's 12 quantiles (45 values),
+        // its minimum first and its maximum, less the mean, last.
+        let min = x.iter().copied().fold(f64::INFINITY, f64::min);
+        let max = x.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let mean = x.iter().sum::<f64>() / n as f64;
+        assert_eq!(out[0], min);
+        assert!((out[11] - (max - mean)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_features_of_a_window_depend_on_it_alone_and_see_its_shape() {
+        let n = 64;
+        let mut qt = Quantiles::new(n);
+        let a: Vec<f64> = (0..n).map(|j| (j as f64 * 0.5).sin()).collect();
+        let b: Vec<f64> = (0..n).map(|j| (j as f64 * 1.5).sin()).collect();
+        let (mut fa, mut fb, mut fa2) = (
+            vec![0.0; qt.len()],
+            vec![0.0; qt.len()],
+            vec![0.0; qt.len()],
+        );
+        qt.compute(&a, &mut fa);
+        qt.compute(&b, &mut fb);
+        qt.compute(&a, &mut fa2);
+        assert_eq!(fa, fa2);
+        assert_ne!(fa, fb);
+        assert!(fa.iter().all(|v| v.is_finite()));
+    }
+}

@@ -1,0 +1,132 @@
+//! `[analysis] features` and `[classifier] method` from the command line:
+//! train, classify and evaluate take random kernels and the ridge through
+//! the same commands, and a setting they cannot use is one line and exit 2.
+
+use std::path::Path;
+
+use crate::common::{p, run};
+
+const SMALL: &str = "tests/data/small";
+const TINY: &str = "tests/data/small/tiny.toml";
+
+/// `tiny.toml` with `[analysis]` and `[classifier]` lines added, written
+/// to `dir/name`.
+fn tiny_with(dir: &Path, name: &str, analysis: &str, classifier: &str) -> String {
+    let text = std::fs::read_to_string(Path::new(crate::common::REPO).join(TINY)).unwrap();
+    let text = text
+        .replace("bins = [1, 8]\n", &format!("bins = [1, 8]\n{analysis}\n"))
+        .replace("k = 1\n", &format!("k = 1\n{classifier}\n"));
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    p(&path).to_string()
+}
+
+/// `hapticlab ARGS` exits 2 with one line holding each of `says`.
+fn refused(args: &[&str], says: &[&str]) {
+    let r = run(args);
+    assert_eq!(r.code, Some(2), "{args:?}: {r:?}");
+    assert_eq!(r.stderr.trim_end().lines().count(), 1, "one line: {r:?}");
+    for s in says {
+        assert!(r.stderr.contains(s), "{args:?}: {s:?} missing: {r:?}");
+    }
+}
+
+#[test]
+fn kernels_and_ridge_train_classify_and_evaluate() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = format!("{SMALL}/two-labels");
+    let profile = tiny_with(
+        dir.path(),
+        "k.toml",
+        "features = \"kernels\"\nkernel_features = 840",
+        "method = \"ridge\"",
+    );
+    let model = dir.path().join("m.json");
+    let r = run(&["train", "-p", &profile, "--out", p(&model), &data]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let saved: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    assert_eq!(saved["format"], "hapticlab model v2");
+    assert_eq!(saved["kernels"]["biases"][0].as_array().unwrap().len(), 840);
+    assert_eq!(saved["ridge"]["weights"].as_array().unwrap().len(), 2);
+    let r = run(&["classify", "-p", &profile, "--model", p(&model), &data]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    // Each training scan is predicted with itself left out (the model
+    // trained again, kernels and all, without it); no neighbours to name.
+    assert_eq!(
+        r.stdout.matches("left out of the model").count(),
+        6,
+        "{r:?}"
+    );
+    assert!(!r.stdout.contains("nearest"), "{r:?}");
+    // Under a profile's k-NN the model's own settings classify, and the
+    // warning names the key, as for any classifier setting.
+    let knn = tiny_with(
+        dir.path(),
+        "knn.toml",
+        "features = \"kernels\"\nkernel_features = 840",
+        "",
+    );
+    let r = run(&["classify", "-p", &knn, "--model", p(&model), &data]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(r.stderr.contains("classifier.method = \"ridge\""), "{r:?}");
+    // Under other features it is refused.
+    let quantiles = tiny_with(dir.path(), "q.toml", "features = \"quantiles\"", "");
+    refused(
+        &["classify", "-p", &quantiles, "--model", p(&model), &data],
+        &["analysis.features", "\"kernels\"", "\"quantiles\""],
+    );
+    let r = run(&["evaluate", "-p", &profile, &data]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(r.stdout.contains("random kernels, ridge"), "{r:?}");
+}
+
+#[test]
+fn settings_the_families_cannot_use_are_refused_by_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = format!("{SMALL}/two-labels");
+    let few = tiny_with(
+        dir.path(),
+        "few.toml",
+        "features = \"kernels\"\nkernel_features = 10",
+        "",
+    );
+    refused(
+        &["evaluate", "-p", &few, &data],
+        &["analysis.kernel_features", "84 to 100000", "10"],
+    );
+    let unused = tiny_with(dir.path(), "unused.toml", "kernel_features = 840", "");
+    refused(
+        &["check", &unused],
+        &[
+            "analysis.kernel_features",
+            "only used with features = \"kernels\"",
+        ],
+    );
+    let word = tiny_with(dir.path(), "word.toml", "features = \"wavelets\"", "");
+    refused(
+        &["check", &word],
+        &[
+            "analysis.features",
+            "\"spectrum\", \"kernels\" or \"quantiles\"",
+        ],
+    );
+    let method = tiny_with(dir.path(), "method.toml", "", "method = \"lasso\"");
+    refused(
+        &["check", &method],
+        &["classifier.method", "\"knn\" or \"ridge\""],
+    );
+    let welch = tiny_with(
+        dir.path(),
+        "welch.toml",
+        "features = \"quantiles\"\nwelch_segment = 8",
+        "",
+    );
+    refused(
+        &["check", &welch],
+        &[
+            "analysis.welch_segment",
+            "only used with features = \"spectrum\"",
+        ],
+    );
+}
