@@ -1,8 +1,10 @@
 //! The console's picture in the docs (`docs/console.svg`): the 120×40
 //! snapshot screen (the fixture app the insta snapshots draw) written as
 //! an SVG of monospace text, one `<text>` per run of equally styled cells,
-//! each stretched to its cells' width so box drawing and Braille line up
-//! whatever the viewer's font. `HAPTICLAB_BLESS=1 cargo test -p hapticlab
+//! each character placed at its cell's x, so box drawing and Braille line
+//! up whatever the viewer's font. Renderers that honour only a text's first
+//! x (librsvg) still line up: a character a monospace font may lack
+//! (Braille, arrows) is a `<text>` of its own. `HAPTICLAB_BLESS=1 cargo test -p hapticlab
 //! --lib console_svg` writes it again; the test fails when it is stale.
 
 use ratatui::Terminal;
@@ -12,9 +14,9 @@ use ratatui::style::{Color, Modifier};
 
 use crate::console::fixtures;
 
-const CELL_W: f64 = 8.4;
+const CELL_W: f64 = 8.8;
 const CELL_H: f64 = 17.0;
-const FONT: f64 = 14.0;
+const FONT: f64 = 14.6;
 const BACKGROUND: &str = "#1e1e1e";
 const FOREGROUND: &str = "#d4d4d4";
 
@@ -59,6 +61,27 @@ fn look(c: &Cell) -> (String, Option<String>, bool, bool) {
     )
 }
 
+/// Whether every monospace font draws `c` one cell wide: ASCII and box
+/// drawing.
+fn common(c: char) -> bool {
+    c.is_ascii() || ('\u{2500}'..='\u{259f}').contains(&c)
+}
+
+/// A run's text cut into pieces, each with its offset in cells: runs of
+/// common characters whole, any other character alone.
+fn pieces(text: &str) -> Vec<(usize, String)> {
+    let mut out: Vec<(usize, String)> = Vec::new();
+    let mut last_common = false;
+    for (i, c) in text.chars().enumerate() {
+        match out.last_mut() {
+            Some((_, piece)) if last_common && common(c) => piece.push(c),
+            _ => out.push((i, c.to_string())),
+        }
+        last_common = common(c);
+    }
+    out
+}
+
 /// The buffer as an SVG.
 pub fn svg(buf: &Buffer) -> String {
     let a = buf.area;
@@ -93,17 +116,22 @@ pub fn svg(buf: &Buffer) -> String {
             // Leading spaces become an offset, trailing ones are dropped.
             let lead = text.chars().take_while(|c| *c == ' ').count();
             let body = trimmed.trim_start();
-            let cells = body.chars().count();
-            out.push_str(&format!(
-                "<text x=\"{:.1}\" y=\"{:.1}\" fill=\"{fg}\"{}{} textLength=\"{:.1}\" \
-                 lengthAdjust=\"spacingAndGlyphs\" xml:space=\"preserve\">{}</text>\n",
-                px + lead as f64 * CELL_W,
-                py + CELL_H * 0.78,
+            let attrs = format!(
+                "fill=\"{fg}\"{}{}",
                 if *bold { " font-weight=\"bold\"" } else { "" },
                 if *dim { " opacity=\"0.65\"" } else { "" },
-                cells as f64 * CELL_W,
-                escape(body),
-            ));
+            );
+            let y_text = py + CELL_H * 0.78;
+            for (offset, piece) in pieces(body) {
+                let xs: Vec<String> = (0..piece.chars().count())
+                    .map(|i| format!("{:.1}", px + (lead + offset + i) as f64 * CELL_W))
+                    .collect();
+                out.push_str(&format!(
+                    "<text x=\"{}\" y=\"{y_text:.1}\" {attrs} xml:space=\"preserve\">{}</text>\n",
+                    xs.join(" "),
+                    escape(&piece),
+                ));
+            }
         }
     }
     out.push_str("</svg>\n");
