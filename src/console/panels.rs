@@ -361,4 +361,6 @@ impl Widget for &App {
 }
 
 #[cfg(test)]
+mod svg;
+#[cfg(test)]
 mod tests;

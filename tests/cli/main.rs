@@ -9,6 +9,7 @@ mod bad_recordings;
 mod cli;
 mod completions_man;
 mod console_windows;
+mod docs;
 mod doctor;
 mod evaluate_windows;
 mod falcon_emulator;

@@ -760,5 +760,8 @@ fn field_names(a: &Analysis) -> Vec<&'static str> {
     ]
 }
 
+mod reference;
+pub use reference::{REGENERATE, profile_keys_markdown};
+
 #[cfg(test)]
 mod tests;
