@@ -52,7 +52,7 @@ use crate::evaluate::plan::{Overrides, Plan};
 use crate::evaluate::{EvaluateError, PredictionRow, Report, count};
 use crate::profile::options::same_grid;
 use crate::profile::tuned::{TunedOn, fingerprint};
-use crate::profile::{Analysis, Metric, Profile, SplitMethod};
+use crate::profile::{Analysis, FeatureFamily, Method, Metric, Profile, SplitMethod};
 use score::{
     Fold, Pairwise, RESAMPLED_MOST, Resampled, Voting, extract, extract_resampled, par_map,
     resample, resampled_points, score_fold,
@@ -104,6 +104,8 @@ pub struct Options {
 /// A setting with its inner scores ([`InnerScore`]).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Scored {
+    /// The feature family and the classifier: `spectrum + knn`.
+    pub family: String,
     pub options: Described,
     /// Mean accuracy over the inner folds (0..1).
     pub inner_accuracy: f64,
@@ -145,6 +147,10 @@ pub struct TuneReport {
     pub chosen: Scored,
     /// The best settings of the search that chose it, best first.
     pub table: Vec<Scored>,
+    /// The best setting of each family and classifier searched
+    /// (`spectrum + knn`, `kernels + ridge`, …) in the search that chose,
+    /// best first: which family won, and by how much.
+    pub families: Vec<Scored>,
     /// For k-fold and leave-one-out: each outer fold's own choice and its
     /// test accuracy.
     pub outer_folds: Vec<OuterFold>,
@@ -296,6 +302,10 @@ pub fn check_plan(scans: &[Entry], plan: &Plan) -> Result<(), TuneError> {
 /// The settings to score: the whole grid within the budget, else whole
 /// feature settings sampled with the seed (each with every classifier
 /// setting) up to the budget. In grid order.
+///
+/// The feature settings are drawn family by family in turn (the spectrum,
+/// the quantiles, the kernels: each a shuffled list), so a budget smaller
+/// than the grid still tries every family.
 fn sample(grid: Vec<Setting>, budget: usize, seed: u64) -> Vec<Setting> {
     if grid.len() <= budget {
         return grid;
@@ -304,9 +314,39 @@ fn sample(grid: Vec<Setting>, budget: usize, seed: u64) -> Vec<Setting> {
     for s in grid {
         by_features.entry(s.feature_key()).or_default().push(s);
     }
-    let mut groups: Vec<Vec<Setting>> = by_features.into_values().collect();
-    groups.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
-    let mut out: Vec<Setting> = groups.into_iter().flatten().take(budget).collect();
+    let mut families: BTreeMap<FeatureFamily, Vec<Vec<Setting>>> = BTreeMap::new();
+    for group in by_features.into_values() {
+        families
+            .entry(group[0].analysis.features)
+            .or_default()
+            .push(group);
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut queues: Vec<std::vec::IntoIter<Vec<Setting>>> = families
+        .into_values()
+        .map(|mut groups| {
+            groups.shuffle(&mut rng);
+            groups.into_iter()
+        })
+        .collect();
+    let mut out: Vec<Setting> = Vec::new();
+    'draw: loop {
+        let mut drew = false;
+        for q in &mut queues {
+            if let Some(group) = q.next() {
+                drew = true;
+                for s in group {
+                    if out.len() == budget {
+                        break 'draw;
+                    }
+                    out.push(s);
+                }
+            }
+        }
+        if !drew {
+            break;
+        }
+    }
     out.sort_by(|a, b| a.values.cmp(&b.values));
     out
 }
@@ -333,13 +373,19 @@ impl InnerScore {
     }
 }
 
-/// The settings in order, best first: by [`InnerScore::better`], then the
-/// simplest ([`Setting::simplicity`]).
+/// The settings in order, best first: the higher inner accuracy; between
+/// equal accuracies the simpler family and classifier
+/// ([`Setting::family_rank`]: the margins of k nearest neighbours and of a
+/// linear classifier's vote are not on one scale), then within one by
+/// [`InnerScore::better`], then the simplest ([`Setting::simplicity`]).
 fn ranked(settings: &[Setting], scores: &[InnerScore]) -> Vec<usize> {
     let mut order: Vec<usize> = (0..settings.len()).collect();
     order.sort_by(|&a, &b| {
-        scores[a]
-            .better(&scores[b])
+        scores[b]
+            .accuracy
+            .total_cmp(&scores[a].accuracy)
+            .then_with(|| settings[a].family_rank().cmp(&settings[b].family_rank()))
+            .then_with(|| scores[a].better(&scores[b]))
             .then_with(|| settings[a].simplicity().cmp(&settings[b].simplicity()))
     });
     order
@@ -353,6 +399,7 @@ fn best(settings: &[Setting], scores: &[InnerScore]) -> usize {
 /// One search's inputs shared by every part: the scans, their classes, the
 /// settings and each part's inner folds.
 struct Search<'a> {
+    name: &'a str,
     scans: &'a [Entry],
     data: &'a Data<'a>,
     settings: &'a [Setting],
@@ -408,7 +455,17 @@ impl Search<'_> {
             } else {
                 extract(scans, analysis, self.threads)?
             };
-            self.score_feature_setting(&features, members, &mut scores);
+            // k nearest neighbours from one table of neighbours; the
+            // linear classifiers fitted fold by fold.
+            let (neighbours, linear): (Vec<usize>, Vec<usize>) = members
+                .iter()
+                .partition(|&&i| settings[i].classifier.method == Method::Knn);
+            if !neighbours.is_empty() {
+                self.score_feature_setting(&features, &neighbours, &mut scores);
+            }
+            if !linear.is_empty() {
+                self.score_fitted(&features, &linear, &mut scores)?;
+            }
             done += members.len();
             progress(done, settings.len());
         }
@@ -498,6 +555,86 @@ impl Search<'_> {
     }
 }
 
+impl Search<'_> {
+    /// Adds to `scores` the inner scores of `members` whose classifier is
+    /// fitted (the linear ones, and whatever the features need fitted:
+    /// the kernels' biases): in each inner fold a model is trained on the
+    /// fold's training recordings only, as `train` would, and classifies
+    /// its test recordings. A recording's finer scores are its windows'
+    /// vote: the share for its own label, and the margin of that share
+    /// over the largest share of another label (−1 to 1).
+    fn score_fitted(
+        &self,
+        features: &score::Features,
+        members: &[usize],
+        scores: &mut [Vec<InnerScore>],
+    ) -> Result<(), TuneError> {
+        let mut tasks = Vec::new();
+        for (p, folds) in self.inner.iter().enumerate() {
+            for f in 0..folds.len() {
+                for &i in members {
+                    tasks.push((p, f, i));
+                }
+            }
+        }
+        // Each task trains on every core (the kernels' transform): a few
+        // at a time.
+        let threads = self.threads.clamp(1, 2);
+        let results = par_map(&tasks, threads, |&(p, f, i)| {
+            let part = &self.inner[p][f];
+            predict_part(
+                self.name,
+                &self.settings[i],
+                self.scans,
+                features,
+                &part.train,
+                &part.test,
+            )
+            .map(|rows| (p, i, rows))
+        });
+        for r in results {
+            let (p, i, rows) = r?;
+            let n_folds = self.inner[p].len() as f64;
+            let tested = rows.len().max(1) as f64;
+            let s = &mut scores[p][i];
+            // Summed as the neighbours' scores are, so equal counts give
+            // equal accuracies to the last bit.
+            let right = rows.iter().filter(|r| r.label == r.predicted).count();
+            s.accuracy += right as f64 / tested / n_folds;
+            let (share, margin) = rows
+                .iter()
+                .map(vote_shares)
+                .fold((0.0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
+            s.margin += margin / tested / n_folds;
+            s.true_share += share / tested / n_folds;
+        }
+        Ok(())
+    }
+}
+
+/// A test recording's share of its windows' votes for its own label, and
+/// the margin of that share over the largest of another label's.
+fn vote_shares(row: &PredictionRow) -> (f64, f64) {
+    let total: usize = row.votes.iter().map(|(_, n)| n).sum();
+    let total = total.max(1) as f64;
+    let own = row
+        .votes
+        .iter()
+        .filter(|(l, _)| *l == row.label)
+        .map(|(_, n)| *n)
+        .sum::<usize>() as f64
+        / total;
+    let other = row
+        .votes
+        .iter()
+        .filter(|(l, _)| *l != row.label)
+        .map(|(_, n)| *n)
+        .max()
+        .unwrap_or(0) as f64
+        / total;
+    (own, own - other)
+}
+
 /// Run the search on the scans (read with [`crate::dataset::Keep::Samples`],
 /// one entry per recording). `progress(done, total)` hears each feature
 /// setting scored, in settings.
@@ -540,6 +677,7 @@ pub fn tune(
         by_features.entry(s.feature_key()).or_default().push(i);
     }
     let search = Search {
+        name,
         scans,
         data: &data,
         settings: &settings,
@@ -548,6 +686,7 @@ pub fn tune(
     };
     let scores = search.score_all(&by_features, progress)?;
     let scored = |i: usize, p: usize| Scored {
+        family: settings[i].family(),
         options: settings[i].describe(),
         inner_accuracy: scores[p][i].accuracy,
         inner_margin: scores[p][i].margin,
@@ -570,7 +709,7 @@ pub fn tune(
                 e.insert(extract(scans, &setting.analysis, options.threads)?)
             }
         };
-        let rows = test_part(name, setting, scans, features, part)?;
+        let rows = predict_part(name, setting, scans, features, &part.train, &part.test)?;
         let right = rows.iter().filter(|r| r.label == r.predicted).count();
         outer_folds.push(OuterFold {
             chosen: scored(chosen, p),
@@ -614,6 +753,21 @@ pub fn tune(
             .take(10)
             .map(|&i| scored(i, final_part))
             .collect(),
+        families: {
+            let mut seen: Vec<String> = Vec::new();
+            order
+                .iter()
+                .filter(|&&i| {
+                    let f = settings[i].family();
+                    let new = !seen.contains(&f);
+                    if new {
+                        seen.push(f);
+                    }
+                    new
+                })
+                .map(|&i| scored(i, final_part))
+                .collect()
+        },
         outer_folds: if plan.method == SplitMethod::Holdout {
             Vec::new()
         } else {
@@ -634,15 +788,15 @@ pub fn tune(
 /// Train a model with the setting on the part's training recordings and
 /// classify each of its test recordings (by its sub-windows' vote): what
 /// `evaluate` does with that setting on that split.
-fn test_part(
+fn predict_part(
     name: &str,
     setting: &Setting,
     scans: &[Entry],
     features: &score::Features,
-    part: &Part,
+    train: &[usize],
+    test: &[usize],
 ) -> Result<Vec<PredictionRow>, TuneError> {
-    let examples: Vec<TrainingExample> = part
-        .train
+    let examples: Vec<TrainingExample> = train
         .iter()
         .flat_map(|&r| {
             features[r].iter().map(move |w| TrainingExample {
@@ -655,8 +809,7 @@ fn test_part(
     let mut classifier = setting.classifier.clone();
     classifier.k = classifier.k.min(examples.len().max(1));
     let model = Model::train(name, &setting.analysis, &classifier, examples)?;
-    part.test
-        .iter()
+    test.iter()
         .map(|&r| {
             let p = model.classify_windows(&features[r])?;
             Ok(PredictionRow {

@@ -28,8 +28,9 @@ pub struct TuneArgs {
     #[arg(long, value_name = "TUNED.toml")]
     pub out: PathBuf,
     /// Settings scored at most; a larger grid is sampled (whole feature
-    /// settings, each with every classifier setting) with the seed.
-    #[arg(long, default_value_t = 768, value_parser = clap::value_parser!(u64).range(1..))]
+    /// settings, each with every classifier setting, the families in turn)
+    /// with the seed.
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u64).range(1..))]
     pub budget: u64,
     /// Seeds the sampling and the inner folds (the outer split is the profile's).
     #[arg(long, default_value_t = 0)]
@@ -165,6 +166,16 @@ fn print_report(r: &TuneReport, a: &TuneArgs) {
         "chosen (inner {}): {}",
         pct(r.chosen.inner_accuracy),
         chosen.join(", ")
+    );
+    let families: Vec<String> = r
+        .families
+        .iter()
+        .map(|f| format!("{} {}", f.family, pct(f.inner_accuracy)))
+        .collect();
+    crate::outln!(
+        "family: {} (the best inner score of each: {})",
+        r.chosen.family,
+        families.join(", ")
     );
     for f in &r.outer_folds {
         crate::outln!(

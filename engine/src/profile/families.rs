@@ -7,7 +7,7 @@
 use serde::{Deserialize, Serialize};
 
 /// What a window's features are.
-#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, Deserialize, Serialize, PartialEq, Eq, PartialOrd, Ord, Default)]
 #[serde(rename_all = "kebab-case")]
 pub enum FeatureFamily {
     /// A spectrum's bins, bands or cepstra (the thesis's).

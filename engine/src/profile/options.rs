@@ -287,6 +287,8 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
         "spectrum as the thesis; kernels (MiniRocket) or quantiles (QUANT) for vibration or motion a spectrum misses, best with classifier.method = \"ridge\"",
         field!(features),
     )
+    // Simplest first: the thesis's spectrum, then the cheaper family.
+    .searched(&["spectrum", "quantiles", "kernels"])
     .labelled(|a| match a.features {
         FeatureFamily::Spectrum => None,
         FeatureFamily::Kernels => Some(FeatureNames::Points),
@@ -550,7 +552,7 @@ pub const CLASSIFIER_OPTIONS: &[ClassifierOption] = &[
         kind: Kind::Choice,
         allowed: &["knn", "ridge"],
         advice: "k nearest neighbours (the thesis), or a ridge classifier for many features (kernels, quantiles)",
-        search: &[],
+        search: &["knn", "ridge"],
         value: |c| json(&c.method),
         line: |c| toml_value(&c.method),
     },
@@ -584,6 +586,16 @@ impl ClassifierOption {
     /// The key within `[classifier]`: `k`.
     pub fn field(&self) -> &'static str {
         self.name.strip_prefix("classifier.").unwrap_or(self.name)
+    }
+    /// Whether only k nearest neighbours use it (every option but the
+    /// method: a linear classifier standardises on its own).
+    pub fn neighbours_only(&self) -> bool {
+        self.field() != "method"
+    }
+    /// Whether every profile sets it (`k`, the thesis's `k = 10`), used or
+    /// not: a setting that does not use it keeps the profile's line.
+    pub fn required(&self) -> bool {
+        self.field() == "k"
     }
     /// The value `c` gives it, as a report writes it (`euclidean`, `3`).
     pub fn text(&self, c: &Classifier) -> String {
@@ -660,6 +672,11 @@ impl AnalysisOption {
     /// The key within `[analysis]`: `spacing`.
     pub fn field(&self) -> &'static str {
         self.name.strip_prefix("analysis.").unwrap_or(self.name)
+    }
+    /// Whether only the spectrum family uses it: every option of the
+    /// spectrum's group but the family itself and the kernels' count.
+    pub fn spectrum_only(&self) -> bool {
+        self.group == Group::Spectrum && !matches!(self.field(), "features" | "kernel_features")
     }
     /// The value `a` gives it, as a report writes it (`log-welch`, `512`,
     /// `none` when left out).

@@ -18,9 +18,9 @@ use crate::analysis::check_settings;
 use crate::profile::fitted::{fitting_bands, float, floor3};
 use crate::profile::options::{
     ANALYSIS_OPTIONS, AnalysisOption, CLASSIFIER_OPTIONS, ClassifierOption, Group, Kind,
-    classifier_option, option as option_named,
+    classifier_option, option as option_named, plain_word,
 };
-use crate::profile::{Analysis, Classifier, Windows};
+use crate::profile::{Analysis, Classifier, FeatureFamily, Method, Windows};
 
 /// One option searched: its name (the profile key) and its values as they
 /// are written in a profile or described, simplest first.
@@ -101,6 +101,39 @@ impl Setting {
         (self.values.iter().sum(), &self.values)
     }
 
+    /// Whether the setting leaves the option unused: a spectrum option
+    /// under another family, a neighbours' option under a linear
+    /// classifier.
+    pub fn unused(&self, option: &str) -> bool {
+        (self.analysis.features != FeatureFamily::Spectrum
+            && option_named(option).is_some_and(|o| o.spectrum_only()))
+            || (self.classifier.method != Method::Knn
+                && classifier_option(option).is_some_and(|o| o.neighbours_only()))
+    }
+
+    /// The family's and the classifier's positions among the values
+    /// searched: smaller is simpler (the spectrum and k nearest neighbours
+    /// first).
+    pub fn family_rank(&self) -> (usize, usize) {
+        let at = |option: &str| {
+            space()
+                .iter()
+                .position(|s| s.option == option)
+                .map_or(0, |row| self.values[row])
+        };
+        (at("features"), at("method"))
+    }
+
+    /// The family and the classifier, as a report names them:
+    /// `kernels + ridge`.
+    pub fn family(&self) -> String {
+        format!(
+            "{} + {}",
+            plain_word(&self.analysis.features),
+            plain_word(&self.classifier.method)
+        )
+    }
+
     /// The feature-changing part of the values.
     pub fn feature_key(&self) -> Vec<usize> {
         space()
@@ -129,6 +162,9 @@ impl Setting {
     pub fn describe(&self) -> Described {
         let a = &self.analysis;
         let text = |option: &str| -> String {
+            if self.unused(option) {
+                return "-".into();
+            }
             match option {
                 // What a reader needs beyond the value: the bands under
                 // the cepstra, the hop of the sub-windows.
@@ -228,6 +264,35 @@ pub fn resolve(base: (&Analysis, &Classifier), values: &[usize]) -> Option<Setti
     if chosen.len() != rows.len() {
         return None;
     }
+    // A family and a classifier are options like the others, but the
+    // spectrum's options mean nothing to another family and k nearest
+    // neighbours' nothing to a linear classifier: those settings are
+    // searched once, with the options they do not use at their first value
+    // (written as left out). The random kernels go to linear classifiers
+    // only, as their paper pairs them: each fold fits its own kernels, and
+    // ten thousand proportions of positive values are made for a linear
+    // decision, not for distances.
+    let word = |option: &str| chosen.iter().find(|(r, _)| r.option == option).map(|x| x.1);
+    let spectrum = word("features").is_none_or(|f| f == "spectrum");
+    let neighbours = word("method").is_none_or(|m| m == "knn");
+    if word("features") == Some("kernels") && neighbours {
+        return None;
+    }
+    let unused = |option: &str| {
+        (!spectrum && option_named(option).is_some_and(|o| o.spectrum_only()))
+            || (!neighbours && classifier_option(option).is_some_and(|o| o.neighbours_only()))
+    };
+    if rows
+        .iter()
+        .zip(values)
+        .any(|(row, &v)| v != 0 && unused(row.option))
+    {
+        return None;
+    }
+    let chosen: Vec<_> = chosen
+        .into_iter()
+        .filter(|(row, _)| !unused(row.option))
+        .collect();
     // Every value as a profile writes it, at once; those relative to the
     // data after.
     let as_written = |features: bool| -> Vec<(&str, &str, Kind)> {
@@ -244,6 +309,7 @@ pub fn resolve(base: (&Analysis, &Classifier), values: &[usize]) -> Option<Setti
     let (analysis, classifier) = decided_options();
     let afresh = |field: &str, search: &[&str]| {
         search.is_empty()
+            || unused(field)
             || chosen
                 .iter()
                 .any(|(row, v)| row.option == field && v.contains('/'))
@@ -254,10 +320,11 @@ pub fn resolve(base: (&Analysis, &Classifier), values: &[usize]) -> Option<Setti
             .filter(|o| afresh(o.field(), o.search))
             .map(|o| o.field()),
     )?;
+    // An option every profile sets stays the profile's when unused.
     let mut c: Classifier = left_out(
         base.1,
         classifier
-            .filter(|o| afresh(o.field(), o.search))
+            .filter(|o| afresh(o.field(), o.search) && !(o.required() && unused(o.field())))
             .map(|o| o.field()),
     )?;
     a = written(&a, &as_written(true))?;
@@ -342,16 +409,36 @@ mod tests {
     fn every_setting_resolves_to_valid_distinct_settings() {
         let (a, c) = fingertip();
         let g = grid((&a, &c));
-        let classifier_points: usize = space()
+        // k nearest neighbours' settings: every classifier row but the method.
+        let neighbours: usize = space()
             .iter()
-            .filter(|s| !s.features)
+            .filter(|s| !s.features && s.option != "method")
             .map(|s| s.values.len())
             .product();
-        assert_eq!(g.len() % classifier_points, 0);
+        let count = |family: &str| g.iter().filter(|s| s.family() == family).count();
         // taper × segment × windows (none, a quarter, a half) × (welch's
         // bins; log-welch's bins, cepstra with and without c0): cepstra
         // only on the log spectrum.
-        assert_eq!(g.len() / classifier_points, 2 * 2 * 3 * (1 + 3));
+        let spectra = 2 * 2 * 3 * (1 + 3);
+        assert_eq!(count("spectrum + knn"), spectra * neighbours);
+        assert_eq!(count("spectrum + ridge"), spectra);
+        // The other families: only the sub-windows (none, a quarter, a
+        // half); the kernels with the linear classifier only.
+        assert_eq!(count("quantiles + knn"), 3 * neighbours);
+        assert_eq!(count("quantiles + ridge"), 3);
+        assert_eq!(count("kernels + knn"), 0);
+        assert_eq!(count("kernels + ridge"), 3);
+        assert_eq!(g.len(), (spectra + 3) * (neighbours + 1) + 3);
+        // A family's unused options are at their defaults and said as `-`.
+        for s in g.iter().filter(|s| s.family() == "kernels + ridge") {
+            assert_eq!(s.analysis.welch_segment, None);
+            assert_eq!(s.classifier.k, c.k, "the profile's k is kept");
+            let d = s.describe();
+            let said = |o: &str| d.0.iter().find(|(k, _)| k == o).unwrap().1.clone();
+            assert_eq!(said("welch_segment"), "-");
+            assert_eq!(said("k"), "-");
+            assert_eq!(said("method"), "ridge");
+        }
         for s in &g {
             assert!(check_settings(&s.analysis).is_ok());
         }
@@ -425,6 +512,7 @@ mod tests {
         assert!(
             grid((&long, &c))
                 .iter()
+                .filter(|s| s.analysis.features == FeatureFamily::Spectrum)
                 .all(|s| s.analysis.welch_segment.is_some_and(|n| n <= 2048))
         );
     }
@@ -444,7 +532,8 @@ mod tests {
         assert_eq!((w.length, w.hop), (1.49, 0.745));
         assert_eq!(s.analysis.welch_segment, Some(512));
         let d = s.describe();
-        assert_eq!(d.0[0], ("spectrum".to_string(), "log-welch".to_string()));
+        assert_eq!(d.0[0], ("features".to_string(), "spectrum".to_string()));
+        assert_eq!(d.0[1], ("spectrum".to_string(), "log-welch".to_string()));
     }
 
     /// Each value the option list declares reaches its option: a setting

@@ -9,12 +9,15 @@ use crate::dataset::Entry;
 use crate::profile::LoadedProfile;
 use std::path::Path;
 
-fn profile(evaluation: &str) -> Profile {
-    let text = format!(
+fn profile_text(evaluation: &str) -> String {
+    format!(
         "name = \"t\"\n[analysis]\nchannel = \"x\"\naxis = \"t_s\"\nwindow = [0.0, 0.999]\n\
          spacing = 0.001\n[classifier]\nk = 1\n[evaluation]\n{evaluation}\n"
-    );
-    LoadedProfile::from_str(&text, "t.toml", Path::new("."))
+    )
+}
+
+fn profile(evaluation: &str) -> Profile {
+    LoadedProfile::from_str(&profile_text(evaluation), "t.toml", Path::new("."))
         .unwrap()
         .profile
 }
@@ -144,8 +147,8 @@ fn a_seed_gives_one_answer_and_the_budget_caps_the_settings() {
     assert_eq!(a, b);
     assert_eq!(a.configurations, 96);
     assert_eq!(
-        a.feature_settings, 2,
-        "two feature settings × 48 classifier settings"
+        a.feature_settings, 3,
+        "the families in turn: a spectrum (49 classifier settings), a kernels (1), a quantiles setting (the rest)"
     );
     let c = run(&p, &s, 96, 6);
     assert_eq!(c.configurations, 96);
@@ -486,7 +489,10 @@ fn equal_inner_accuracies_go_to_the_wider_margin_then_the_simplest() {
     let simplest = (0..settings.len())
         .min_by_key(|&i| settings[i].simplicity())
         .unwrap();
-    let other = (simplest + 1) % settings.len();
+    // Another setting of the same family and classifier.
+    let other = (0..settings.len())
+        .find(|&i| i != simplest && settings[i].family_rank() == settings[simplest].family_rank())
+        .unwrap();
     let saturated = InnerScore {
         accuracy: 1.0,
         margin: 0.2,
@@ -510,8 +516,102 @@ fn equal_inner_accuracies_go_to_the_wider_margin_then_the_simplest() {
     let ties: Vec<&Scored> = r
         .table
         .iter()
-        .filter(|t| t.inner_accuracy == r.chosen.inner_accuracy)
+        .filter(|t| t.inner_accuracy == r.chosen.inner_accuracy && t.family == r.chosen.family)
         .collect();
     assert!(ties.len() > 1, "the data saturates the inner folds");
     assert!(ties.iter().all(|t| t.inner_margin <= r.chosen.inner_margin));
+    // Between families equal accuracies go to the simpler family: their
+    // margins are not on one scale.
+    for f in &r.families {
+        if f.inner_accuracy == r.chosen.inner_accuracy {
+            let rank = |family: &str| {
+                [
+                    "spectrum + knn",
+                    "spectrum + ridge",
+                    "quantiles + knn",
+                    "quantiles + ridge",
+                ]
+                .iter()
+                .position(|x| *x == family)
+                .unwrap_or(9)
+            };
+            assert!(rank(&r.chosen.family) <= rank(&f.family), "{f:?}");
+        }
+    }
+}
+
+/// A sawtooth that rises and the same that falls: one is the other
+/// reversed in time, so their magnitude spectra are the same and no
+/// spectrum tells them apart; the shape of a rise (kernels) or the
+/// quantiles of the first differences do.
+fn saws() -> Vec<Entry> {
+    scans(2, 20, |c, _, rng| {
+        let phase = rng.next() + 0.5;
+        (0..1000)
+            .map(|i| {
+                let x = (i as f64 / 37.0 + phase).fract();
+                let saw = if c == 0 { x } else { 1.0 - x };
+                saw + 0.05 * rng.next()
+            })
+            .collect()
+    })
+}
+
+#[test]
+fn a_texture_no_spectrum_tells_apart_goes_to_another_family() {
+    let holdout = "method = \"holdout\"\ntrain_per_class = 10\ntest_per_class = 10";
+    let r = run(&profile(holdout), &saws(), 10_000, 0);
+    let inner = |family: &str| {
+        r.families
+            .iter()
+            .find(|f| f.family == family)
+            .unwrap_or_else(|| panic!("{family} not scored: {:?}", r.families))
+            .inner_accuracy
+    };
+    // Every family and classifier was scored (the kernels with the
+    // linear classifier only).
+    assert_eq!(r.families.len(), 5, "{:?}", r.families);
+    // The best of a thousand spectrum settings scores above chance by
+    // luck in folds of four, but below the family that sees the shape.
+    assert!(
+        inner("spectrum + knn") < r.chosen.inner_accuracy,
+        "{:?}",
+        r.families
+    );
+    assert!(!r.chosen.family.starts_with("spectrum"), "{:?}", r.families);
+    assert!(r.chosen.inner_accuracy >= 0.9, "{:?}", r.chosen);
+    assert!(r.outer_accuracy >= 0.9, "outer {}", r.outer_accuracy);
+    // The tuned profile says the family, and reads back as the setting.
+    let setting = r.chosen_setting.as_ref().unwrap();
+    assert!(setting.analysis.features != crate::profile::FeatureFamily::Spectrum);
+    let text = text::tuned_profile(&profile_text(holdout), setting, &r, "saws");
+    assert!(
+        text.contains(&format!("# Family chosen: {}", r.chosen.family)),
+        "{text}"
+    );
+    let back = LoadedProfile::from_str(&text, "t.toml", Path::new(".")).unwrap();
+    assert!(text::reads_back_as(
+        setting,
+        &back.profile.analysis,
+        &back.profile.classifier
+    ));
+}
+
+#[test]
+fn a_small_budget_still_tries_every_family() {
+    let r = run(&profile(HOLDOUT), &saws(), 60, 0);
+    assert!(r.configurations <= 60);
+    let mut features: Vec<&str> = r
+        .families
+        .iter()
+        .map(|f| f.family.split(' ').next().unwrap())
+        .collect();
+    features.sort_unstable();
+    features.dedup();
+    assert_eq!(
+        features,
+        ["kernels", "quantiles", "spectrum"],
+        "{:?}",
+        r.families
+    );
 }

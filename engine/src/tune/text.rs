@@ -21,13 +21,22 @@ pub(super) fn decided(setting: &Setting) -> Vec<(&'static str, Vec<Line>)> {
         (
             "analysis",
             analysis
-                .map(|o| (o.field(), o.written(&setting.analysis)))
+                .map(|o| {
+                    let used = !setting.unused(o.field());
+                    (o.field(), o.written(&setting.analysis).filter(|_| used))
+                })
                 .collect(),
         ),
         (
             "classifier",
             classifier
-                .map(|o| (o.field(), o.written(&setting.classifier)))
+                // An option every profile sets keeps the profile's line
+                // when the setting does not use it.
+                .filter(|o| !(o.required() && setting.unused(o.field())))
+                .map(|o| {
+                    let used = !setting.unused(o.field());
+                    (o.field(), o.written(&setting.classifier).filter(|_| used))
+                })
                 .collect(),
         ),
     ]
@@ -167,6 +176,17 @@ fn comment_block(r: &TuneReport, about: &str) -> String {
             "# them flatters (it says so): quote the outer estimate, or evaluate on recordings the search never saw."
         );
     }
+    let families: Vec<String> = r
+        .families
+        .iter()
+        .map(|f| format!("{} {}", f.family, pct(f.inner_accuracy)))
+        .collect();
+    let _ = writeln!(
+        w,
+        "# Family chosen: {} (the best inner score of each: {}).",
+        r.chosen.family,
+        families.join(", ")
+    );
     let _ = writeln!(w, "{}", r.tuned_on.line());
     let _ = writeln!(
         w,
