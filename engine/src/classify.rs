@@ -7,6 +7,11 @@
 //! `classify/model_file.rs`. This module knows nothing of recordings or devices:
 //! examples come in as feature vectors with their file name and label.
 //!
+//! With `method = "ridge"` or `"lda"` the model also carries a linear
+//! classifier fitted on its examples (`classify/ridge.rs`, `classify/lda.rs`),
+//! which answers in the neighbours' place: the class of the largest score,
+//! one vote.
+//!
 //! Classification: the distance (Euclidean, Manhattan or cosine) to every
 //! training example, the `k` nearest vote (one vote each, or `1/distance`
 //! each with `weights = "distance"`; then an exact match outvotes the rest),
@@ -41,9 +46,11 @@ use crate::analysis;
 pub mod live;
 use crate::analysis::kernels::KernelTransform;
 use crate::profile::{Analysis, Classifier, FeatureFamily, Method, Metric, Weights};
+use lda::LdaFit;
 use ridge::RidgeFit;
 
 mod k_choice;
+pub mod lda;
 mod model_file;
 pub mod ridge;
 use k_choice::{inner_folds, recording_numbers, select_k, smallest_class};
@@ -55,8 +62,9 @@ pub use vote::{RecordingPrediction, WindowTally, WindowVote, vote};
 /// quantiles'), as every version has written it.
 pub const MODEL_FORMAT: &str = "hapticlab model v1";
 /// The `format` tag of a model that carries what it fitted beyond its
-/// examples: random kernels' biases ([`Model::kernels`]) or a ridge
-/// ([`Model::ridge`]). A v1 file has neither and still loads.
+/// examples: random kernels' biases ([`Model::kernels`]), a ridge
+/// ([`Model::ridge`]) or a linear discriminant ([`Model::lda`]). A v1 file
+/// has none of them and still loads.
 pub const MODEL_FORMAT_V2: &str = "hapticlab model v2";
 
 /// One labelled feature vector, named by the recording it came from.
@@ -103,6 +111,10 @@ pub struct Model {
     /// `method = "ridge"`: the ridge fitted on the (transformed) examples.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ridge: Option<RidgeFit>,
+    /// `method = "lda"`: the linear discriminant fitted on the
+    /// (transformed) examples.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lda: Option<LdaFit>,
     /// The examples' features as the distance sees them (scaled), row-major.
     #[serde(skip)]
     matrix: Vec<f64>,
@@ -249,12 +261,15 @@ pub enum ClassifyError {
     )]
     Unmeasurable { file: String },
     #[error(
-        "the ridge's score for {label} is not a finite number: the scan's features are too far \
-         from the model's range"
+        "the {method}'s score for {label} is not a finite number: the scan's features are too \
+         far from the model's range"
     )]
-    ScoreNotFinite { label: String },
+    ScoreNotFinite { method: &'static str, label: String },
     #[error("the model's analysis settings are unusable: {0}")]
     Settings(String),
+    /// The ridge or the LDA could not be fitted on these examples.
+    #[error("{0}")]
+    Fit(String),
     #[error(
         "the model was trained with {field} = {model} but the profile has {field} = {profile}; \
          retrain the model under this profile"
@@ -301,12 +316,12 @@ fn check_parts(
     if examples.is_empty() {
         return Err(ClassifyError::NoExamples);
     }
-    if classifier.method == Method::Ridge {
-        // k is not used.
+    if classifier.method != Method::Knn {
+        // k is not used (a ridge's or an LDA's k, 10 when left out, is
+        // not held against a small training set either).
     } else if classifier.k == 0 {
         return Err(ClassifyError::KZero);
-    }
-    if classifier.k > examples.len() {
+    } else if classifier.k > examples.len() {
         return Err(ClassifyError::KTooLarge {
             k: classifier.k,
             examples: examples.len(),
@@ -588,8 +603,8 @@ impl Model {
         examples: Vec<TrainingExample>,
     ) -> Result<Model, ClassifyError> {
         let mut classifier = classifier.clone();
-        let ridge = classifier.method == Method::Ridge;
-        let auto = classifier.k_is_auto() && !ridge;
+        let knn = classifier.method == Method::Knn;
+        let auto = classifier.k_is_auto() && knn;
         if auto {
             classifier.k = 1;
         }
@@ -599,18 +614,24 @@ impl Model {
         let labels = sorted_labels(&examples);
         let rows = fitted_rows(kernels.as_ref(), &examples);
         let refs: Vec<&[f64]> = rows.iter().map(Vec::as_slice).collect();
-        let scaling = (classifier.standardize && !ridge).then(|| Scaling::fit(&refs));
-        let ridge = if ridge {
-            let classes: Vec<usize> = examples
-                .iter()
-                .map(|e| labels.binary_search(&e.label).unwrap_or(0))
-                .collect();
-            Some(RidgeFit::fit(&refs, &classes, labels.len()).map_err(ClassifyError::Settings)?)
-        } else {
-            None
-        };
+        let scaling = (classifier.standardize && knn).then(|| Scaling::fit(&refs));
+        let classes: Vec<usize> = examples
+            .iter()
+            .map(|e| labels.binary_search(&e.label).unwrap_or(0))
+            .collect();
+        let (mut ridge, mut lda) = (None, None);
+        match classifier.method {
+            Method::Knn => {}
+            Method::Ridge => {
+                ridge =
+                    Some(RidgeFit::fit(&refs, &classes, labels.len()).map_err(ClassifyError::Fit)?);
+            }
+            Method::Lda => {
+                lda = Some(LdaFit::fit(&refs, &classes, labels.len()).map_err(ClassifyError::Fit)?);
+            }
+        }
         drop(refs);
-        let format = if kernels.is_some() || ridge.is_some() {
+        let format = if kernels.is_some() || ridge.is_some() || lda.is_some() {
             MODEL_FORMAT_V2
         } else {
             MODEL_FORMAT
@@ -628,6 +649,7 @@ impl Model {
             k_fallback: None,
             kernels,
             ridge,
+            lda,
             matrix: Vec::new(),
             norms: Vec::new(),
             classes: Vec::new(),
@@ -675,7 +697,7 @@ impl Model {
         let Some((label, fewest)) = smallest_class(&examples) else {
             return Model::train(profile_name, analysis, classifier, examples);
         };
-        if classifier.method == Method::Ridge
+        if classifier.method != Method::Knn
             || classifier.k_is_auto()
             || classifier.k == 0
             || fewest >= classifier.k
@@ -753,8 +775,8 @@ impl Model {
         if m.method != p.method {
             return differ("classifier.method", json(&m.method), json(&p.method));
         }
-        if m.method == Method::Ridge {
-            // Standardised always; k, metric and weights are not used.
+        if m.method != Method::Knn {
+            // Ridge and LDA: k, metric, weights and standardize are not used.
             return Ok(());
         }
         if m.k != p.k {
@@ -791,14 +813,14 @@ impl Model {
     }
 
     /// Builds the distance-ready copy of the examples' fitted rows (none
-    /// for a ridge, which needs only its weights).
+    /// for a ridge or an LDA, which need only their weights).
     fn prepare_rows(&mut self, rows: Vec<Vec<f64>>) {
         self.classes = self
             .examples
             .iter()
             .map(|e| self.labels.binary_search(&e.label).unwrap_or(0))
             .collect();
-        if self.ridge.is_some() {
+        if self.ridge.is_some() || self.lda.is_some() {
             self.matrix = Vec::new();
             self.norms = Vec::new();
             return;
@@ -806,6 +828,15 @@ impl Model {
         let (matrix, norms) = prepare(&rows, self.scaling.as_ref(), self.classifier.metric);
         self.matrix = matrix;
         self.norms = norms;
+    }
+
+    /// The classifier in a few words: `k-NN (k = 3)`, `ridge`, `LDA`.
+    pub fn classifier_name(&self) -> String {
+        match self.classifier.method {
+            Method::Knn => format!("k-NN (k = {})", self.classifier.k),
+            Method::Ridge => "ridge".into(),
+            Method::Lda => "LDA".into(),
+        }
     }
 
     /// Features the classifier sees per window: the kernels' when the
@@ -816,13 +847,17 @@ impl Model {
             .map_or(self.feature_count(), KernelTransform::feature_count)
     }
 
-    /// A ridge's answer: the classes by score, the best first (a tie to
-    /// the label first in order); one vote for the best.
-    fn ridge_prediction(&self, ridge: &RidgeFit, q: &[f64]) -> Result<Prediction, ClassifyError> {
-        let mut scaled = vec![0.0; q.len()];
-        let scores = ridge.scores(q, &mut scaled);
+    /// A ridge's or an LDA's answer from its scores: the classes by
+    /// score, the best first (a tie to the label first in order); one
+    /// vote for the best.
+    fn score_prediction(
+        &self,
+        method: &'static str,
+        scores: Vec<f64>,
+    ) -> Result<Prediction, ClassifyError> {
         if let Some(i) = scores.iter().position(|s| !s.is_finite()) {
             return Err(ClassifyError::ScoreNotFinite {
+                method,
                 label: self.labels[i].clone(),
             });
         }
@@ -880,8 +915,14 @@ impl Model {
             }
             None => features,
         };
+        let mut buf = Vec::new();
         if let Some(ridge) = &self.ridge {
-            return self.ridge_prediction(ridge, features);
+            buf.resize(features.len(), 0.0);
+            return self.score_prediction("ridge", ridge.scores(features, &mut buf));
+        }
+        if let Some(lda) = &self.lda {
+            buf.resize(features.len(), 0.0);
+            return self.score_prediction("LDA", lda.scores(features, &mut buf));
         }
         let k = self.classifier.k.clamp(1, self.examples.len());
         let mut scaled;

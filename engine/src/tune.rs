@@ -592,8 +592,11 @@ impl Search<'_> {
             )
             .map(|rows| (p, i, rows))
         });
+        let results: Vec<Result<_, TuneError>> = results;
         for r in results {
-            let (p, i, rows) = r?;
+            // A setting that cannot train in a fold (an LDA on examples
+            // that are all alike) scores nothing there.
+            let Ok((p, i, rows)) = r else { continue };
             let n_folds = self.inner[p].len() as f64;
             let tested = rows.len().max(1) as f64;
             let s = &mut scores[p][i];

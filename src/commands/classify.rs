@@ -141,7 +141,7 @@ fn line(f: &Path, label: Option<&str>, a: &Answer) -> String {
             w.windows.len(),
             votes.join(" ")
         ),
-        // A ridge has no neighbours: its vote is the best score.
+        // A ridge or an LDA has no neighbours: its vote is the best score.
         None => format!(
             "{}: {}{} — votes {}{}",
             f.display(),

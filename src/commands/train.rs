@@ -71,8 +71,8 @@ fn train(
     }
     model.save(out, &inputs, existing).map_err(output_failure)?;
     crate::outln!(
-        "trained k-NN (k = {}) on {} of {} ({}); model saved to {}",
-        model.classifier.k,
+        "trained {} on {} of {} ({}); model saved to {}",
+        model.classifier_name(),
         trained_on,
         plural(model.labels.len(), "class", "classes"),
         model.labels.join(", "),

@@ -18,7 +18,7 @@ use crate::classify::{Model, TrainingExample};
 use crate::dataset;
 use crate::evaluate::Report;
 use crate::evaluate::request::{self, Evaluation, Request};
-use crate::profile::{Analysis, LoadedProfile};
+use crate::profile::{Analysis, LoadedProfile, Method};
 use crate::recording;
 
 /// The model file the console writes into (and reads from) a dataset folder.
@@ -52,8 +52,8 @@ pub struct ModelInfo {
     pub examples: usize,
     pub labels: Vec<String>,
     pub k: usize,
-    /// A ridge classifier (no k): `classifier.method = "ridge"`.
-    pub ridge: bool,
+    /// The classifier: a ridge or an LDA has no k.
+    pub method: Method,
     /// Where it came from or was saved.
     pub file: Option<PathBuf>,
     /// Incomplete recordings in the folder that training skipped: with the
@@ -73,7 +73,7 @@ impl ModelInfo {
             examples: model.examples.len(),
             labels: model.labels.clone(),
             k: model.classifier.k,
-            ridge: model.ridge.is_some(),
+            method: model.classifier.method,
             file,
             skipped: 0,
             k_notice: model.k_notice(),

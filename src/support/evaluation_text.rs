@@ -120,7 +120,7 @@ fn method_line(lp: &LoadedProfile, ev: &Evaluation) -> String {
                 ""
             },
         ),
-        Method::Ridge => classifier_text(lp, ev),
+        Method::Ridge | Method::Lda => classifier_text(lp, ev),
     };
     format!(
         "profile {}: {classifier}, {}, {}{}{fell_back}",
@@ -136,7 +136,8 @@ fn method_line(lp: &LoadedProfile, ev: &Evaluation) -> String {
 }
 
 /// The classifier as the header names it, after the features when they
-/// are not the spectrum's: `k-NN k = 10`, `random kernels, ridge`.
+/// are not the spectrum's: `k-NN k = 10`, `random kernels, ridge`,
+/// `LDA (Ledoit–Wolf shrinkage)`.
 fn classifier_text(lp: &LoadedProfile, ev: &Evaluation) -> String {
     let p = &lp.profile;
     let features = match p.analysis.features {
@@ -147,6 +148,7 @@ fn classifier_text(lp: &LoadedProfile, ev: &Evaluation) -> String {
     match p.classifier.method {
         Method::Knn => format!("{features}k-NN k = {}", k_text(lp, ev)),
         Method::Ridge => format!("{features}ridge (alpha by leave-one-out)"),
+        Method::Lda => format!("{features}LDA (Ledoit–Wolf shrinkage)"),
     }
 }
 

@@ -1,6 +1,7 @@
 //! `[analysis] features` and `[classifier] method` from the command line:
-//! train, classify and evaluate take random kernels and the ridge through
-//! the same commands, and a setting they cannot use is one line and exit 2.
+//! train, classify and evaluate take random kernels, the ridge and the LDA
+//! through the same commands, and a setting they cannot use is one line and
+//! exit 2.
 
 use std::path::Path;
 
@@ -82,6 +83,68 @@ fn kernels_and_ridge_train_classify_and_evaluate() {
 }
 
 #[test]
+fn lda_trains_classifies_and_evaluates_on_spectrum_and_kernels() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = format!("{SMALL}/two-labels");
+    let kernels = "features = \"kernels\"\nkernel_features = 840";
+    for (name, analysis, header) in [
+        ("spectrum", "", "profile tiny: LDA (Ledoit–Wolf shrinkage),"),
+        (
+            "kernels",
+            kernels,
+            "profile tiny: random kernels, LDA (Ledoit–Wolf shrinkage),",
+        ),
+    ] {
+        let profile = tiny_with(
+            dir.path(),
+            &format!("{name}.toml"),
+            analysis,
+            "method = \"lda\"",
+        );
+        let model = dir.path().join(format!("{name}.json"));
+        let r = run(&["train", "-p", &profile, "--out", p(&model), &data]);
+        assert_eq!(r.code, Some(0), "{name}: {r:?}");
+        assert!(
+            r.stdout.contains("trained LDA on 6 recordings"),
+            "{name}: {r:?}"
+        );
+        let saved: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+        assert_eq!(saved["format"], "hapticlab model v2", "{name}");
+        assert_eq!(saved["classifier"]["method"], "lda", "{name}");
+        assert_eq!(saved["lda"]["weights"].as_array().unwrap().len(), 2);
+        assert_eq!(saved["lda"]["priors"], serde_json::json!([0.5, 0.5]));
+        assert!(saved.get("ridge").is_none() && saved.get("scaling").is_none());
+        assert_eq!(saved.get("kernels").is_some(), name == "kernels");
+        let r = run(&["classify", "-p", &profile, "--model", p(&model), &data]);
+        assert_eq!(r.code, Some(0), "{name}: {r:?}");
+        // Each training scan predicted with itself left out (the LDA, and
+        // the kernels, fitted again on the other five); no neighbours.
+        assert_eq!(
+            r.stdout.matches("left out of the model").count(),
+            6,
+            "{name}: {r:?}"
+        );
+        assert!(!r.stdout.contains("nearest"), "{name}: {r:?}");
+        let r = run(&["evaluate", "-p", &profile, "--loo", &data]);
+        assert_eq!(r.code, Some(0), "{name}: {r:?}");
+        assert!(r.stdout.contains(header), "{name}: {r:?}");
+        // tiny.toml's holdout trains on one recording a texture: there is
+        // no covariance to shrink, and that is said, not scored.
+        refused(
+            &["evaluate", "-p", &profile, &data],
+            &["no covariance to estimate", "two different examples"],
+        );
+    }
+    // Under a profile's ridge the LDA model is not used silently.
+    let ridge = tiny_with(dir.path(), "ridge.toml", "", "method = \"ridge\"");
+    let model = dir.path().join("spectrum.json");
+    let r = run(&["classify", "-p", &ridge, "--model", p(&model), &data]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(r.stderr.contains("classifier.method = \"lda\""), "{r:?}");
+}
+
+#[test]
 fn settings_the_families_cannot_use_are_refused_by_key() {
     let dir = tempfile::tempdir().unwrap();
     let data = format!("{SMALL}/two-labels");
@@ -114,7 +177,7 @@ fn settings_the_families_cannot_use_are_refused_by_key() {
     let method = tiny_with(dir.path(), "method.toml", "", "method = \"lasso\"");
     refused(
         &["check", &method],
-        &["classifier.method", "\"knn\" or \"ridge\""],
+        &["classifier.method", "\"knn\", \"ridge\" or \"lda\""],
     );
     let welch = tiny_with(
         dir.path(),

@@ -1,11 +1,11 @@
-//! Random kernels, interval quantiles and the ridge through the one model:
-//! what is fitted comes from the training examples alone, the model file
-//! carries it (format v2), and a spectrum + k-NN model is still v1.
+//! Random kernels, interval quantiles, the ridge and the LDA through the one
+//! model: what is fitted comes from the training examples alone, the model
+//! file carries it (format v2), and a spectrum + k-NN model is still v1.
 
 use std::path::Path;
 
 use hapticlab::analysis::kernels::KernelTransform;
-use hapticlab::classify::{MODEL_FORMAT, MODEL_FORMAT_V2, Model, TrainingExample};
+use hapticlab::classify::{ClassifyError, MODEL_FORMAT, MODEL_FORMAT_V2, Model, TrainingExample};
 use hapticlab::profile::{Analysis, Classifier, FeatureFamily, Method};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -26,6 +26,13 @@ fn analysis(features: FeatureFamily) -> Analysis {
 fn ridge() -> Classifier {
     Classifier {
         method: Method::Ridge,
+        ..Classifier::default()
+    }
+}
+
+fn lda() -> Classifier {
+    Classifier {
+        method: Method::Lda,
         ..Classifier::default()
     }
 }
@@ -152,7 +159,7 @@ fn a_fitted_model_is_format_v2_and_loads_back_with_its_answers() {
     // A v1 tag on it, or a part missing, is a clear refusal.
     let v1 = text.replace(MODEL_FORMAT_V2, MODEL_FORMAT);
     let err = Model::from_json(&v1, path).unwrap_err().to_string();
-    assert!(err.contains("holds no kernels or ridge"), "{err}");
+    assert!(err.contains("holds no kernels, ridge or LDA"), "{err}");
     let mut value: serde_json::Value = serde_json::from_str(&text).unwrap();
     value.as_object_mut().unwrap().remove("ridge");
     let err = Model::from_json(&value.to_string(), path)
@@ -177,10 +184,142 @@ fn a_spectrum_knn_model_is_still_written_as_v1() {
     let m = Model::train("thesis", &a.analysis, &a.classifier, train).unwrap();
     assert_eq!(m.format, MODEL_FORMAT);
     let value = serde_json::to_value(&m).unwrap();
-    for key in ["kernels", "ridge"] {
+    for key in ["kernels", "ridge", "lda"] {
         assert!(value.get(key).is_none(), "{key}");
     }
     assert!(value["analysis"].get("features").is_none());
     assert!(value["analysis"].get("kernel_features").is_none());
     assert!(value["classifier"].get("method").is_none());
+}
+
+#[test]
+fn lda_tells_the_textures_apart_on_kernels_quantiles_and_spectrum_features() {
+    // Kernels: 840 features against 30 windows (Woodbury's way); the
+    // kernels still fitted on the training windows alone.
+    let a = analysis(FeatureFamily::Kernels);
+    let train = examples(&windows(10, 1));
+    let model = Model::train("t", &a, &lda(), train.clone()).unwrap();
+    let w: Vec<&[f64]> = train.iter().map(|e| e.features.as_slice()).collect();
+    assert!(model.kernels.as_ref() == Some(&KernelTransform::fit(&w, 64, 1, 840).unwrap()));
+    assert!(model.ridge.is_none() && model.scaling.is_none());
+    let fit = model.lda.as_ref().unwrap();
+    assert_eq!((fit.weights.len(), fit.weights[0].len()), (3, 840));
+    assert!(
+        fit.shrinkage.iter().all(|s| *s > 0.0 && *s <= 1.0),
+        "{:?}",
+        fit.shrinkage
+    );
+    let test = examples(&windows(10, 2));
+    let before = model.clone();
+    let right = accuracy(&model, &test);
+    assert!(model == before);
+    assert!(right >= 27, "kernels: {right} of 30");
+    let p = model.classify(&test[0].features).unwrap();
+    assert_eq!(p.votes.iter().map(|(_, v)| v).sum::<usize>(), 1);
+    assert_eq!(p.votes[0], (p.label.clone(), 1));
+    assert!(p.neighbours.is_empty());
+    // A recording's sub-windows vote as the ridge's do: one each.
+    let windows_of: Vec<Vec<f64>> = test[..6].iter().map(|e| e.features.clone()).collect();
+    let voted = model.classify_windows(&windows_of).unwrap();
+    assert_eq!(voted.tally.iter().map(|t| t.windows).sum::<usize>(), 6);
+    // Quantiles: more features than the 60 windows as well.
+    let q = analysis(FeatureFamily::Quantiles);
+    let model = Model::train("t", &q, &lda(), quantile_examples(&windows(20, 5))).unwrap();
+    assert!(model.kernels.is_none() && model.lda.is_some());
+    assert!(q.feature_count() > 60);
+    let right = accuracy(&model, &quantile_examples(&windows(10, 6)));
+    assert!(right >= 27, "quantiles: {right} of 30");
+    // The thesis's spectrum settings: 49 features against 24 examples
+    // (two well-separated classes of 12); then 96 examples (the direct
+    // solve).
+    let thesis = hapticlab::profile::LoadedProfile::thesis().profile;
+    let spectra = |seed: u64, n: usize| -> Vec<TrainingExample> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        (0..n)
+            .map(|i| TrainingExample {
+                file: format!("{seed}_{i}.csv"),
+                label: ["S1", "S2"][i % 2].into(),
+                features: (0..49)
+                    .map(|j| {
+                        let peak = if i % 2 == 0 { 10 } else { 30 };
+                        -8.0 + 3.0 * (-((j as f64 - peak as f64) / 4.0).powi(2)).exp()
+                            + 0.5 * rng.random_range(-1.0..1.0)
+                    })
+                    .collect(),
+            })
+            .collect()
+    };
+    for n in [24, 96] {
+        let model = Model::train("t", &thesis.analysis, &lda(), spectra(1, n)).unwrap();
+        assert_eq!(model.format, MODEL_FORMAT_V2);
+        assert_eq!(accuracy(&model, &spectra(2, 24)), 24, "{n} examples");
+    }
+}
+
+#[test]
+fn an_lda_model_loads_back_with_its_answers_and_is_checked_as_the_ridge_is() {
+    let a = analysis(FeatureFamily::Kernels);
+    let model = Model::train("t", &a, &lda(), examples(&windows(5, 7))).unwrap();
+    assert_eq!(model.format, MODEL_FORMAT_V2);
+    let text = serde_json::to_string_pretty(&model).unwrap();
+    let path = Path::new("m.json");
+    let back = Model::from_json(&text, path).unwrap();
+    assert!(back == model);
+    for e in examples(&windows(3, 8)) {
+        assert_eq!(
+            back.classify(&e.features).unwrap(),
+            model.classify(&e.features).unwrap()
+        );
+    }
+    let refused = |value: serde_json::Value, says: &str| {
+        let err = Model::from_json(&value.to_string(), path)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(says), "{says:?} missing: {err}");
+    };
+    let value: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let mut v1 = value.clone();
+    v1["format"] = serde_json::json!(MODEL_FORMAT);
+    refused(v1, "holds no kernels, ridge or LDA");
+    let mut gone = value.clone();
+    gone.as_object_mut().unwrap().remove("lda");
+    refused(gone, "has no LDA");
+    let mut knn = value.clone();
+    knn["classifier"].as_object_mut().unwrap().remove("method");
+    refused(knn, "it has an LDA but classifier.method is not \"lda\"");
+    let mut short = value.clone();
+    short["lda"]["centre"].as_array_mut().unwrap().pop();
+    refused(short, "its LDA must have 3 rows of 840 finite weights");
+    let mut shrunk = value.clone();
+    shrunk["lda"]["shrinkage"][0] = serde_json::json!(1.5);
+    refused(shrunk, "shrinkage intensities from 0 to 1");
+    // A profile's other method is refused by key; its k, metric and
+    // weights are not the LDA's business.
+    let err = model.check_classifier(&ridge()).unwrap_err();
+    assert!(
+        matches!(
+            &err,
+            ClassifyError::SettingsDiffer {
+                field: "classifier.method",
+                ..
+            }
+        ),
+        "{err}"
+    );
+    let other = Classifier {
+        k: 3,
+        standardize: true,
+        ..lda()
+    };
+    assert!(model.check_classifier(&other).is_ok());
+    // No k to adapt: five scans a texture under k = 10 train as asked.
+    let adapted = Model::train_adapting_k("t", &a, &lda(), examples(&windows(5, 7))).unwrap();
+    assert!(adapted.k_fallback.is_none() && adapted.k_selection.is_none());
+    assert!(adapted == model);
+    assert!(adapted.k_notice().is_none());
+    // One training window a texture: no covariance, refused in words.
+    let err = Model::train("t", &a, &lda(), examples(&windows(1, 9)))
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("no covariance to estimate"), "{err}");
 }

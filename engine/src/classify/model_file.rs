@@ -123,8 +123,8 @@ impl Model {
             }
             (Some(_), false) => {
                 return Err(invalid(
-                    "it has a scaling but classifier.standardize = false (or a ridge, which \
-                     keeps its own); train it again"
+                    "it has a scaling but classifier.standardize = false (or a ridge or an \
+                     LDA, which need none of the model's); train it again"
                         .into(),
                 ));
             }
@@ -158,15 +158,18 @@ impl Model {
 
 /// What a model fitted beyond its examples, checked against its settings:
 /// kernels exactly under `features = "kernels"`, a ridge exactly under
-/// `method = "ridge"`, each of the sizes they give, and neither in a v1
-/// file (which predates them).
+/// `method = "ridge"`, an LDA exactly under `method = "lda"`, each of the
+/// sizes they give, and none in a v1 file (which predates them).
 fn check_fitted(model: &Model) -> Result<(), String> {
     let a = &model.analysis;
     let wants_kernels = a.features == FeatureFamily::Kernels;
     let wants_ridge = model.classifier.method == Method::Ridge;
-    if model.format == MODEL_FORMAT && (model.kernels.is_some() || model.ridge.is_some()) {
+    let wants_lda = model.classifier.method == Method::Lda;
+    if model.format == MODEL_FORMAT
+        && (model.kernels.is_some() || model.ridge.is_some() || model.lda.is_some())
+    {
         return Err(format!(
-            "a {MODEL_FORMAT:?} file holds no kernels or ridge; its format should be {MODEL_FORMAT_V2:?}"
+            "a {MODEL_FORMAT:?} file holds no kernels, ridge or LDA; its format should be {MODEL_FORMAT_V2:?}"
         ));
     }
     match (&model.kernels, wants_kernels) {
@@ -184,13 +187,23 @@ fn check_fitted(model: &Model) -> Result<(), String> {
         }
     }
     match (&model.ridge, wants_ridge) {
-        (Some(r), true) => r.check(model.fitted_feature_count(), model.labels.len()),
-        (None, false) => Ok(()),
+        (Some(r), true) => r.check(model.fitted_feature_count(), model.labels.len())?,
+        (None, false) => {}
         (None, true) => {
-            Err("classifier.method = \"ridge\" but it has no ridge; train it again".into())
+            return Err("classifier.method = \"ridge\" but it has no ridge; train it again".into());
         }
         (Some(_), false) => {
-            Err("it has a ridge but classifier.method is not \"ridge\"; train it again".into())
+            return Err(
+                "it has a ridge but classifier.method is not \"ridge\"; train it again".into(),
+            );
+        }
+    }
+    match (&model.lda, wants_lda) {
+        (Some(l), true) => l.check(model.fitted_feature_count(), model.labels.len()),
+        (None, false) => Ok(()),
+        (None, true) => Err("classifier.method = \"lda\" but it has no LDA; train it again".into()),
+        (Some(_), false) => {
+            Err("it has an LDA but classifier.method is not \"lda\"; train it again".into())
         }
     }
 }

@@ -1,5 +1,5 @@
-//! `[classifier]`: the k-NN's k (or `"auto"` and its candidates), metric,
-//! vote weights and standardisation. Schema and checks only; the classifier
+//! `[classifier]`: the method (k-NN, ridge or LDA), the k-NN's k (or
+//! `"auto"` and its candidates), metric, vote weights and standardisation. Schema and checks only; the classifier
 //! itself is `crate::classify`.
 
 use serde::{Deserialize, Serialize};
@@ -38,6 +38,9 @@ pub enum Method {
     /// A ridge classifier, its penalty chosen by leave-one-out on the
     /// training examples (`k`, `metric` and `weights` are not used).
     Ridge,
+    /// Linear discriminant analysis, its covariance shrunk by Ledoit and
+    /// Wolf's intensity (`k`, `metric` and `weights` are not used).
+    Lda,
 }
 
 /// `classifier.k = "auto"` is stored as this value of `k`.
@@ -61,7 +64,7 @@ pub struct Classifier {
     /// The values `k = "auto"` tries (default 1, 3, 5, …, 15).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub k_candidates: Option<Vec<usize>>,
-    /// k-NN (the default) or ridge.
+    /// k-NN (the default), ridge or LDA.
     #[serde(default, skip_serializing_if = "is_default")]
     pub method: Method,
 }

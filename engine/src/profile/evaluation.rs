@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::classifier::Classifier;
+use super::classifier::{Classifier, Method};
 use super::{Invalid, bad, is_default};
 
 /// How `evaluate` splits the recordings.
@@ -120,8 +120,10 @@ pub(super) fn validate(
             "must be at least 1 (method = \"holdout\" splits by it)",
         );
     }
+    // A ridge or an LDA has no k to check.
     if e.train_per_class > 0
         && textures > 0
+        && classifier.method == Method::Knn
         && !classifier.k_is_auto()
         && classifier.k > e.train_per_class * textures
     {
@@ -178,5 +180,10 @@ mod tests {
         assert!(err.contains("exceeds the training set"), "{err}");
         // No [[textures]]: the labels come with the recordings.
         assert!(validate(&e, &k(9), 0).is_ok());
+        // A ridge or an LDA does not use k.
+        for method in [Method::Ridge, Method::Lda] {
+            let c = Classifier { method, ..k(21) };
+            assert!(validate(&e, &c, 4).is_ok(), "{method:?}");
+        }
     }
 }

@@ -284,7 +284,7 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
         "",
         true,
         Group::Spectrum,
-        "spectrum as the thesis; kernels (MiniRocket) or quantiles (QUANT) for vibration or motion a spectrum misses, best with classifier.method = \"ridge\"",
+        "spectrum as the thesis; kernels (MiniRocket) or quantiles (QUANT) for vibration or motion a spectrum misses, best with classifier.method = \"ridge\" or \"lda\"",
         field!(features),
     )
     // Simplest first: the thesis's spectrum, then the cheaper family.
@@ -550,9 +550,9 @@ pub const CLASSIFIER_OPTIONS: &[ClassifierOption] = &[
     ClassifierOption {
         name: "classifier.method",
         kind: Kind::Choice,
-        allowed: &["knn", "ridge"],
-        advice: "k nearest neighbours (the thesis), or a ridge classifier for many features (kernels, quantiles)",
-        search: &["knn", "ridge"],
+        allowed: &["knn", "ridge", "lda"],
+        advice: "k nearest neighbours (the thesis), or for many features (kernels, quantiles) a ridge classifier or a linear discriminant with a shrunk covariance (lda)",
+        search: &["knn", "ridge", "lda"],
         value: |c| json(&c.method),
         line: |c| toml_value(&c.method),
     },

@@ -422,13 +422,16 @@ mod tests {
         let spectra = 2 * 2 * 3 * (1 + 3);
         assert_eq!(count("spectrum + knn"), spectra * neighbours);
         assert_eq!(count("spectrum + ridge"), spectra);
+        assert_eq!(count("spectrum + lda"), spectra);
         // The other families: only the sub-windows (none, a quarter, a
-        // half); the kernels with the linear classifier only.
+        // half); the kernels with the linear classifiers only.
         assert_eq!(count("quantiles + knn"), 3 * neighbours);
         assert_eq!(count("quantiles + ridge"), 3);
+        assert_eq!(count("quantiles + lda"), 3);
         assert_eq!(count("kernels + knn"), 0);
         assert_eq!(count("kernels + ridge"), 3);
-        assert_eq!(g.len(), (spectra + 3) * (neighbours + 1) + 3);
+        assert_eq!(count("kernels + lda"), 3);
+        assert_eq!(g.len(), (spectra + 3) * (neighbours + 2) + 6);
         // A family's unused options are at their defaults and said as `-`.
         for s in g.iter().filter(|s| s.family() == "kernels + ridge") {
             assert_eq!(s.analysis.welch_segment, None);

@@ -314,8 +314,8 @@ impl App {
                     String::new()
                 };
                 let text = format!(
-                    "trained k-NN (k = {}) on {} of {}{skipped}",
-                    model.classifier.k,
+                    "trained {} on {} of {}{skipped}",
+                    model.classifier_name(),
                     plural(model.examples.len(), "recording", "recordings"),
                     model.labels.join(", ")
                 );

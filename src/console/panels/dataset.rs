@@ -12,6 +12,7 @@ use super::{elide_middle, fit_lines, frame};
 use crate::classify::plural;
 use crate::console::app::App;
 use crate::console::keymap::Key;
+use crate::profile::Method;
 
 pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
     let d = &app.dataset;
@@ -50,10 +51,10 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
             ),
             None => format!(
                 "model: {} on {} of {}",
-                if m.ridge {
-                    "ridge".to_string()
-                } else {
-                    format!("k-NN k = {}", m.k)
+                match m.method {
+                    Method::Knn => format!("k-NN k = {}", m.k),
+                    Method::Ridge => "ridge".to_string(),
+                    Method::Lda => "LDA".to_string(),
                 },
                 plural(m.examples, "recording", "recordings"),
                 m.labels.join(", ")
