@@ -148,7 +148,7 @@ fn a_seed_gives_one_answer_and_the_budget_caps_the_settings() {
     assert_eq!(a.configurations, 96);
     assert_eq!(
         a.feature_settings, 3,
-        "the families in turn: a spectrum (49 classifier settings), a kernels (1), a quantiles setting (the rest)"
+        "the families in turn: a spectrum (50 classifier settings), a kernels (2), a quantiles setting (the rest)"
     );
     let c = run(&p, &s, 96, 6);
     assert_eq!(c.configurations, 96);
@@ -528,8 +528,10 @@ fn equal_inner_accuracies_go_to_the_wider_margin_then_the_simplest() {
                 [
                     "spectrum + knn",
                     "spectrum + ridge",
+                    "spectrum + lda",
                     "quantiles + knn",
                     "quantiles + ridge",
+                    "quantiles + lda",
                 ]
                 .iter()
                 .position(|x| *x == family)
@@ -570,7 +572,7 @@ fn a_texture_no_spectrum_tells_apart_goes_to_another_family() {
     };
     // Every family and classifier was scored (the kernels with the
     // linear classifier only).
-    assert_eq!(r.families.len(), 5, "{:?}", r.families);
+    assert_eq!(r.families.len(), 8, "{:?}", r.families);
     // The best of a thousand spectrum settings scores above chance by
     // luck in folds of four, but below the family that sees the shape.
     assert!(
