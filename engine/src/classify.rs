@@ -51,6 +51,7 @@ use ridge::RidgeFit;
 
 mod k_choice;
 pub mod lda;
+mod linear;
 mod model_file;
 pub mod ridge;
 use k_choice::{inner_folds, recording_numbers, select_k, smallest_class};

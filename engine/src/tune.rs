@@ -464,7 +464,7 @@ impl Search<'_> {
                 self.score_feature_setting(&features, &neighbours, &mut scores);
             }
             if !linear.is_empty() {
-                self.score_fitted(&features, &linear, &mut scores)?;
+                self.score_fitted(&features, &linear, &mut scores);
             }
             done += members.len();
             progress(done, settings.len());
@@ -568,7 +568,7 @@ impl Search<'_> {
         features: &score::Features,
         members: &[usize],
         scores: &mut [Vec<InnerScore>],
-    ) -> Result<(), TuneError> {
+    ) {
         let mut tasks = Vec::new();
         for (p, folds) in self.inner.iter().enumerate() {
             for f in 0..folds.len() {
@@ -592,7 +592,6 @@ impl Search<'_> {
             )
             .map(|rows| (p, i, rows))
         });
-        let results: Vec<Result<_, TuneError>> = results;
         for r in results {
             // A setting that cannot train in a fold (an LDA on examples
             // that are all alike) scores nothing there.
@@ -611,7 +610,6 @@ impl Search<'_> {
             s.margin += margin / tested / n_folds;
             s.true_share += share / tested / n_folds;
         }
-        Ok(())
     }
 }
 

@@ -141,14 +141,14 @@ fn kernels_with_knn_and_quantiles_with_either_classifier_tell_the_textures_apart
     }
 }
 
-#[test]
-fn a_fitted_model_is_format_v2_and_loads_back_with_its_answers() {
+/// A model of random kernels and `classifier`, trained, written as v2
+/// and read back equal, with the same answers; and its text.
+fn kernel_model_loads_back(classifier: &Classifier) -> (Model, String) {
     let a = analysis(FeatureFamily::Kernels);
-    let model = Model::train("t", &a, &ridge(), examples(&windows(5, 7))).unwrap();
+    let model = Model::train("t", &a, classifier, examples(&windows(5, 7))).unwrap();
     assert_eq!(model.format, MODEL_FORMAT_V2);
     let text = serde_json::to_string_pretty(&model).unwrap();
-    let path = Path::new("m.json");
-    let back = Model::from_json(&text, path).unwrap();
+    let back = Model::from_json(&text, Path::new("m.json")).unwrap();
     assert!(back == model);
     for e in examples(&windows(3, 8)) {
         assert_eq!(
@@ -156,6 +156,13 @@ fn a_fitted_model_is_format_v2_and_loads_back_with_its_answers() {
             model.classify(&e.features).unwrap()
         );
     }
+    (model, text)
+}
+
+#[test]
+fn a_fitted_model_is_format_v2_and_loads_back_with_its_answers() {
+    let (model, text) = kernel_model_loads_back(&ridge());
+    let path = Path::new("m.json");
     // A v1 tag on it, or a part missing, is a clear refusal.
     let v1 = text.replace(MODEL_FORMAT_V2, MODEL_FORMAT);
     let err = Model::from_json(&v1, path).unwrap_err().to_string();
@@ -258,19 +265,8 @@ fn lda_tells_the_textures_apart_on_kernels_quantiles_and_spectrum_features() {
 
 #[test]
 fn an_lda_model_loads_back_with_its_answers_and_is_checked_as_the_ridge_is() {
-    let a = analysis(FeatureFamily::Kernels);
-    let model = Model::train("t", &a, &lda(), examples(&windows(5, 7))).unwrap();
-    assert_eq!(model.format, MODEL_FORMAT_V2);
-    let text = serde_json::to_string_pretty(&model).unwrap();
+    let (model, text) = kernel_model_loads_back(&lda());
     let path = Path::new("m.json");
-    let back = Model::from_json(&text, path).unwrap();
-    assert!(back == model);
-    for e in examples(&windows(3, 8)) {
-        assert_eq!(
-            back.classify(&e.features).unwrap(),
-            model.classify(&e.features).unwrap()
-        );
-    }
     let refused = |value: serde_json::Value, says: &str| {
         let err = Model::from_json(&value.to_string(), path)
             .unwrap_err()

@@ -552,40 +552,6 @@ mod tests {
             .collect()
     }
 
-    /// The features as the module documentation defines them, one by one.
-    fn naive_features(t: &KernelTransform, window: &[f64]) -> Vec<f64> {
-        let n = t.layout.points;
-        let mut out = Vec::new();
-        for (c, biases) in t.biases.iter().enumerate() {
-            let x = &window[c * n..(c + 1) * n];
-            let mut f = 0;
-            for (i, (&d, &count)) in t
-                .layout
-                .dilations
-                .iter()
-                .zip(&t.layout.features_per_dilation)
-                .enumerate()
-            {
-                for (k, &kernel) in kernels().iter().enumerate() {
-                    let y = naive_convolution(x, kernel, d);
-                    // Unpadded: only outputs whose taps all lie in the window.
-                    let span = 4 * d;
-                    let kept: Vec<f64> = if padded(i, k) {
-                        y
-                    } else {
-                        y[span..n - span].to_vec()
-                    };
-                    for b in &biases[f..f + count] {
-                        let positive = kept.iter().filter(|&&v| v > *b).count();
-                        out.push(positive as f64 / kept.len() as f64);
-                    }
-                    f += count;
-                }
-            }
-        }
-        out
-    }
-
     /// Windows of small whole numbers: every sum is exact, so the fast
     /// and the naive convolution agree to the bit and so do the counts.
     fn integer_windows(count: usize, len: usize, seed: u64) -> Vec<Vec<f64>> {
@@ -688,7 +654,7 @@ mod tests {
             let mut out = vec![f64::NAN; t.feature_count()];
             for w in integer_windows(3, points * channels, seed + 100) {
                 t.transform(&w, &mut conv, &mut out);
-                assert_eq!(out, naive_features(&t, &w), "{points} points");
+                assert_eq!(out, reference_features(&t, &w, naive_convolution), "{points} points");
             }
         }
     }

@@ -306,7 +306,7 @@ impl LdaFit {
     }
 
     fn finite(&self) -> bool {
-        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        use super::linear::finite;
         self.weights.iter().all(|w| finite(w)) && finite(&self.intercepts) && finite(&self.centre)
     }
 
@@ -315,20 +315,14 @@ impl LdaFit {
         for ((o, v), c) in centred.iter_mut().zip(x).zip(&self.centre) {
             *o = v - c;
         }
-        self.weights
-            .iter()
-            .zip(&self.intercepts)
-            .map(|(w, b)| super::dot(w, centred) + b)
-            .collect()
+        super::linear::scores(&self.weights, &self.intercepts, centred)
     }
 
     /// Checks a fit read from a file against `features` and `classes`.
     pub fn check(&self, features: usize, classes: usize) -> Result<(), String> {
-        if self.weights.len() != classes
-            || self.intercepts.len() != classes
-            || self.weights.iter().any(|w| w.len() != features)
+        if !super::linear::weights_fit(&self.weights, &self.intercepts, features, classes)
             || self.centre.len() != features
-            || !self.finite()
+            || !super::linear::finite(&self.centre)
         {
             return Err(format!(
                 "its LDA must have {classes} rows of {features} finite weights, {classes} \

@@ -222,24 +222,13 @@ impl RidgeFit {
     /// Each class's score for `x`, with `scaled` a buffer of its length.
     pub fn scores(&self, x: &[f64], scaled: &mut [f64]) -> Vec<f64> {
         self.scaling.apply(x, scaled);
-        self.weights
-            .iter()
-            .zip(&self.intercepts)
-            .map(|(w, b)| super::dot(w, scaled) + b)
-            .collect()
+        super::linear::scores(&self.weights, &self.intercepts, scaled)
     }
 
     /// Checks a fit read from a file against `features` and `classes`.
     pub fn check(&self, features: usize, classes: usize) -> Result<(), String> {
-        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
-        if self.weights.len() != classes
-            || self.intercepts.len() != classes
-            || self
-                .weights
-                .iter()
-                .any(|w| w.len() != features || !finite(w))
-            || !finite(&self.intercepts)
-        {
+        use super::linear::{finite, weights_fit};
+        if !weights_fit(&self.weights, &self.intercepts, features, classes) {
             return Err(format!(
                 "its ridge must have {classes} rows of {features} finite weights and {classes} intercepts"
             ));
@@ -267,8 +256,6 @@ impl RidgeFit {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rand::{Rng, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
 
     /// Solves `a x = b` by Gaussian elimination with partial pivoting.
     fn solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Vec<f64> {
@@ -322,17 +309,7 @@ mod tests {
     }
 
     fn data(n: usize, p: usize, classes: usize, seed: u64) -> (Vec<Vec<f64>>, Vec<usize>) {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let labels: Vec<usize> = (0..n).map(|i| i % classes).collect();
-        let rows = labels
-            .iter()
-            .map(|&c| {
-                (0..p)
-                    .map(|j| rng.random_range(-1.0..1.0) + if j % classes == c { 0.7 } else { 0.0 })
-                    .collect()
-            })
-            .collect();
-        (rows, labels)
+        crate::classify::linear::separable(n, p, classes, seed, |_| 0.0)
     }
 
     /// The efficient leave-one-out errors are those of n fits, each

@@ -1,6 +1,4 @@
 use super::*;
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 
 // The reference numbers below are scikit-learn 1.9.1's (numpy 2.4.6), made
 // by this script on the same formulas:
@@ -189,21 +187,7 @@ fn decision_scores_match_scikit_learn_with_more_features_than_examples() {
 }
 
 fn data(n: usize, p: usize, classes: usize, seed: u64) -> (Vec<Vec<f64>>, Vec<usize>) {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let labels: Vec<usize> = (0..n).map(|i| i % classes).collect();
-    let rows = labels
-        .iter()
-        .map(|&c| {
-            (0..p)
-                .map(|j| {
-                    rng.random_range(-1.0..1.0)
-                        + if j % classes == c { 0.7 } else { 0.0 }
-                        + 3.0 * j as f64
-                })
-                .collect()
-        })
-        .collect();
-    (rows, labels)
+    crate::classify::linear::separable(n, p, classes, seed, |j| 3.0 * j as f64)
 }
 
 fn assert_same_fit(a: &LdaFit, b: &LdaFit, what: &str) {
