@@ -51,6 +51,8 @@ use ridge::RidgeFit;
 
 mod k_choice;
 pub mod lda;
+mod distance;
+pub(crate) use distance::{dot, rank_table, rank_value, to_distance};
 mod linear;
 mod model_file;
 pub mod ridge;
@@ -359,81 +361,6 @@ fn sorted_labels(examples: &[TrainingExample]) -> Vec<String> {
     labels.sort();
     labels.dedup();
     labels
-}
-
-/// Squared Euclidean distance; four partial sums let the compiler vectorise.
-fn squared_distance(a: &[f64], b: &[f64]) -> f64 {
-    let mut acc = [0.0f64; 4];
-    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
-    let (ra, rb) = (ca.remainder(), cb.remainder());
-    for (x, y) in ca.zip(cb) {
-        for l in 0..4 {
-            let d = x[l] - y[l];
-            acc[l] += d * d;
-        }
-    }
-    let mut tail = 0.0;
-    for (x, y) in ra.iter().zip(rb) {
-        let d = x - y;
-        tail += d * d;
-    }
-    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
-}
-
-fn manhattan(a: &[f64], b: &[f64]) -> f64 {
-    let mut acc = [0.0f64; 4];
-    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
-    let (ra, rb) = (ca.remainder(), cb.remainder());
-    for (x, y) in ca.zip(cb) {
-        for l in 0..4 {
-            acc[l] += (x[l] - y[l]).abs();
-        }
-    }
-    let tail: f64 = ra.iter().zip(rb).map(|(x, y)| (x - y).abs()).sum();
-    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
-}
-
-pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let mut acc = [0.0f64; 4];
-    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
-    let (ra, rb) = (ca.remainder(), cb.remainder());
-    for (x, y) in ca.zip(cb) {
-        for l in 0..4 {
-            acc[l] += x[l] * y[l];
-        }
-    }
-    let tail: f64 = ra.iter().zip(rb).map(|(x, y)| x * y).sum();
-    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
-}
-
-/// The value the neighbour search ranks by (squared for Euclidean), and how
-/// it turns into the reported distance.
-pub(crate) fn rank_value(
-    metric: Metric,
-    q: &[f64],
-    q_norm: f64,
-    row: &[f64],
-    row_norm: f64,
-) -> f64 {
-    match metric {
-        Metric::Euclidean => squared_distance(q, row),
-        Metric::Manhattan => manhattan(q, row),
-        Metric::Cosine => {
-            if q_norm == 0.0 || row_norm == 0.0 {
-                1.0
-            } else {
-                (1.0 - dot(q, row) / (q_norm * row_norm)).max(0.0)
-            }
-        }
-    }
-}
-
-pub(crate) fn to_distance(metric: Metric, r: f64) -> f64 {
-    if metric == Metric::Euclidean {
-        r.sqrt()
-    } else {
-        r
-    }
 }
 
 /// The `k` smallest `(rank value, row)`, ascending, by bounded insertion: a

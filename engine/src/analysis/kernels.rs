@@ -47,7 +47,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use super::quantiles::quantile_sorted;
+use super::quantiles::{quantile_sorted, quantile_unsorted};
 use crate::profile::families;
 
 /// Taps of every kernel.
@@ -417,6 +417,10 @@ fn count_pass<const N: usize>(u: &[f64], v: &[f64], biases: &[f64], sums: &mut [
     }
 }
 
+/// Biases per kernel and dilation up to which each is selected from the
+/// convolution's output in linear time rather than by sorting it.
+const SELECT_MOST: usize = 8;
+
 /// The fitted transform: the layout and each channel's biases.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -457,9 +461,16 @@ impl KernelTransform {
                     let w = windows[rng.random_range(0..windows.len())];
                     conv.dilate(&w[c * points..(c + 1) * points], d);
                     sorted.copy_from_slice(conv.convolve(kernel));
-                    sorted.sort_by(f64::total_cmp);
+                    if count > SELECT_MOST {
+                        sorted.sort_by(f64::total_cmp);
+                    }
                     for _ in 0..count {
-                        own.push(quantile_sorted(&sorted, bias_quantile(own.len())));
+                        let q = bias_quantile(own.len());
+                        own.push(if count > SELECT_MOST {
+                            quantile_sorted(&sorted, q)
+                        } else {
+                            quantile_unsorted(&mut sorted, q)
+                        });
                     }
                 }
             }

@@ -22,6 +22,14 @@ use crate::profile::families::{
 
 use super::spectrum::MagnitudeSpectrum;
 
+/// The order statistics at `q · (n − 1)` (`q` from 0 to 1) either side,
+/// and how far between them.
+fn position(n: usize, q: f64) -> (usize, usize, f64) {
+    let pos = q.clamp(0.0, 1.0) * (n - 1) as f64;
+    let lo = (pos.floor() as usize).min(n - 1);
+    (lo, (lo + 1).min(n - 1), pos - lo as f64)
+}
+
 /// The `q` quantile (0 to 1) of sorted values, by linear interpolation
 /// between the order statistics at `q · (n − 1)` (numpy's default).
 pub fn quantile_sorted(sorted: &[f64], q: f64) -> f64 {
@@ -29,15 +37,35 @@ pub fn quantile_sorted(sorted: &[f64], q: f64) -> f64 {
     if n == 1 {
         return sorted[0];
     }
-    let pos = q.clamp(0.0, 1.0) * (n - 1) as f64;
-    let lo = (pos.floor() as usize).min(n - 1);
-    let hi = (lo + 1).min(n - 1);
-    let frac = pos - lo as f64;
+    let (lo, hi, frac) = position(n, q);
     if frac == 0.0 {
         sorted[lo]
     } else {
         sorted[lo] + frac * (sorted[hi] - sorted[lo])
     }
+}
+
+/// [`quantile_sorted`] of `values` in any order (ordered by
+/// [`f64::total_cmp`], as sorting them would), by selecting the two order
+/// statistics it needs: the same number to the bit, in linear time.
+/// Leaves `values` reordered.
+pub fn quantile_unsorted(values: &mut [f64], q: f64) -> f64 {
+    let n = values.len();
+    if n == 1 {
+        return values[0];
+    }
+    let (lo, _, frac) = position(n, q);
+    let (_, &mut low, above) = values.select_nth_unstable_by(lo, f64::total_cmp);
+    if frac == 0.0 {
+        return low;
+    }
+    // The next order statistic is the least of those above.
+    let high = above
+        .iter()
+        .copied()
+        .min_by(f64::total_cmp)
+        .unwrap_or(low);
+    low + frac * (high - low)
 }
 
 /// The interval quantile transform of windows of one length.
@@ -149,6 +177,38 @@ mod tests {
         assert_eq!(quantile_sorted(&v, 0.5), 3.0);
         assert!((quantile_sorted(&v, 0.25) - 1.75).abs() < 1e-15);
         assert_eq!(quantile_sorted(&[5.0], 0.3), 5.0);
+    }
+
+    /// Selecting the order statistics gives what sorting gives, to the
+    /// bit: ties, signed zeros, infinities, any length and quantile.
+    #[test]
+    fn selected_quantiles_are_the_sorted_ones_to_the_bit() {
+        let mut seed = 12345u64;
+        let mut next = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed >> 33
+        };
+        for n in [1, 2, 3, 7, 64, 1001] {
+            for trial in 0..20 {
+                let values: Vec<f64> = (0..n)
+                    .map(|_| match next() % 9 {
+                        0 => 0.0,
+                        1 => -0.0,
+                        2 => 3.0,
+                        3 if trial % 4 == 0 => f64::INFINITY,
+                        _ => (next() % 2001) as f64 / 7.0 - 140.0,
+                    })
+                    .collect();
+                let mut sorted = values.clone();
+                sorted.sort_by(f64::total_cmp);
+                for q in [0.0, 1.0, 0.5, 0.618, (next() % 1000) as f64 / 999.0] {
+                    let mut scratch = values.clone();
+                    let a = quantile_unsorted(&mut scratch, q);
+                    let b = quantile_sorted(&sorted, q);
+                    assert!(a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()), "{n} {q}: {a} {b}");
+                }
+            }
+        }
     }
 
     #[test]

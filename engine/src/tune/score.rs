@@ -12,7 +12,7 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use crate::analysis::FeatureExtractor;
-use crate::classify::{Scaling, dot, rank_classes, rank_value, to_distance};
+use crate::classify::{Scaling, dot, rank_classes, rank_table, rank_value, to_distance};
 use crate::dataset::{DatasetError, Entry};
 use crate::profile::{Analysis, Metric, Weights};
 
@@ -165,6 +165,9 @@ pub struct Pairwise {
 /// that, folds compute their own distances.
 const PAIRWISE_MOST: usize = 8 << 20;
 
+/// Rows of the table computed together.
+const PAIRWISE_BAND: usize = 32;
+
 impl Pairwise {
     /// The table over `recordings`' windows, or `None` when it would hold
     /// more than [`PAIRWISE_MOST`] entries.
@@ -196,17 +199,29 @@ impl Pairwise {
                 }
             })
             .collect();
-        let index: Vec<usize> = (0..n).collect();
-        let lower = par_map(&index, threads, |&i| {
-            (0..=i)
-                .map(|j| rank_value(metric, rows[i], norms[i], rows[j], norms[j]))
-                .collect::<Vec<f64>>()
+        // Bands of rows, each against every row up to its last (the
+        // largest bands first, for the threads to finish together).
+        let bands: Vec<usize> = (0..n.div_ceil(PAIRWISE_BAND)).rev().collect();
+        let lower = par_map(&bands, threads, |&b| {
+            let (from, to) = (b * PAIRWISE_BAND, ((b + 1) * PAIRWISE_BAND).min(n));
+            let mut out = vec![0.0; (to - from) * to];
+            rank_table(
+                metric,
+                &rows[from..to],
+                &norms[from..to],
+                &rows[..to],
+                &norms[..to],
+                &mut out,
+            );
+            (from, to, out)
         });
         let mut values = vec![0.0; n * n];
-        for (i, row) in lower.into_iter().enumerate() {
-            for (j, v) in row.into_iter().enumerate() {
-                values[i * n + j] = v;
-                values[j * n + i] = v;
+        for (from, to, band) in lower {
+            for (i, row) in (from..to).zip(band.chunks_exact(to)) {
+                for (j, &v) in row[..=i].iter().enumerate() {
+                    values[i * n + j] = v;
+                    values[j * n + i] = v;
+                }
             }
         }
         Some(Pairwise { first, n, values })
@@ -384,6 +399,7 @@ fn nearest_windows(
         }
     };
     let norms: Vec<f64> = matrix.chunks_exact(d.max(1)).map(norm).collect();
+    let rows: Vec<&[f64]> = matrix.chunks_exact(d.max(1)).collect();
     let mut out = Vec::with_capacity(test_windows.len());
     for block in test_windows.chunks(QUERY_BLOCK) {
         let queries: Vec<Vec<f64>> = block
@@ -401,21 +417,17 @@ fn nearest_windows(
             })
             .collect();
         let q_norms: Vec<f64> = queries.iter().map(|q| norm(q)).collect();
-        // Each training window once per block of queries, rather than once
-        // per query: the same values, a fraction of the memory traffic when
-        // the windows are long spectra.
-        let mut ranked: Vec<Vec<(f64, usize)>> =
-            vec![Vec::with_capacity(train.rows.len()); queries.len()];
-        for (i, (row, &n)) in matrix.chunks_exact(d.max(1)).zip(&norms).enumerate() {
-            for ((q, &q_norm), r) in queries.iter().zip(&q_norms).zip(ranked.iter_mut()) {
-                r.push((rank_value(metric, q, q_norm, row, n), i));
-            }
-        }
+        // The block against every training window, tile by tile: the
+        // same values, a fraction of the memory traffic when the windows
+        // are long.
+        let q_rows: Vec<&[f64]> = queries.iter().map(Vec::as_slice).collect();
+        let mut values = vec![0.0; q_rows.len() * rows.len()];
+        rank_table(metric, &q_rows, &q_norms, &rows, &norms, &mut values);
         out.extend(
-            ranked
-                .into_iter()
+            values
+                .chunks_exact(rows.len().max(1))
                 .zip(block)
-                .map(|(r, &(t, _))| keep_nearest(r, t)),
+                .map(|(v, &(t, _))| keep_nearest(v.iter().copied().zip(0..).collect(), t)),
         );
     }
     out
