@@ -461,6 +461,15 @@ fn fit_kernels(
     .map_err(ClassifyError::Settings)
 }
 
+/// What every classifier trained on the same examples shares.
+struct Fitted<'a> {
+    kernels: Option<KernelTransform>,
+    labels: Vec<String>,
+    /// The examples as the classifier sees them.
+    rows: &'a [Vec<f64>],
+    classes: &'a [usize],
+}
+
 /// The examples as the classifier sees them: transformed by the kernels
 /// when there are some (on every core), else as they are.
 fn fitted_rows(kernels: Option<&KernelTransform>, examples: &[TrainingExample]) -> Vec<Vec<f64>> {
@@ -530,32 +539,110 @@ impl Model {
         classifier: &Classifier,
         examples: Vec<TrainingExample>,
     ) -> Result<Model, ClassifyError> {
-        let mut classifier = classifier.clone();
-        let knn = classifier.method == Method::Knn;
-        let auto = classifier.k_is_auto() && knn;
-        if auto {
-            classifier.k = 1;
+        Model::train_each(
+            profile_name,
+            analysis,
+            std::slice::from_ref(classifier),
+            examples,
+        )?
+        .pop()
+        .unwrap_or(Err(ClassifyError::NoExamples))
+    }
+
+    /// [`Model::train`] for each of `classifiers` on the same examples,
+    /// what they share (the kernels' biases and transform) fitted once:
+    /// each model the one [`Model::train`] makes. The outer error is the
+    /// shared part's, the inner each classifier's.
+    #[allow(clippy::type_complexity)]
+    pub fn train_each(
+        profile_name: &str,
+        analysis: &Analysis,
+        classifiers: &[Classifier],
+        examples: Vec<TrainingExample>,
+    ) -> Result<Vec<Result<Model, ClassifyError>>, ClassifyError> {
+        let classifiers: Vec<(Classifier, bool)> = classifiers
+            .iter()
+            .map(|c| {
+                let mut c = c.clone();
+                let auto = c.k_is_auto() && c.method == Method::Knn;
+                if auto {
+                    c.k = 1;
+                }
+                (c, auto)
+            })
+            .collect();
+        let checked: Vec<Result<(), ClassifyError>> = classifiers
+            .iter()
+            .map(|(c, _)| check_parts(analysis, c, &examples))
+            .collect();
+        if !checked.is_empty() && !checked.iter().any(Result::is_ok) {
+            // None can train: each says why.
+            return Ok(checked.into_iter().filter_map(Result::err).map(Err).collect());
         }
-        check_parts(analysis, &classifier, &examples)?;
         // Fitted on these examples only: the caller's training part.
         let kernels = fit_kernels(analysis, &examples)?;
         let labels = sorted_labels(&examples);
         let rows = fitted_rows(kernels.as_ref(), &examples);
-        let refs: Vec<&[f64]> = rows.iter().map(Vec::as_slice).collect();
-        let scaling = (classifier.standardize && knn).then(|| Scaling::fit(&refs));
         let classes: Vec<usize> = examples
             .iter()
             .map(|e| labels.binary_search(&e.label).unwrap_or(0))
             .collect();
+        let mut out = Vec::with_capacity(classifiers.len());
+        let last = classifiers.len().saturating_sub(1);
+        let mut examples = Some(examples);
+        for (i, ((classifier, auto), check)) in classifiers.into_iter().zip(checked).enumerate() {
+            let own = if i == last {
+                examples.take().unwrap_or_default()
+            } else {
+                examples.clone().unwrap_or_default()
+            };
+            out.push(check.and_then(|()| {
+                Model::fitted(
+                    profile_name,
+                    analysis,
+                    classifier,
+                    auto,
+                    own,
+                    Fitted {
+                        kernels: kernels.clone(),
+                        labels: labels.clone(),
+                        rows: &rows,
+                        classes: &classes,
+                    },
+                )
+            }));
+        }
+        Ok(out)
+    }
+
+    /// One classifier's model on examples already checked, with what
+    /// every classifier shares.
+    fn fitted(
+        profile_name: &str,
+        analysis: &Analysis,
+        classifier: Classifier,
+        auto: bool,
+        examples: Vec<TrainingExample>,
+        shared: Fitted,
+    ) -> Result<Model, ClassifyError> {
+        let Fitted {
+            kernels,
+            labels,
+            rows,
+            classes,
+        } = shared;
+        let knn = classifier.method == Method::Knn;
+        let refs: Vec<&[f64]> = rows.iter().map(Vec::as_slice).collect();
+        let scaling = (classifier.standardize && knn).then(|| Scaling::fit(&refs));
         let (mut ridge, mut lda) = (None, None);
         match classifier.method {
             Method::Knn => {}
             Method::Ridge => {
                 ridge =
-                    Some(RidgeFit::fit(&refs, &classes, labels.len()).map_err(ClassifyError::Fit)?);
+                    Some(RidgeFit::fit(&refs, classes, labels.len()).map_err(ClassifyError::Fit)?);
             }
             Method::Lda => {
-                lda = Some(LdaFit::fit(&refs, &classes, labels.len()).map_err(ClassifyError::Fit)?);
+                lda = Some(LdaFit::fit(&refs, classes, labels.len()).map_err(ClassifyError::Fit)?);
             }
         }
         drop(refs);
@@ -737,12 +824,12 @@ impl Model {
     /// transformed again by its kernels).
     fn prepare(&mut self) {
         let rows = fitted_rows(self.kernels.as_ref(), &self.examples);
-        self.prepare_rows(rows);
+        self.prepare_rows(&rows);
     }
 
     /// Builds the distance-ready copy of the examples' fitted rows (none
     /// for a ridge or an LDA, which need only their weights).
-    fn prepare_rows(&mut self, rows: Vec<Vec<f64>>) {
+    fn prepare_rows(&mut self, rows: &[Vec<f64>]) {
         self.classes = self
             .examples
             .iter()
@@ -753,7 +840,7 @@ impl Model {
             self.norms = Vec::new();
             return;
         }
-        let (matrix, norms) = prepare(&rows, self.scaling.as_ref(), self.classifier.metric);
+        let (matrix, norms) = prepare(rows, self.scaling.as_ref(), self.classifier.metric);
         self.matrix = matrix;
         self.norms = norms;
     }

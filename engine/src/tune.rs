@@ -572,30 +572,36 @@ impl Search<'_> {
         let mut tasks = Vec::new();
         for (p, folds) in self.inner.iter().enumerate() {
             for f in 0..folds.len() {
-                for &i in members {
-                    tasks.push((p, f, i));
-                }
+                tasks.push((p, f));
             }
         }
         // Each task trains on every core (the kernels' transform): a few
-        // at a time.
+        // at a time. Its settings share the features, so the kernels are
+        // fitted once for all of them.
         let threads = self.threads.clamp(1, 2);
-        let results = par_map(&tasks, threads, |&(p, f, i)| {
+        let settings: Vec<&Setting> = members.iter().map(|&i| &self.settings[i]).collect();
+        let results = par_map(&tasks, threads, |&(p, f)| {
             let part = &self.inner[p][f];
-            predict_part(
+            let each = predict_part(
                 self.name,
-                &self.settings[i],
+                &settings,
                 self.scans,
                 features,
                 &part.train,
                 &part.test,
-            )
-            .map(|rows| (p, i, rows))
+            );
+            (p, each)
         });
-        for r in results {
+        let each_setting = results.into_iter().flat_map(|(p, each)| {
             // A setting that cannot train in a fold (an LDA on examples
-            // that are all alike) scores nothing there.
-            let Ok((p, i, rows)) = r else { continue };
+            // that are all alike) scores nothing there; nor do any when
+            // what they share cannot be fitted.
+            each.unwrap_or_default()
+                .into_iter()
+                .zip(members)
+                .filter_map(move |(rows, &i)| Some((p, i, rows.ok()?)))
+        });
+        for (p, i, rows) in each_setting {
             let n_folds = self.inner[p].len() as f64;
             let tested = rows.len().max(1) as f64;
             let s = &mut scores[p][i];
@@ -710,7 +716,9 @@ pub fn tune(
                 e.insert(extract(scans, &setting.analysis, options.threads)?)
             }
         };
-        let rows = predict_part(name, setting, scans, features, &part.train, &part.test)?;
+        let rows = predict_part(name, &[setting], scans, features, &part.train, &part.test)?
+            .pop()
+            .unwrap_or(Ok(Vec::new()))?;
         let right = rows.iter().filter(|r| r.label == r.predicted).count();
         outer_folds.push(OuterFold {
             chosen: scored(chosen, p),
@@ -786,17 +794,19 @@ pub fn tune(
     })
 }
 
-/// Train a model with the setting on the part's training recordings and
-/// classify each of its test recordings (by its sub-windows' vote): what
-/// `evaluate` does with that setting on that split.
+/// What models of each of `settings` (one analysis, several classifiers)
+/// trained on the recordings `train` say of each recording in `test`; the
+/// kernels, when there are some, fitted once for them all. The outer error
+/// is the shared part's, the inner each setting's.
+#[allow(clippy::type_complexity)]
 fn predict_part(
     name: &str,
-    setting: &Setting,
+    settings: &[&Setting],
     scans: &[Entry],
     features: &score::Features,
     train: &[usize],
     test: &[usize],
-) -> Result<Vec<PredictionRow>, TuneError> {
+) -> Result<Vec<Result<Vec<PredictionRow>, TuneError>>, TuneError> {
     let examples: Vec<TrainingExample> = train
         .iter()
         .flat_map(|&r| {
@@ -807,22 +817,37 @@ fn predict_part(
             })
         })
         .collect();
-    let mut classifier = setting.classifier.clone();
-    classifier.k = classifier.k.min(examples.len().max(1));
-    let model = Model::train(name, &setting.analysis, &classifier, examples)?;
-    test.iter()
-        .map(|&r| {
-            let p = model.classify_windows(&features[r])?;
-            Ok(PredictionRow {
-                file: scans[r].file.clone(),
-                label: scans[r].label.clone(),
-                predicted: p.label,
-                votes: p
-                    .tally
-                    .iter()
-                    .map(|t| (t.label.clone(), t.windows))
-                    .collect(),
-            })
+    let classifiers: Vec<crate::profile::Classifier> = settings
+        .iter()
+        .map(|s| {
+            let mut c = s.classifier.clone();
+            c.k = c.k.min(examples.len().max(1));
+            c
         })
-        .collect()
+        .collect();
+    let Some(analysis) = settings.first().map(|s| &s.analysis) else {
+        return Ok(Vec::new());
+    };
+    let models = Model::train_each(name, analysis, &classifiers, examples)?;
+    Ok(models
+        .into_iter()
+        .map(|model| {
+            let model = model?;
+            test.iter()
+                .map(|&r| {
+                    let p = model.classify_windows(&features[r])?;
+                    Ok(PredictionRow {
+                        file: scans[r].file.clone(),
+                        label: scans[r].label.clone(),
+                        predicted: p.label,
+                        votes: p
+                            .tally
+                            .iter()
+                            .map(|t| (t.label.clone(), t.windows))
+                            .collect(),
+                    })
+                })
+                .collect()
+        })
+        .collect())
 }

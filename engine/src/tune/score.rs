@@ -12,7 +12,7 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use crate::analysis::FeatureExtractor;
-use crate::classify::{Scaling, dot, rank_classes, rank_table, rank_value, to_distance};
+use crate::classify::{Scaling, dot, rank_classes, rank_table, to_distance};
 use crate::dataset::{DatasetError, Entry};
 use crate::profile::{Analysis, Metric, Weights};
 
@@ -512,6 +512,7 @@ pub fn score_fold(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::classify::rank_value;
 
     /// [`FoldScore`]'s margin and true share summed over `test`, each
     /// window against every training window, unscaled, by brute force.
