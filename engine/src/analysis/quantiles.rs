@@ -17,7 +17,8 @@
 //! [`Quantiles::new`] it allocates nothing per window.
 
 use crate::profile::families::{
-    QUANTILE_DEPTH, quantile_feature_count, quantile_intervals, quantile_series, quantiles_in,
+    QUANTILE_DEPTH, level_ends, quantile_feature_count, quantile_intervals, quantile_levels,
+    quantile_series, quantiles_in,
 };
 
 use super::spectrum::MagnitudeSpectrum;
@@ -74,6 +75,14 @@ pub struct Quantiles {
     points: usize,
     /// Per series, its intervals.
     intervals: [Vec<[usize; 2]>; 4],
+    /// Per series, per interval, the level it is one of the dyadic
+    /// intervals of (not when it is a shifted one).
+    level_of: [Vec<Option<usize>>; 4],
+    /// Per series, per level, its intervals' ends.
+    ends: [Vec<Vec<usize>>; 4],
+    /// Per series, per level, the series with each of the level's
+    /// intervals sorted in place.
+    levels: [Vec<Vec<f64>>; 4],
     spectrum: MagnitudeSpectrum,
     /// The four series, one after another.
     series: [Vec<f64>; 4],
@@ -84,12 +93,53 @@ impl Quantiles {
     /// For windows of `points` (at least 4).
     pub fn new(points: usize) -> Quantiles {
         let lengths = quantile_series(points);
+        let ends = lengths.map(|n| {
+            (0..quantile_levels(n, QUANTILE_DEPTH))
+                .map(|k| level_ends(n, k))
+                .collect::<Vec<_>>()
+        });
+        let intervals = lengths.map(|n| quantile_intervals(n, QUANTILE_DEPTH));
+        let level_of = std::array::from_fn(|s| {
+            intervals[s]
+                .iter()
+                .map(|&[a, b]| {
+                    ends[s].iter().position(|e: &Vec<usize>| {
+                        e.windows(2).any(|w| w[0] == a && w[1] == b)
+                    })
+                })
+                .collect()
+        });
         Quantiles {
             points,
-            intervals: lengths.map(|n| quantile_intervals(n, QUANTILE_DEPTH)),
+            levels: std::array::from_fn(|s| vec![vec![0.0; lengths[s]]; ends[s].len()]),
+            intervals,
+            level_of,
+            ends,
             spectrum: MagnitudeSpectrum::new(points),
             series: lengths.map(|n| vec![0.0; n]),
             sorted: Vec::with_capacity(points),
+        }
+    }
+
+    /// Each level's intervals sorted in place: the deepest level's
+    /// directly, each level above by merging the two below each interval.
+    fn sort_levels(&mut self) {
+        for ((series, ends), levels) in self.series.iter().zip(&self.ends).zip(&mut self.levels) {
+            let Some(deepest) = ends.len().checked_sub(1) else {
+                continue;
+            };
+            levels[deepest].copy_from_slice(series);
+            for w in ends[deepest].windows(2) {
+                levels[deepest][w[0]..w[1]].sort_unstable_by(f64::total_cmp);
+            }
+            for k in (0..deepest).rev() {
+                let (above, below) = levels.split_at_mut(k + 1);
+                let (out, halves) = (&mut above[k], &below[0]);
+                for (i, w) in ends[k].windows(2).enumerate() {
+                    let mid = ends[k + 1][2 * i + 1];
+                    merge(&halves[w[0]..mid], &halves[mid..w[1]], &mut out[w[0]..w[1]]);
+                }
+            }
         }
     }
 
@@ -114,28 +164,50 @@ impl Quantiles {
             *d = w[1] - w[0];
         }
         self.spectrum.compute(x, magnitude);
+        self.sort_levels();
         let mut f = 0;
-        for (series, intervals) in self.series.iter().zip(&self.intervals) {
-            for &[a, b] in intervals {
+        for (s, (series, intervals)) in self.series.iter().zip(&self.intervals).enumerate() {
+            for (&[a, b], level) in intervals.iter().zip(&self.level_of[s]) {
                 let part = &series[a..b];
                 let q = quantiles_in(part.len());
-                self.sorted.clear();
-                self.sorted.extend_from_slice(part);
-                self.sorted.sort_by(f64::total_cmp);
+                let sorted = match level {
+                    Some(k) => &self.levels[s][*k][a..b],
+                    None => {
+                        self.sorted.clear();
+                        self.sorted.extend_from_slice(part);
+                        self.sorted.sort_unstable_by(f64::total_cmp);
+                        &self.sorted[..]
+                    }
+                };
                 if part.len() == 1 || q == 1 {
-                    out[f] = quantile_sorted(&self.sorted, 0.5);
+                    out[f] = quantile_sorted(sorted, 0.5);
                     f += 1;
                     continue;
                 }
                 let mean = part.iter().sum::<f64>() / part.len() as f64;
                 for i in 0..q {
-                    let v = quantile_sorted(&self.sorted, i as f64 / (q - 1) as f64);
+                    let v = quantile_sorted(sorted, i as f64 / (q - 1) as f64);
                     out[f] = if i % 2 == 1 { v - mean } else { v };
                     f += 1;
                 }
             }
         }
         debug_assert_eq!(f, out.len());
+    }
+}
+
+/// Two sorted runs into `out`, in [`f64::total_cmp`]'s order.
+fn merge(a: &[f64], b: &[f64], out: &mut [f64]) {
+    let (mut i, mut j) = (0, 0);
+    for o in out.iter_mut() {
+        let take_a = j == b.len() || (i < a.len() && a[i].total_cmp(&b[j]).is_le());
+        if take_a {
+            *o = a[i];
+            i += 1;
+        } else {
+            *o = b[j];
+            j += 1;
+        }
     }
 }
 
@@ -208,6 +280,46 @@ mod tests {
                     assert!(a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()), "{n} {q}: {a} {b}");
                 }
             }
+        }
+    }
+
+    /// The levels sorted by merging give every feature exactly as each
+    /// interval sorted on its own does: lengths that halve unevenly,
+    /// ties and signed zeros.
+    #[test]
+    fn merged_levels_give_each_interval_sorted_on_its_own_to_the_bit() {
+        for n in [4, 5, 63, 100, 257, 1000] {
+            let x: Vec<f64> = (0..n)
+                .map(|j| match j % 11 {
+                    3 => 0.0,
+                    7 => -0.0,
+                    _ => ((j * 7919) % 97) as f64 / 13.0 - 3.0,
+                })
+                .collect();
+            let mut qt = Quantiles::new(n);
+            let mut out = vec![f64::NAN; qt.len()];
+            qt.compute(&x, &mut out);
+            let mut want = Vec::new();
+            for (s, series) in qt.series.iter().enumerate() {
+                for &[a, b] in &qt.intervals[s] {
+                    let mut sorted = series[a..b].to_vec();
+                    sorted.sort_by(f64::total_cmp);
+                    let q = quantiles_in(sorted.len());
+                    if q == 1 {
+                        want.push(quantile_sorted(&sorted, 0.5));
+                        continue;
+                    }
+                    let mean = series[a..b].iter().sum::<f64>() / (b - a) as f64;
+                    for i in 0..q {
+                        let v = quantile_sorted(&sorted, i as f64 / (q - 1) as f64);
+                        want.push(if i % 2 == 1 { v - mean } else { v });
+                    }
+                }
+            }
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&out), bits(&want), "{n} points");
+            // Some intervals of each series come from the merged levels.
+            assert!(qt.level_of.iter().all(|l| l.iter().filter(|k| k.is_some()).count() > 1));
         }
     }
 

@@ -43,6 +43,24 @@ pub const QUANTILE_DEPTH: usize = 6;
 /// One quantile per this many points of an interval (QUANT's default).
 pub const QUANTILE_DIVISOR: usize = 4;
 
+/// How many levels of dyadic intervals a series of `n` values has (at
+/// most `depth`).
+pub fn quantile_levels(n: usize, depth: usize) -> usize {
+    if n == 0 {
+        0
+    } else {
+        depth.min(n.ilog2() as usize + 1)
+    }
+}
+
+/// The ends of level `k`'s `2^k` intervals over `n` values: `⌊i·n / 2^k⌋`,
+/// `i = 0..=2^k`. Each of them is an end of the next level's too, so an
+/// interval is the next level's two below it.
+pub fn level_ends(n: usize, k: usize) -> Vec<usize> {
+    let m = 1usize << k;
+    (0..=m).map(|i| i * n / m).collect()
+}
+
 /// QUANT's intervals `[start, end)` over a series of `n` values: at level
 /// `k = 0, 1, …` (up to `depth` levels, and no more than `⌊log2 n⌋ + 1`),
 /// `2^k` intervals with ends `⌊i·n / 2^k⌋`; below the first level, when the
@@ -52,11 +70,10 @@ pub fn quantile_intervals(n: usize, depth: usize) -> Vec<[usize; 2]> {
     if n == 0 {
         return Vec::new();
     }
-    let levels = depth.min(n.ilog2() as usize + 1);
     let mut all = Vec::new();
-    for k in 0..levels {
+    for k in 0..quantile_levels(n, depth) {
         let m = 1usize << k;
-        let ends: Vec<usize> = (0..=m).map(|i| i * n / m).collect();
+        let ends = level_ends(n, k);
         let level: Vec<[usize; 2]> = ends.windows(2).map(|w| [w[0], w[1]]).collect();
         let mut lengths: Vec<usize> = level.iter().map(|[a, b]| b - a).collect();
         lengths.sort_unstable();
