@@ -49,9 +49,9 @@ use crate::profile::{Analysis, Classifier, FeatureFamily, Method, Metric, Weight
 use lda::LdaFit;
 use ridge::RidgeFit;
 
+mod distance;
 mod k_choice;
 pub mod lda;
-mod distance;
 pub(crate) use distance::{dot, rank_table, rank_value, to_distance};
 mod linear;
 mod model_file;
@@ -577,7 +577,11 @@ impl Model {
             .collect();
         if !checked.is_empty() && !checked.iter().any(Result::is_ok) {
             // None can train: each says why.
-            return Ok(checked.into_iter().filter_map(Result::err).map(Err).collect());
+            return Ok(checked
+                .into_iter()
+                .filter_map(Result::err)
+                .map(Err)
+                .collect());
         }
         // Fitted on these examples only: the caller's training part.
         let kernels = fit_kernels(analysis, &examples)?;

@@ -665,7 +665,11 @@ mod tests {
             let mut out = vec![f64::NAN; t.feature_count()];
             for w in integer_windows(3, points * channels, seed + 100) {
                 t.transform(&w, &mut conv, &mut out);
-                assert_eq!(out, reference_features(&t, &w, naive_convolution), "{points} points");
+                assert_eq!(
+                    out,
+                    reference_features(&t, &w, naive_convolution),
+                    "{points} points"
+                );
             }
         }
     }

@@ -61,11 +61,7 @@ pub fn quantile_unsorted(values: &mut [f64], q: f64) -> f64 {
         return low;
     }
     // The next order statistic is the least of those above.
-    let high = above
-        .iter()
-        .copied()
-        .min_by(f64::total_cmp)
-        .unwrap_or(low);
+    let high = above.iter().copied().min_by(f64::total_cmp).unwrap_or(low);
     low + frac * (high - low)
 }
 
@@ -103,9 +99,9 @@ impl Quantiles {
             intervals[s]
                 .iter()
                 .map(|&[a, b]| {
-                    ends[s].iter().position(|e: &Vec<usize>| {
-                        e.windows(2).any(|w| w[0] == a && w[1] == b)
-                    })
+                    ends[s]
+                        .iter()
+                        .position(|e: &Vec<usize>| e.windows(2).any(|w| w[0] == a && w[1] == b))
                 })
                 .collect()
         });
@@ -257,7 +253,9 @@ mod tests {
     fn selected_quantiles_are_the_sorted_ones_to_the_bit() {
         let mut seed = 12345u64;
         let mut next = || {
-            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             seed >> 33
         };
         for n in [1, 2, 3, 7, 64, 1001] {
@@ -277,7 +275,10 @@ mod tests {
                     let mut scratch = values.clone();
                     let a = quantile_unsorted(&mut scratch, q);
                     let b = quantile_sorted(&sorted, q);
-                    assert!(a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()), "{n} {q}: {a} {b}");
+                    assert!(
+                        a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
+                        "{n} {q}: {a} {b}"
+                    );
                 }
             }
         }
@@ -319,7 +320,11 @@ mod tests {
             let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&out), bits(&want), "{n} points");
             // Some intervals of each series come from the merged levels.
-            assert!(qt.level_of.iter().all(|l| l.iter().filter(|k| k.is_some()).count() > 1));
+            assert!(
+                qt.level_of
+                    .iter()
+                    .all(|l| l.iter().filter(|k| k.is_some()).count() > 1)
+            );
         }
     }
 
