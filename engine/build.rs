@@ -1,7 +1,8 @@
 //! Names the commit hapticlab is built from, for `--version` and the
 //! `software` written into every recording, model and tuned profile:
 //! `HAPTICLAB_COMMIT` is `commit 67c70ce`, `commit 67c70ce, modified` (tracked
-//! files differ from the commit, as `git describe --dirty` counts them), or
+//! files differ from the commit, as `git describe --dirty` counts them, or
+//! a Rust source under `src/` or `engine/src/` is not tracked yet), or
 //! `unknown commit` when there is no git or no repository (a tarball): a
 //! build never fails for want of git.
 //!
@@ -78,7 +79,24 @@ fn describe(root: &Path) -> Option<String> {
             "--untracked-files=no",
         ],
     )?;
-    Some(if status.is_empty() {
+    // And Rust sources git does not track yet that a build compiles in
+    // (a new module not yet added): the commit alone would not rebuild it.
+    let untracked = git(
+        root,
+        &[
+            "--no-optional-locks",
+            "status",
+            "--porcelain",
+            "--untracked-files=all",
+            "--",
+            "src",
+            "engine/src",
+        ],
+    )?;
+    let new_source = untracked
+        .lines()
+        .any(|l| l.starts_with("?? ") && l.ends_with(".rs"));
+    Some(if status.is_empty() && !new_source {
         format!("commit {hash}")
     } else {
         format!("commit {hash}, modified")

@@ -301,8 +301,10 @@ pub fn tidy_rate(rate: f64, tolerance: f64) -> f64 {
         .unwrap_or(rate)
 }
 
-/// Keys every hapticlab recording carries that say nothing about grouping.
-const PLAIN_META: [&str; 14] = [
+/// Keys every hapticlab recording carries that say nothing about grouping
+/// (an imported file's size and hash: `source` and `source_path` name it,
+/// and files of one size are not alike for that).
+const PLAIN_META: [&str; 16] = [
     "label",
     "profile",
     "profile_sha256",
@@ -317,6 +319,8 @@ const PLAIN_META: [&str; 14] = [
     "damping_n_s_per_m",
     "scan_from_m",
     "scan_to_m",
+    "source_bytes",
+    "source_sha256",
 ];
 
 /// The first two recordings of one label, adjacent in file-name order,

@@ -535,3 +535,26 @@ fn an_unsaved_scan_from_an_earlier_session_can_be_stored() {
     a.on_unsaved_found(fixtures::scan_view(true));
     assert!(a.last_scan.as_ref().unwrap().prediction.is_none(), "kept");
 }
+
+/// Predict in a new session trains on a folder with nothing stored yet:
+/// the error says what to do, with the keys in use.
+#[test]
+fn training_on_nothing_stored_says_to_store_scans_first() {
+    let mut a = app();
+    a.on_job(crate::console::dataset::JobResult::Failed {
+        what: "train",
+        error: "no recordings (*.csv, *.csv.gz) found in ds".into(),
+    });
+    assert!(
+        a.status
+            .text
+            .contains("store scans of each texture first (w stores"),
+        "{}",
+        a.status.text
+    );
+    a.on_job(crate::console::dataset::JobResult::Failed {
+        what: "evaluate",
+        error: "no recordings (*.csv, *.csv.gz) found in ds".into(),
+    });
+    assert!(!a.status.text.contains("store scans"), "{}", a.status.text);
+}

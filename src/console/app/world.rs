@@ -406,7 +406,17 @@ impl App {
                 vec![]
             }
             JobResult::Failed { what, error } => {
-                self.error(format!("could not {what}: {error}"));
+                // A new session has nothing stored to train on yet.
+                let hint = if what == "train" && error.starts_with("no recordings") {
+                    format!(
+                        ": store scans of each texture first ({} stores a scan under the label, {} changes the label)",
+                        self.key_name(Key::Store),
+                        self.key_name(Key::Label)
+                    )
+                } else {
+                    String::new()
+                };
+                self.error(format!("could not {what}: {error}{hint}"));
                 vec![]
             }
         }
