@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use clap::Args;
 
 use crate::acquire;
-use crate::profile::LoadedProfile;
+use crate::profile::{FeatureFamily, LoadedProfile, Method};
 use crate::support::{Failure, bad};
 
 #[derive(Debug, Args)]
@@ -21,11 +21,23 @@ pub fn run(a: CheckArgs) -> Result<(), Failure> {
 /// What the profile holds, and for an analysis-only one what it can be used for.
 fn summary(lp: &LoadedProfile) -> String {
     let p = &lp.profile;
-    let analysis = format!(
-        "{} features, k = {}",
-        p.analysis.feature_count(),
-        p.classifier.k_text()
-    );
+    let a = &p.analysis;
+    let features = match a.features {
+        FeatureFamily::Spectrum => format!("{} features", a.feature_count()),
+        FeatureFamily::Quantiles => format!("{} interval-quantile features", a.feature_count()),
+        FeatureFamily::Kernels => format!(
+            "{} random-kernel features ({} asked, a multiple of 84 per channel) of {} points",
+            a.fitted_feature_count(),
+            a.kernel_features_asked(),
+            a.feature_count()
+        ),
+    };
+    let classifier = match p.classifier.method {
+        Method::Knn => format!("k = {}", p.classifier.k_text()),
+        Method::Ridge => "ridge".into(),
+        Method::Lda => "LDA".into(),
+    };
+    let analysis = format!("{features}, {classifier}");
     match lp.rig() {
         Ok(rig) => format!(
             "profile {:?}, device {}, {} waypoints, {} textures, {analysis}{}",

@@ -193,3 +193,36 @@ fn settings_the_families_cannot_use_are_refused_by_key() {
         ],
     );
 }
+
+/// `check` says what the classifier sees and which classifier: the kernels'
+/// features made (not the points they are made of), no k for a ridge or
+/// an LDA.
+#[test]
+fn check_names_the_family_and_the_classifier() {
+    let dir = tempfile::tempdir().unwrap();
+    let kernels = tiny_with(
+        dir.path(),
+        "k.toml",
+        "features = \"kernels\"\nkernel_features = 200",
+        "method = \"ridge\"",
+    );
+    let r = run(&["check", &kernels]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(
+        r.stdout.contains("168 random-kernel features (200 asked") && r.stdout.contains(", ridge"),
+        "{r:?}"
+    );
+    assert!(!r.stdout.contains("k = "), "{r:?}");
+    let quantiles = tiny_with(
+        dir.path(),
+        "q.toml",
+        "features = \"quantiles\"",
+        "method = \"lda\"",
+    );
+    let r = run(&["check", &quantiles]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(
+        r.stdout.contains("interval-quantile features, LDA"),
+        "{r:?}"
+    );
+}
