@@ -73,7 +73,10 @@ fn with_group(text: &str, g: usize) -> String {
         .trim_matches(['[', ']']);
     let replaces = |key: &str| {
         keys.iter().any(|(k, _)| *k == key)
-            || (keys.iter().any(|(k, _)| *k == "spectrum") && SPECTRUM_KEYS.contains(&key))
+            || (keys
+                .iter()
+                .any(|(k, _)| *k == "spectrum" || *k == "features")
+                && SPECTRUM_KEYS.contains(&key))
             || (table == "evaluation" && keys.iter().any(|(k, _)| *k == "method"))
     };
     let mut out = String::new();

@@ -8,6 +8,7 @@ use std::path::Path;
 
 use super::cautions::{self, per_label};
 use super::survey::{self, Survey};
+use crate::profile::families::DEFAULT_KERNEL_FEATURES;
 use crate::profile::fitted::{ceil_significant, fitting_bands};
 use crate::profile::options::Group;
 use crate::profile::{Analysis, Classifier, Metric, SpectrumKind, Taper, check_options};
@@ -464,7 +465,25 @@ fn spectrum_groups(p: &Plan) -> Vec<OptionGroup> {
         keys: welch_keys(p, "log-welch"),
     });
     groups.extend(band_groups(p));
+    groups.extend(family_groups());
     groups
+}
+
+/// The feature families beside the spectrum (`tune` searches them too).
+fn family_groups() -> Vec<OptionGroup> {
+    vec![
+        OptionGroup {
+            when: "interval quantiles of the signal, its differences and its spectrum (QUANT): textures told apart by the shape of the signal more than by its spectrum (a rising and a falling sawtooth have one spectrum); with k-NN or the LDA below".into(),
+            keys: vec![("features", "\"quantiles\"".into())],
+        },
+        OptionGroup {
+            when: "random convolutional kernels (MiniRocket), their biases fitted on the training windows: with method = \"ridge\" or \"lda\" below, their pairing".into(),
+            keys: vec![
+                ("features", "\"kernels\"".into()),
+                ("kernel_features", DEFAULT_KERNEL_FEATURES.to_string()),
+            ],
+        },
+    ]
 }
 
 /// Band energies and their cepstra, when log-spaced bands fit the spectrum.
@@ -586,6 +605,14 @@ fn classifier_table(doc: &mut Doc, p: &Plan) {
         when: "the angle between spectra, not their size: recordings whose overall level differs"
             .into(),
         keys: vec![("metric", "\"cosine\"".into())],
+    });
+    groups.push(OptionGroup {
+        when: "a ridge classifier, its penalty chosen by leave-one-out inside the training set: many features against few recordings (the random kernels)".into(),
+        keys: vec![("method", "\"ridge\"".into())],
+    });
+    groups.push(OptionGroup {
+        when: "linear discriminant analysis with a shrunk covariance (Ledoit-Wolf): log spectra, quantiles or kernels whose classes differ by a shift".into(),
+        keys: vec![("method", "\"lda\"".into())],
     });
     doc.classifier(
         &c,

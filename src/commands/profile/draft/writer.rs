@@ -283,7 +283,8 @@ pub fn apply_group(text: &str, table: &str, keys: &[(String, String)]) -> Result
         .get_mut(table)
         .and_then(|v| v.as_table_mut())
         .ok_or_else(|| format!("no [{table}]"))?;
-    if keys.iter().any(|(k, _)| k == "spectrum") {
+    // A spectrum or another family replaces every spectrum line.
+    if keys.iter().any(|(k, _)| k == "spectrum" || k == "features") {
         t.retain(|k, _| spectrum_keys().all(|s| s != k));
     }
     if table == "evaluation" && keys.iter().any(|(k, _)| k == "method") {
