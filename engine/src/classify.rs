@@ -461,6 +461,14 @@ fn fit_kernels(
     .map_err(ClassifyError::Settings)
 }
 
+/// Each example's index in the sorted `labels`.
+fn class_indices(labels: &[String], examples: &[TrainingExample]) -> Vec<usize> {
+    examples
+        .iter()
+        .map(|e| labels.binary_search(&e.label).unwrap_or(0))
+        .collect()
+}
+
 /// What every classifier trained on the same examples shares.
 struct Fitted<'a> {
     kernels: Option<KernelTransform>,
@@ -587,10 +595,7 @@ impl Model {
         let kernels = fit_kernels(analysis, &examples)?;
         let labels = sorted_labels(&examples);
         let rows = fitted_rows(kernels.as_ref(), &examples);
-        let classes: Vec<usize> = examples
-            .iter()
-            .map(|e| labels.binary_search(&e.label).unwrap_or(0))
-            .collect();
+        let classes = class_indices(&labels, &examples);
         let mut out = Vec::with_capacity(classifiers.len());
         let last = classifiers.len().saturating_sub(1);
         let mut examples = Some(examples);
@@ -673,7 +678,7 @@ impl Model {
             norms: Vec::new(),
             classes: Vec::new(),
         };
-        model.prepare_rows(rows);
+        model.prepare_rows(rows, classes.to_vec());
         if auto {
             let recording_of = recording_numbers(&model.examples);
             let scores = select_k(
@@ -828,17 +833,14 @@ impl Model {
     /// transformed again by its kernels).
     fn prepare(&mut self) {
         let rows = fitted_rows(self.kernels.as_ref(), &self.examples);
-        self.prepare_rows(&rows);
+        let classes = class_indices(&self.labels, &self.examples);
+        self.prepare_rows(&rows, classes);
     }
 
     /// Builds the distance-ready copy of the examples' fitted rows (none
     /// for a ridge or an LDA, which need only their weights).
-    fn prepare_rows(&mut self, rows: &[Vec<f64>]) {
-        self.classes = self
-            .examples
-            .iter()
-            .map(|e| self.labels.binary_search(&e.label).unwrap_or(0))
-            .collect();
+    fn prepare_rows(&mut self, rows: &[Vec<f64>], classes: Vec<usize>) {
+        self.classes = classes;
         if self.ridge.is_some() || self.lda.is_some() {
             self.matrix = Vec::new();
             self.norms = Vec::new();
@@ -852,9 +854,8 @@ impl Model {
     /// The classifier in a few words: `k-NN (k = 3)`, `ridge`, `LDA`.
     pub fn classifier_name(&self) -> String {
         match self.classifier.method {
-            Method::Knn => format!("k-NN (k = {})", self.classifier.k),
-            Method::Ridge => "ridge".into(),
-            Method::Lda => "LDA".into(),
+            Method::Knn => format!("{} (k = {})", Method::Knn.name(), self.classifier.k),
+            other => other.name().into(),
         }
     }
 
@@ -937,11 +938,11 @@ impl Model {
         let mut buf = Vec::new();
         if let Some(ridge) = &self.ridge {
             buf.resize(features.len(), 0.0);
-            return self.score_prediction("ridge", ridge.scores(features, &mut buf));
+            return self.score_prediction(Method::Ridge.name(), ridge.scores(features, &mut buf));
         }
         if let Some(lda) = &self.lda {
             buf.resize(features.len(), 0.0);
-            return self.score_prediction("LDA", lda.scores(features, &mut buf));
+            return self.score_prediction(Method::Lda.name(), lda.scores(features, &mut buf));
         }
         let k = self.classifier.k.clamp(1, self.examples.len());
         let mut scaled;

@@ -34,8 +34,7 @@ fn summary(lp: &LoadedProfile) -> String {
     };
     let classifier = match p.classifier.method {
         Method::Knn => format!("k = {}", p.classifier.k_text()),
-        Method::Ridge => "ridge".into(),
-        Method::Lda => "LDA".into(),
+        other => other.name().into(),
     };
     let analysis = format!("{features}, {classifier}");
     match lp.rig() {

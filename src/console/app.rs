@@ -390,13 +390,9 @@ impl App {
             return vec![];
         }
         self.dataset.busy = Some("training…".into());
-        let classifier = match self.profile.profile.classifier.method {
-            crate::profile::Method::Knn => "k-NN",
-            crate::profile::Method::Ridge => "a ridge",
-            crate::profile::Method::Lda => "an LDA",
-        };
         self.info(format!(
-            "training {classifier} on the recordings in {}",
+            "training {} on the recordings in {}",
+            self.profile.profile.classifier.method.name(),
             self.dataset.dir.display()
         ));
         vec![Action::Train { then_predict }]

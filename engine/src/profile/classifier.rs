@@ -43,6 +43,17 @@ pub enum Method {
     Lda,
 }
 
+impl Method {
+    /// The classifier as a report names it: `k-NN`, `ridge`, `LDA`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Knn => "k-NN",
+            Method::Ridge => "ridge",
+            Method::Lda => "LDA",
+        }
+    }
+}
+
 /// `classifier.k = "auto"` is stored as this value of `k`.
 pub const K_AUTO: usize = usize::MAX;
 

@@ -52,9 +52,8 @@ pub fn render(app: &App, area: Rect, buf: &mut Buffer) {
             None => format!(
                 "model: {} on {} of {}",
                 match m.method {
-                    Method::Knn => format!("k-NN k = {}", m.k),
-                    Method::Ridge => "ridge".to_string(),
-                    Method::Lda => "LDA".to_string(),
+                    Method::Knn => format!("{} k = {}", Method::Knn.name(), m.k),
+                    other => other.name().to_string(),
                 },
                 plural(m.examples, "recording", "recordings"),
                 m.labels.join(", ")
