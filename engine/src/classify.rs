@@ -282,7 +282,7 @@ pub enum ClassifyError {
         model: String,
         profile: String,
     },
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {}", path.display(), crate::io::said(source))]
     Io {
         path: PathBuf,
         source: std::io::Error,

@@ -452,7 +452,7 @@ fn stage(
                  memory twice over); cut it into parts first"
             )
         } else {
-            format!("{origin}: {e}")
+            format!("{origin}: {}", crate::io::said(&e))
         };
         // A file named that does not exist, not a regular file, or too
         // large, is the argument's fault.

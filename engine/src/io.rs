@@ -65,6 +65,24 @@ pub fn kind_of(m: &Metadata) -> &'static str {
     }
 }
 
+/// `e` in a lab's words for a message after a path: "no such file or
+/// folder" for a path that does not exist, "permission denied" for one
+/// that may not be read, otherwise the system's text without its
+/// "(os error N)".
+pub fn said(e: &io::Error) -> String {
+    match e.kind() {
+        io::ErrorKind::NotFound => "no such file or folder".into(),
+        io::ErrorKind::PermissionDenied => "permission denied".into(),
+        _ => {
+            let text = e.to_string();
+            match text.rsplit_once(" (os error ") {
+                Some((said, _)) => said.to_string(),
+                None => text,
+            }
+        }
+    }
+}
+
 /// True when `e` is [`open_input`]'s refusal of a file that is not regular.
 pub fn not_regular(e: &io::Error) -> bool {
     e.get_ref().is_some_and(|inner| inner.is::<NotRegular>())
@@ -236,7 +254,7 @@ pub enum OutputError {
         out.display()
     )]
     Exists { out: PathBuf },
-    #[error("{}: cannot write: {source}", out.display())]
+    #[error("{}: cannot write: {}", out.display(), said(source))]
     Io { out: PathBuf, source: io::Error },
 }
 

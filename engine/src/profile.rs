@@ -168,7 +168,7 @@ impl LoadedProfile {
             line: None,
             column: None,
             key: None,
-            reason: format!("cannot read the profile: {e}"),
+            reason: format!("cannot read the profile: {}", crate::io::said(&e)),
         })?;
         let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
         Self::from_str(&text, &origin, &base)

@@ -50,7 +50,7 @@ pub use writer::{
 #[derive(Debug, thiserror::Error)]
 pub enum RecordingError {
     /// The file could not be read, created or written.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {}", path.display(), crate::io::said(source))]
     Io { path: PathBuf, source: io::Error },
     /// The text breaks the format at a line (1-based).
     #[error("{origin}:{line}: {reason}")]

@@ -55,21 +55,33 @@ pub struct PlotArgs {
 #[derive(Debug, Subcommand, Clone)]
 pub enum Figure {
     /// A recording's trace with its analysis window, and its spectrum (Figs 4.5–4.8).
+    #[command(
+        after_help = "The top panel is the recorded trace against distance along the scan, with the profile's analysis window shaded and the resampled signal over it; the bottom panel is the spectrum the classifier is given (49 magnitudes under the thesis profile).\n\nExamples:\n  hapticlab plot trace recordings/thesis-sim/S2/S2_001.csv.gz --out s2.png\n  hapticlab plot trace recordings/thesis-sim/S4/S4_001.csv.gz -p profiles/thesis.toml --out s4.svg"
+    )]
     Trace {
         #[command(flatten)]
         profile: ProfileArg,
+        /// The recording to draw (.csv or .csv.gz).
         #[arg(value_name = "FILE")]
         file: PathBuf,
     },
     /// The confusion matrix of `evaluate --json` as a heat map.
+    #[command(
+        after_help = "Rows are the true textures, columns what they were classified as; each cell holds its count and its share of the row. Draw again from the JSON without evaluating again.\n\nExamples:\n  hapticlab evaluate recordings/thesis-sim --folds 10 --json > r.json && hapticlab plot confusion r.json --out confusion.svg"
+    )]
     Confusion {
+        /// A report written by `hapticlab evaluate --json` (not a sweep's).
         #[arg(value_name = "REPORT.json")]
         report: PathBuf,
     },
     /// The features of N recordings per class (Fig 4.3); with `[analysis] windows`, each one's first window.
+    #[command(
+        after_help = "One panel per texture, one line per recording over the feature index: how alike a texture's recordings are, and how far apart the textures lie, before any classifier sees them.\n\nExamples:\n  hapticlab plot features recordings/thesis-sim --per-class 5 --out features.png\n  hapticlab plot features recordings/thesis-sim/S1 recordings/thesis-sim/S3 --per-class 3 --out s1-s3.svg"
+    )]
     Features {
         #[command(flatten)]
         profile: ProfileArg,
+        /// Recordings, or folders of them (one folder per texture, as `evaluate` reads them).
         #[arg(required = true, value_name = "PATH")]
         paths: Vec<PathBuf>,
         /// Recordings drawn per class, 1 to 1000.
@@ -81,6 +93,7 @@ pub enum Figure {
         after_help = "A one-key sweep is a line of the pooled accuracy against the value, with the spread across folds; a two-key grid is a heat map (rows the first --sweep's values, columns the second's, the best outlined, points not evaluated left white). Draw again from the JSON without evaluating again.\n\nExamples:\n  hapticlab evaluate recordings/thesis-sim --folds 5 --sweep k=1..15 --json > s.json && hapticlab plot sweep s.json --out sweep.png\n  hapticlab evaluate recordings/thesis-sim --folds 5 --sweep k=1,5,10 --sweep taper=none,hann --json > g.json && hapticlab plot sweep g.json --out grid.svg"
     )]
     Sweep {
+        /// A report written by `hapticlab evaluate --sweep … --json`.
         #[arg(value_name = "SWEEP.json")]
         sweep: PathBuf,
     },
@@ -256,7 +269,7 @@ const LABELS: (&str, u32) = ("sans-serif", 18);
 
 fn read_json(p: &Path) -> Result<serde_json::Value, Failure> {
     let bytes = crate::io::read_input(p).map_err(|e| {
-        let m = format!("{}: {e}", p.display());
+        let m = format!("{}: {}", p.display(), crate::io::said(&e));
         // Missing, or not a regular file (a FIFO would block): the argument's fault.
         if crate::io::not_regular(&e) || e.kind() == std::io::ErrorKind::NotFound {
             bad(m)

@@ -63,7 +63,7 @@ fn profile_text(arg: &ProfileArg) -> Result<String, Failure> {
         return Ok(THESIS_PROFILE.to_string());
     }
     crate::io::read_input_to_string(p)
-        .map_err(|e| bad(format!("{}: cannot read: {e}", p.display())))
+        .map_err(|e| bad(format!("{}: cannot read: {}", p.display(), crate::io::said(&e))))
 }
 
 pub fn run(a: TuneArgs) -> Result<(), Failure> {

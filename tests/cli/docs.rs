@@ -8,7 +8,7 @@
 //! inside the folder, and must exit 0. Skipped: lines marked as
 //! placeholders (`placeholder` in a comment, or a `<…>` to fill in; a
 //! comment line `# placeholder…` marks the rest of its block), lines
-//! in [`SKIPPED`] with the reason, and lines that are not hapticlab's
+//! in [`SKIPPED`] or `common::NOT_RUN_IN_TESTS` with the reason, and lines that are not hapticlab's
 //! (`cargo`, `python3`, `sudo`, …; a shell loop or `mkdir` that prepares
 //! files runs). A block of commands not tagged `sh` fails the test, so none
 //! escapes it.
@@ -18,29 +18,19 @@ use std::process::Command;
 
 use hapticlab::profile::options::{REGENERATE, profile_keys_markdown};
 
-use crate::common::{BIN, REPO};
+use crate::common::{BIN, REPO, not_run_in_tests, shipped_workspace};
 
-/// Commands that cannot run in a test, by a word they contain, and why.
+/// Commands that cannot run in a test, by a word they contain, and why,
+/// beyond `common::NOT_RUN_IN_TESTS`.
 const SKIPPED: &[(&str, &str)] = &[
     (
         "-p profiles/thesis-falcon.toml",
         "needs a Novint Falcon on USB",
     ),
     ("sudo ", "needs root"),
-    ("hapticlab console", "opens the console on the terminal"),
-    ("hapticlab --dataset", "opens the console on the terminal"),
-    (
-        "hapticlab replay",
-        "opens the replay console on the terminal",
-    ),
-    ("hapticlab scan", "drives the servo in real time"),
     (
         "--self-test -p profiles/thesis-emulator.toml",
         "a self-test, run by the emulator tests (falcon_self_test)",
-    ),
-    (
-        "--simulate",
-        "minutes of simulation: the sweep_simulated tests run it smaller",
     ),
 ];
 
@@ -100,16 +90,8 @@ fn placeholder(line: &str) -> bool {
 
 /// A fresh folder with the shipped recordings and profiles, and a HOME.
 fn workspace() -> tempfile::TempDir {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::create_dir_all(dir.path().join("recordings")).unwrap();
-    std::fs::create_dir_all(dir.path().join("home")).unwrap();
-    let repo = Path::new(REPO);
-    std::os::unix::fs::symlink(
-        repo.join("recordings/thesis-sim"),
-        dir.path().join("recordings/thesis-sim"),
-    )
-    .unwrap();
-    std::os::unix::fs::symlink(repo.join("profiles"), dir.path().join("profiles")).unwrap();
+    let dir = shipped_workspace();
+    std::fs::create_dir(dir.path().join("home")).unwrap();
     dir
 }
 
@@ -149,7 +131,7 @@ fn every_command_in_the_readme_and_docs_runs_as_written() {
                     skipped += 1;
                     continue;
                 }
-                if let Some((_, why)) = SKIPPED.iter().find(|(w, _)| line.contains(w)) {
+                if let Some(why) = not_run_in_tests(line, SKIPPED) {
                     eprintln!("{name}: skipped ({why}): {line}");
                     skipped += 1;
                     continue;

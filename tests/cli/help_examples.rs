@@ -7,17 +7,11 @@
 use std::path::Path;
 use std::process::Command;
 
-use crate::common::{BIN, REPO};
+use crate::common::{BIN, REPO, not_run_in_tests, shipped_workspace};
 
-/// Examples that cannot run in a test, by a word they contain, and why.
+/// Examples that cannot run in a test, by a word they contain, and why,
+/// beyond `common::NOT_RUN_IN_TESTS`.
 const SKIPPED: &[(&str, &str)] = &[
-    ("hapticlab --dataset", "opens the console on the terminal"),
-    ("hapticlab console", "opens the console on the terminal"),
-    (
-        "hapticlab replay",
-        "opens the replay console on the terminal",
-    ),
-    ("hapticlab scan", "drives the servo in real time"),
     ("thesis-falcon.toml", "needs a Novint Falcon on USB"),
     (
         "thesis-emulator.toml --yes",
@@ -30,10 +24,6 @@ const SKIPPED: &[(&str, &str)] = &[
     ("recordings/rig", "a rig's own recordings"),
     ("rec/finger", "a rig's own recordings"),
     ("rec/sound", "a rig's own recordings"),
-    (
-        "--simulate",
-        "minutes of simulation: the sweep_simulated tests run it smaller",
-    ),
 ];
 
 fn help(args: &[&str]) -> String {
@@ -117,15 +107,7 @@ fn outputs(examples: &[String]) -> Vec<&str> {
 /// A fresh folder with the shipped recordings and profiles, and the model
 /// `train`'s example writes (`classify`'s example reads it).
 fn workspace(model: &Path) -> tempfile::TempDir {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::create_dir(dir.path().join("recordings")).unwrap();
-    let repo = Path::new(REPO);
-    std::os::unix::fs::symlink(
-        repo.join("recordings/thesis-sim"),
-        dir.path().join("recordings/thesis-sim"),
-    )
-    .unwrap();
-    std::os::unix::fs::symlink(repo.join("profiles"), dir.path().join("profiles")).unwrap();
+    let dir = shipped_workspace();
     std::fs::copy(model, dir.path().join("thesis.model.json")).unwrap();
     dir
 }
@@ -159,7 +141,7 @@ fn every_example_in_every_help_runs_as_printed() {
             let _ = std::fs::remove_file(dir.path().join(w));
         }
         for ex in &examples {
-            if let Some((_, why)) = SKIPPED.iter().find(|(w, _)| ex.contains(w)) {
+            if let Some(why) = not_run_in_tests(ex, SKIPPED) {
                 // Not run, but the shipped files it names are there as
                 // printed (`S2_003.csv` where the file is `.csv.gz` failed).
                 for arg in shipped_paths(ex, &written) {

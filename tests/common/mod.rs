@@ -24,6 +24,50 @@ pub const BIN: &str = env!("CARGO_BIN_EXE_hapticlab");
 /// `tests/data/…` paths resolve.
 pub const REPO: &str = env!("CARGO_MANIFEST_DIR");
 
+/// Commands a documented example may hold that cannot run in a test, by a
+/// word they contain, and why: the README's and docs' commands
+/// (`cli::docs`) and the `--help` examples (`cli::help_examples`) skip
+/// these, each adding its own.
+pub const NOT_RUN_IN_TESTS: &[(&str, &str)] = &[
+    ("hapticlab console", "opens the console on the terminal"),
+    ("hapticlab --dataset", "opens the console on the terminal"),
+    (
+        "hapticlab replay",
+        "opens the replay console on the terminal",
+    ),
+    ("hapticlab scan", "drives the servo in real time"),
+    (
+        "--simulate",
+        "minutes of simulation: the sweep_simulated tests run it smaller",
+    ),
+];
+
+/// The reason `command` cannot run in a test, from `NOT_RUN_IN_TESTS` or
+/// the caller's own `more`.
+pub fn not_run_in_tests(command: &str, more: &[(&str, &'static str)]) -> Option<&'static str> {
+    NOT_RUN_IN_TESTS
+        .iter()
+        .chain(more)
+        .find(|(word, _)| command.contains(word))
+        .map(|(_, why)| *why)
+}
+
+/// A fresh folder holding the shipped recordings (`recordings/thesis-sim`)
+/// and `profiles/` as links to the repository's, for documented commands
+/// that name them; the caller adds what else its commands read.
+pub fn shipped_workspace() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("recordings")).unwrap();
+    let repo = Path::new(REPO);
+    std::os::unix::fs::symlink(
+        repo.join("recordings/thesis-sim"),
+        dir.path().join("recordings/thesis-sim"),
+    )
+    .unwrap();
+    std::os::unix::fs::symlink(repo.join("profiles"), dir.path().join("profiles")).unwrap();
+    dir
+}
+
 /// The binary, run from the repository (so `profiles/…` paths resolve).
 pub fn hapticlab() -> Command {
     let mut c = Command::new(BIN);

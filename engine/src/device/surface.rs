@@ -18,7 +18,7 @@ const GRID_M: f64 = 0.000_02;
 
 #[derive(Debug, thiserror::Error)]
 pub enum SurfaceError {
-    #[error("{path}: cannot read the surface CSV: {source}")]
+    #[error("{}: cannot read the surface CSV: {}", path.display(), crate::io::said(source))]
     Io {
         path: PathBuf,
         source: std::io::Error,
