@@ -62,8 +62,13 @@ fn profile_text(arg: &ProfileArg) -> Result<String, Failure> {
     if p.as_os_str() == "thesis" && !p.exists() {
         return Ok(THESIS_PROFILE.to_string());
     }
-    crate::io::read_input_to_string(p)
-        .map_err(|e| bad(format!("{}: cannot read: {}", p.display(), crate::io::said(&e))))
+    crate::io::read_input_to_string(p).map_err(|e| {
+        bad(format!(
+            "{}: cannot read: {}",
+            p.display(),
+            crate::io::said(&e)
+        ))
+    })
 }
 
 pub fn run(a: TuneArgs) -> Result<(), Failure> {

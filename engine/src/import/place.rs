@@ -149,7 +149,9 @@ fn place(staged: &[Staged], force: bool) -> Result<Vec<PathBuf>, ImportError> {
 }
 
 fn place_one(s: &Staged, force: bool) -> Result<(), ImportError> {
-    let fail = |p: &Path, e: std::io::Error| ImportError::Runtime(format!("{}: {}", p.display(), crate::io::said(&e)));
+    let fail = |p: &Path, e: std::io::Error| {
+        ImportError::Runtime(format!("{}: {}", p.display(), crate::io::said(&e)))
+    };
     if let Some(d) = s.path.parent() {
         std::fs::create_dir_all(d).map_err(|e| fail(d, e))?;
     }
