@@ -11,25 +11,10 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use hapticlab::analysis::kernels::{DEFAULT_FEATURES, KernelTransform};
 use hapticlab::analysis::quantiles::Quantiles;
 use hapticlab::classify::ridge::RidgeFit;
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 
-/// `count` noisy sines of `points`, four periods, one per class in turn.
-fn windows(count: usize, points: usize, seed: u64) -> Vec<Vec<f64>> {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    (0..count)
-        .map(|i| {
-            let period = [5.0, 9.0, 14.0, 23.0][i % 4];
-            let phase: f64 = rng.random_range(0.0..std::f64::consts::TAU);
-            (0..points)
-                .map(|t| {
-                    (t as f64 / period * std::f64::consts::TAU + phase).sin()
-                        + 0.3 * rng.random_range(-1.0..1.0)
-                })
-                .collect()
-        })
-        .collect()
-}
+#[path = "shared/noisy_sines.rs"]
+mod noisy_sines;
+use noisy_sines::windows;
 
 fn bench(c: &mut Criterion) {
     for points in [100, 1000, 13_200] {
