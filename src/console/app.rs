@@ -24,7 +24,7 @@ use ratatui::crossterm::event::{KeyCode, KeyEvent, KeyModifiers};
 
 use crate::acquire::HOMING_HELP;
 use crate::classify::Model;
-use crate::profile::{LoadedProfile, WORKSPACE_MAX_M, WORKSPACE_MIN_M, check_label};
+use crate::profile::{DeviceKind, LoadedProfile, WORKSPACE_MAX_M, WORKSPACE_MIN_M, check_label};
 use crate::servo::Mode;
 
 use super::dataset::DatasetView;
@@ -293,9 +293,12 @@ impl App {
         self.keys.name(k)
     }
 
-    /// The texture the label names, when the simulator can mount it.
+    /// The texture the label names, when the device is simulated (the
+    /// simulator, or the emulated Falcon over its simulation) and can
+    /// mount it; on a real Falcon the lab changes the texture by hand.
     fn texture_for(&self, label: &str) -> Option<String> {
-        let sim = matches!(&self.source, Source::Live { backend } if backend == "sim");
+        let sim = matches!(&self.source, Source::Live { backend }
+            if backend == DeviceKind::Sim.name() || backend == DeviceKind::FalconEmulator.name());
         (sim && self.profile.profile.texture(label).is_some()).then(|| label.to_string())
     }
 

@@ -154,6 +154,30 @@ fn w_stores_the_last_scan_under_a_label_defaulting_to_the_last() {
     assert!(matches!(&a.overlay, Some(Overlay::Form(f)) if f.error.is_some()));
 }
 
+/// The emulated Falcon runs over the simulation, so a label mounts its
+/// texture there too (a training session on it is not all one texture);
+/// a real Falcon's texture is changed by hand.
+#[test]
+fn l_mounts_the_texture_on_the_emulated_falcon_but_not_on_a_real_one() {
+    for (backend, mounts) in [("falcon-emulator", true), ("falcon", false)] {
+        let mut a = app();
+        a.source = Source::Live {
+            backend: backend.into(),
+        };
+        a.handle_key(key('l'));
+        a.handle_key(code(KeyCode::Backspace));
+        a.handle_key(code(KeyCode::Backspace));
+        type_text(&mut a, "S3");
+        let want = if mounts {
+            vec![Action::Mount("S3".into())]
+        } else {
+            vec![]
+        };
+        assert_eq!(a.handle_key(code(KeyCode::Enter)), want, "{backend}");
+        assert_eq!(a.label, "S3");
+    }
+}
+
 #[test]
 fn l_mounts_a_profile_texture_and_n_runs_a_training_session() {
     let mut a = app();

@@ -83,10 +83,24 @@ pub enum FirmwareFileError {
 
 /// Read and check a firmware image.
 pub fn load_image(path: &Path) -> Result<FirmwareImage, FirmwareFileError> {
-    let bytes = std::fs::read(path).map_err(|e| FirmwareFileError::Missing {
+    // Only a regular file (a FIFO named by mistake must not hang the
+    // console), and nothing larger than the largest image known is read.
+    let missing = |e: std::io::Error| FirmwareFileError::Missing {
         path: path.to_path_buf(),
-        reason: e.to_string(),
-    })?;
+        reason: crate::io::said(&e),
+    };
+    let most = KNOWN_IMAGES.iter().map(|(_, n)| *n).max().unwrap_or(0);
+    let len = crate::io::open_input(path)
+        .and_then(|f| f.metadata())
+        .map_err(missing)?
+        .len();
+    if len > most as u64 {
+        return Err(FirmwareFileError::WrongSize {
+            path: path.to_path_buf(),
+            len: usize::try_from(len).unwrap_or(usize::MAX),
+        });
+    }
+    let bytes = crate::io::read_input_at_most(path, most as u64).map_err(missing)?;
     if !KNOWN_IMAGES.iter().any(|(_, n)| *n == bytes.len()) {
         return Err(FirmwareFileError::WrongSize {
             path: path.to_path_buf(),
@@ -414,6 +428,19 @@ mod tests {
         );
         std::fs::write(&missing, vec![7u8; 8492]).unwrap();
         assert_eq!(load_image(&missing).unwrap().bytes.len(), 8492);
+        // Larger than any image: its size is told, nothing is read.
+        std::fs::write(&missing, vec![7u8; 1 << 20]).unwrap();
+        let e = load_image(&missing).unwrap_err().to_string();
+        assert!(e.contains("1048576 bytes"), "{e}");
+        // Missing in the lab's words; a FIFO is refused, not waited on.
+        std::fs::remove_file(&missing).unwrap();
+        let e = load_image(&missing).unwrap_err().to_string();
+        assert!(e.contains("no such file") && !e.contains("os error"), "{e}");
+        let c = std::ffi::CString::new(missing.to_str().unwrap()).unwrap();
+        // SAFETY: a valid NUL-terminated path.
+        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+        let e = load_image(&missing).unwrap_err().to_string();
+        assert!(e.contains("FIFO"), "{e}");
     }
 
     /// A Falcon whose boot loader never answers (e.g. no wall power):
