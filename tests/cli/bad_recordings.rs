@@ -220,6 +220,6 @@ fn simulate_into_a_read_only_folder_fails_with_exit_1() {
     }
     let msg = assert_error(&r, 1);
     assert!(msg.contains(p(&ro)), "{msg}");
-    assert!(msg.contains("Permission denied"), "{msg}");
+    assert!(msg.contains("permission denied"), "{msg}");
     assert_eq!(recordings(&ro).len(), 0);
 }

@@ -737,7 +737,7 @@ fn a_read_only_dataset_folder_is_a_clear_error() {
         std::fs::write(&file, b"not a folder").unwrap();
         (file.join("D"), "Not a directory")
     } else {
-        (ro.clone(), "Permission denied")
+        (ro.clone(), "permission denied")
     };
     let r = output(hapticlab().args(["scan", "-p", QUICK_SIM, "--label", "S2", "--out", p(&out)]));
     std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o755)).unwrap();
