@@ -84,23 +84,24 @@ pub enum FirmwareFileError {
 /// Read and check a firmware image.
 pub fn load_image(path: &Path) -> Result<FirmwareImage, FirmwareFileError> {
     // Only a regular file (a FIFO named by mistake must not hang the
-    // console), and nothing larger than the largest image known is read.
-    let missing = |e: std::io::Error| FirmwareFileError::Missing {
-        path: path.to_path_buf(),
-        reason: crate::io::said(&e),
-    };
+    // console), and nothing larger than the largest image known is read:
+    // the reader refuses a larger one by its size, which is told.
     let most = KNOWN_IMAGES.iter().map(|(_, n)| *n).max().unwrap_or(0);
-    let len = crate::io::open_input(path)
-        .and_then(|f| f.metadata())
-        .map_err(missing)?
-        .len();
-    if len > most as u64 {
-        return Err(FirmwareFileError::WrongSize {
-            path: path.to_path_buf(),
-            len: usize::try_from(len).unwrap_or(usize::MAX),
-        });
-    }
-    let bytes = crate::io::read_input_at_most(path, most as u64).map_err(missing)?;
+    let bytes = crate::io::read_input_at_most(path, most as u64).map_err(|e| {
+        match e
+            .get_ref()
+            .and_then(|i| i.downcast_ref::<crate::io::TooLarge>())
+        {
+            Some(big) => FirmwareFileError::WrongSize {
+                path: path.to_path_buf(),
+                len: usize::try_from(big.size).unwrap_or(usize::MAX),
+            },
+            None => FirmwareFileError::Missing {
+                path: path.to_path_buf(),
+                reason: crate::io::said(&e),
+            },
+        }
+    })?;
     if !KNOWN_IMAGES.iter().any(|(_, n)| *n == bytes.len()) {
         return Err(FirmwareFileError::WrongSize {
             path: path.to_path_buf(),
