@@ -47,7 +47,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use super::quantiles::{quantile_sorted, quantile_unsorted};
+use super::quantiles::quantiles_unsorted;
 use crate::profile::families;
 
 /// Taps of every kernel.
@@ -199,8 +199,6 @@ pub struct Convolution {
     points: usize,
     /// `−Σ_j x[t + (j − 4)·d]`: every kernel's −1 part (the fit's).
     base: Vec<f64>,
-    /// `3 · x[t + (j − 4)·d]` for `j = 0..9`, one after another (the fit's).
-    shifted: Vec<f64>,
     /// One kernel's output (the fit's).
     output: Vec<f64>,
     /// The channel being transformed with zeros either side, as many as
@@ -216,7 +214,6 @@ impl Convolution {
         Convolution {
             points,
             base: vec![0.0; points],
-            shifted: vec![0.0; points * KERNEL_LENGTH],
             output: vec![0.0; points],
             padded: vec![0.0; points + 2 * margin],
             block: vec![0.0; BLOCK_ROWS * BLOCK],
@@ -229,38 +226,42 @@ impl Convolution {
         KernelLayout::padding((points.saturating_sub(1) / (KERNEL_LENGTH - 1)).max(1))
     }
 
-    /// Shifts `x` for dilation `d` (zeros beyond the window).
-    fn dilate(&mut self, x: &[f64], d: usize) {
-        let n = self.points;
-        self.base.fill(0.0);
+    /// `x[t + (j − 4)·d]` for every `t` of the window last loaded (zero
+    /// beyond it): the nine shifted windows of dilation `d` are slices.
+    fn shifted(&self, j: usize, d: usize) -> &[f64] {
+        let from = Convolution::margin(self.points) - KernelLayout::padding(d) + j * d;
+        &self.padded[from..from + self.points]
+    }
+
+    /// Takes `x` as the window the fit convolves next.
+    fn load(&mut self, x: &[f64]) {
+        let margin = Convolution::margin(self.points);
+        self.padded[margin..margin + self.points].copy_from_slice(x);
+    }
+
+    /// The −1 part of every kernel at dilation `d` for the window loaded:
+    /// the nine shifted windows subtracted from zero one after another.
+    fn dilate(&mut self, d: usize) {
+        let mut base = std::mem::take(&mut self.base);
+        base.fill(0.0);
         for j in 0..KERNEL_LENGTH {
-            let row = &mut self.shifted[j * n..(j + 1) * n];
-            row.fill(0.0);
-            // x[t + (j − 4)·d] for the t where it lies in the window.
-            let offset = j as isize - (KERNEL_LENGTH / 2) as isize;
-            let shift = offset * d as isize;
-            let (from, to) = if shift >= 0 {
-                (0, n.saturating_sub(shift as usize))
-            } else {
-                ((-shift) as usize, n)
-            };
-            for t in from.min(to)..to {
-                let v = x[(t as isize + shift) as usize];
-                row[t] = 3.0 * v;
-                self.base[t] -= v;
+            for (b, &v) in base.iter_mut().zip(self.shifted(j, d)) {
+                *b -= v;
             }
         }
+        self.base = base;
     }
 
     /// The output of `kernel` at the dilation last dilated, all `points`
-    /// of it (padded).
-    fn convolve(&mut self, kernel: [usize; 3]) -> &[f64] {
-        let n = self.points;
-        let [a, b, c] = kernel.map(|p| &self.shifted[p * n..(p + 1) * n]);
-        for t in 0..n {
-            self.output[t] = self.base[t] + a[t] + b[t] + c[t];
+    /// of it (padded): `((base + 3x_a) + 3x_b) + 3x_c`.
+    fn convolve(&mut self, kernel: [usize; 3], d: usize) -> &mut [f64] {
+        let mut output = std::mem::take(&mut self.output);
+        let [a, b, c] = kernel.map(|p| self.shifted(p, d));
+        for ((((o, &u), &a), &b), &c) in output.iter_mut().zip(&self.base).zip(a).zip(b).zip(c) {
+            *o = u + 3.0 * a + 3.0 * b + 3.0 * c;
         }
-        &self.output
+        self.output = output;
+        &mut self.output
     }
 
     /// One channel's features: `x` its points, `biases` and `out` its
@@ -417,10 +418,6 @@ fn count_pass<const N: usize>(u: &[f64], v: &[f64], biases: &[f64], sums: &mut [
     }
 }
 
-/// Biases per kernel and dilation up to which each is selected from the
-/// convolution's output in linear time rather than by sorting it.
-const SELECT_MOST: usize = 8;
-
 /// The fitted transform: the layout and each channel's biases.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -452,27 +449,36 @@ impl KernelTransform {
         let kernels = kernels();
         let mut rng = ChaCha8Rng::seed_from_u64(SEED);
         let mut conv = Convolution::new(points);
-        let mut sorted = vec![0.0; points];
+        let (mut qs, mut got) = (Vec::new(), Vec::new());
         let mut biases = Vec::with_capacity(channels);
         for c in 0..channels {
-            let mut own = Vec::with_capacity(layout.feature_count());
+            let mut own = vec![0.0; layout.feature_count()];
+            let mut f0 = 0;
             for (&d, &count) in layout.dilations.iter().zip(&layout.features_per_dilation) {
-                for &kernel in &kernels {
-                    let w = windows[rng.random_range(0..windows.len())];
-                    conv.dilate(&w[c * points..(c + 1) * points], d);
-                    sorted.copy_from_slice(conv.convolve(kernel));
-                    if count > SELECT_MOST {
-                        sorted.sort_by(f64::total_cmp);
+                // Each kernel's training window, drawn in kernel order; the
+                // kernels that drew the same one convolve it after one
+                // loading and one −1 part.
+                let drawn: Vec<usize> = kernels
+                    .iter()
+                    .map(|_| rng.random_range(0..windows.len()))
+                    .collect();
+                let mut order: Vec<usize> = (0..kernels.len()).collect();
+                order.sort_by_key(|&k| drawn[k]);
+                let mut loaded = None;
+                for k in order {
+                    if loaded != Some(drawn[k]) {
+                        conv.load(&windows[drawn[k]][c * points..(c + 1) * points]);
+                        conv.dilate(d);
+                        loaded = Some(drawn[k]);
                     }
-                    for _ in 0..count {
-                        let q = bias_quantile(own.len());
-                        own.push(if count > SELECT_MOST {
-                            quantile_sorted(&sorted, q)
-                        } else {
-                            quantile_unsorted(&mut sorted, q)
-                        });
-                    }
+                    let first = f0 + k * count;
+                    qs.clear();
+                    qs.extend((first..first + count).map(bias_quantile));
+                    got.clear();
+                    quantiles_unsorted(conv.convolve(kernels[k], d), &qs, &mut got);
+                    own[first..first + count].copy_from_slice(&got);
                 }
+                f0 += KERNEL_COUNT * count;
             }
             biases.push(own);
         }
@@ -640,10 +646,11 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(7);
         let x: Vec<f64> = (0..61).map(|_| rng.random_range(-1.0..1.0)).collect();
         let mut conv = Convolution::new(x.len());
+        conv.load(&x);
         for d in [1, 2, 3, 7] {
-            conv.dilate(&x, d);
+            conv.dilate(d);
             for kernel in kernels() {
-                let fast = conv.convolve(kernel).to_vec();
+                let fast = conv.convolve(kernel, d).to_vec();
                 let naive = naive_convolution(&x, kernel, d);
                 for (a, b) in fast.iter().zip(&naive) {
                     assert!((a - b).abs() < 1e-12, "d {d} {kernel:?}: {a} {b}");
@@ -825,8 +832,9 @@ mod tests {
             let mut fit_conv = t.convolution();
             let one_at_a_time = |x: &[f64], kernel: [usize; 3], d: usize| {
                 let mut c = fit_conv.clone();
-                c.dilate(x, d);
-                c.convolve(kernel).to_vec()
+                c.load(x);
+                c.dilate(d);
+                c.convolve(kernel, d).to_vec()
             };
             let special = [
                 0.0,
@@ -861,6 +869,89 @@ mod tests {
                         .zip(&out[c * per..])
                         .all(|(a, b)| a.to_bits() == b.to_bits())
                 );
+            }
+        }
+    }
+
+    /// The fit as first written: per channel, dilation and kernel in turn,
+    /// a drawn window's nine shifted rows made afresh, the kernel's whole
+    /// output sorted and each bias read from it.
+    fn fit_by_sorting(
+        windows: &[&[f64]],
+        points: usize,
+        channels: usize,
+        asked: usize,
+    ) -> Vec<Vec<f64>> {
+        let layout = KernelLayout::new(points, asked).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(SEED);
+        let mut biases = Vec::new();
+        for c in 0..channels {
+            let mut own = Vec::new();
+            for (&d, &count) in layout.dilations.iter().zip(&layout.features_per_dilation) {
+                for kernel in kernels() {
+                    let w = windows[rng.random_range(0..windows.len())];
+                    let x = &w[c * points..(c + 1) * points];
+                    let at = |j: usize, t: usize| {
+                        let i = t as isize + (j as isize - 4) * d as isize;
+                        (0..points as isize).contains(&i).then(|| x[i as usize])
+                    };
+                    let mut y: Vec<f64> = (0..points)
+                        .map(|t| {
+                            let mut base = 0.0;
+                            for j in 0..KERNEL_LENGTH {
+                                if let Some(v) = at(j, t) {
+                                    base -= v;
+                                }
+                            }
+                            let row = |j| at(j, t).map_or(0.0, |v| 3.0 * v);
+                            base + row(kernel[0]) + row(kernel[1]) + row(kernel[2])
+                        })
+                        .collect();
+                    y.sort_by(f64::total_cmp);
+                    for _ in 0..count {
+                        own.push(super::super::quantiles::quantile_sorted(
+                            &y,
+                            bias_quantile(own.len()),
+                        ));
+                    }
+                }
+            }
+            biases.push(own);
+        }
+        biases
+    }
+
+    #[test]
+    fn the_fit_selects_the_biases_a_sort_gives_to_the_bit() {
+        // Few and many biases per kernel and dilation, one and two
+        // channels, windows drawn more than once, zeros of both signs,
+        // infinities, NaN and extremes.
+        let mut rng = ChaCha8Rng::seed_from_u64(41);
+        for (points, channels, asked, count) in [
+            (40, 1, 10_000, 3),
+            (300, 2, 2520, 5),
+            (9, 1, 168, 1),
+            (1000, 1, 9996, 2),
+        ] {
+            let mut train = real_windows(count, points * channels, &mut rng);
+            let special = [0.0, -0.0, f64::INFINITY, f64::NEG_INFINITY, f64::NAN, 1e300];
+            for (i, v) in special.iter().enumerate() {
+                let w = &mut train[i % count];
+                let at = (i * 7919) % w.len();
+                w[at] = *v;
+            }
+            let refs: Vec<&[f64]> = train.iter().map(Vec::as_slice).collect();
+            let t = KernelTransform::fit(&refs, points, channels, asked).unwrap();
+            let want = fit_by_sorting(&refs, points, channels, asked);
+            assert_eq!(t.biases.len(), want.len());
+            for (got, want) in t.biases.iter().zip(&want) {
+                assert_eq!(got.len(), want.len());
+                for (f, (a, b)) in got.iter().zip(want).enumerate() {
+                    assert!(
+                        a.to_bits() == b.to_bits(),
+                        "{points} points, feature {f}: {a} {b}"
+                    );
+                }
             }
         }
     }
