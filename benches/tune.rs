@@ -74,6 +74,7 @@ fn tune_96(c: &mut Criterion) {
         budget: 96,
         seed: 0,
         threads,
+        max_minutes: hapticlab::tune::MAX_MINUTES,
     };
     let mut g = c.benchmark_group("tune");
     g.sample_size(10).measurement_time(Duration::from_secs(30));

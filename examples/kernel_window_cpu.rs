@@ -9,6 +9,10 @@
 //!
 //!     cargo run --release --example kernel_window_cpu -- POINTS [R]
 //!
+//! A second line gives the fit's CPU time (biases on the 80 windows) and
+//! both as rates per point: the ones `tune` estimates a kernel setting's
+//! cost with (`hapticlab::tune::cost`), measured.
+//!
 //! e.g., alternated with aeon in one run:
 //!
 //!     for i in 1 2 3; do
@@ -48,7 +52,10 @@ fn main() {
     let (points, repeats) = (number(0, 1000), number(1, 50).max(1));
     let train = windows(80, points, 1);
     let refs: Vec<&[f64]> = train.iter().map(Vec::as_slice).collect();
-    let t = match KernelTransform::fit(&refs, points, 1, DEFAULT_FEATURES) {
+    let c0 = thread_cpu();
+    let fitted = KernelTransform::fit(&refs, points, 1, DEFAULT_FEATURES);
+    let fit_cpu = thread_cpu() - c0;
+    let t = match fitted {
         Ok(t) => t,
         Err(e) => {
             eprintln!("kernel_window_cpu: {points} points: {e}");
@@ -83,5 +90,19 @@ fn main() {
         1e3 * single[single.len() / 2],
         1e3 * single[0],
         1e3 * batched
+    );
+    // The rates tune's estimate of a kernel setting's cost uses
+    // (hapticlab::tune::cost): per point and feature of a window
+    // transformed, per point and kernel-dilation pair of a fit.
+    let pairs = hapticlab::analysis::kernels::KERNEL_COUNT * t.layout.dilations.len();
+    println!(
+        "  fit on 80 windows: CPU {:.3} s, {:.2} ns per point and kernel-dilation pair \
+         (tune::cost::FIT_SECONDS {:.2} ns); transform {:.3} ns per point and feature \
+         (tune::cost::TRANSFORM_SECONDS {:.3} ns)",
+        fit_cpu,
+        1e9 * fit_cpu / (points * pairs) as f64,
+        1e9 * hapticlab::tune::cost::FIT_SECONDS,
+        1e9 * batched / (points * t.feature_count()) as f64,
+        1e9 * hapticlab::tune::cost::TRANSFORM_SECONDS
     );
 }

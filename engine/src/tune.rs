@@ -29,6 +29,7 @@
 //! Like the rest of the engine this never prints: progress goes to a
 //! callback.
 
+pub mod cost;
 pub mod parts;
 pub mod score;
 pub mod space;
@@ -99,7 +100,16 @@ pub struct Options {
     /// Seeds the sampling of the grid and the inner folds.
     pub seed: u64,
     pub threads: usize,
+    /// CPU minutes (estimated, [`cost`]) a feature setting fitted fold by
+    /// fold may take over the whole search; costlier ones are left out.
+    pub max_minutes: f64,
 }
+
+/// The CPU minutes a fitted feature setting may take by default: the
+/// random kernels on the generated sets' windows take seconds to a few
+/// minutes under their README plans; on 5-second clips at 44.1 kHz under
+/// leave-one-out, hours.
+pub const MAX_MINUTES: f64 = 10.0;
 
 /// A setting with its inner scores ([`InnerScore`]).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -122,8 +132,12 @@ pub struct Scored {
 pub struct TuneReport {
     /// Settings scored in each search.
     pub configurations: usize,
-    /// Settings in the whole grid (those the data fits).
+    /// Settings in the whole grid (those the data fits and the search can
+    /// afford).
     pub grid: usize,
+    /// Settings the data fits that the search left out before any work,
+    /// by family and reason ([`cost::affordable`]).
+    pub left_out: Vec<cost::LeftOut>,
     /// Distinct feature settings computed.
     pub feature_settings: usize,
     /// Each of them: the feature options' values (`contrib/tune_reference.py`
@@ -678,6 +692,18 @@ pub fn tune(
             "no setting of the search fits the analysis window (Welch segments of at least 16 points): widen [analysis] window",
         ));
     }
+    let work = cost::Work::of(&parts, &inner);
+    let (all, left_out) = cost::affordable(all, scans.len(), work, options.max_minutes);
+    if all.is_empty() {
+        let why: Vec<String> = left_out
+            .iter()
+            .map(|l| format!("{}: {}", l.family, l.reason))
+            .collect();
+        return Err(plan_error(format!(
+            "every setting of the search is left out on these recordings ({})",
+            why.join("; ")
+        )));
+    }
     let settings = sample(all.clone(), options.budget.max(1), options.seed);
     let mut by_features: BTreeMap<Vec<usize>, Vec<usize>> = BTreeMap::new();
     for (i, s) in settings.iter().enumerate() {
@@ -746,6 +772,7 @@ pub fn tune(
     Ok(TuneReport {
         configurations: settings.len(),
         grid: all.len(),
+        left_out,
         feature_settings: by_features.len(),
         feature_settings_scored: by_features
             .values()

@@ -35,6 +35,12 @@ pub struct TuneArgs {
     /// Seeds the sampling and the inner folds (the outer split is the profile's).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// CPU minutes (estimated from the recordings and the plan, the same on
+    /// any machine) a feature setting refitted in every fold may take over
+    /// the whole search: costlier ones (random kernels on long windows
+    /// under leave-one-out can take hours) are left out and named.
+    #[arg(long, value_name = "MINUTES", default_value_t = tune::MAX_MINUTES, value_parser = minutes)]
+    pub max_minutes: f64,
     /// Replace --out when it exists (never a recording or the input profile).
     #[arg(long)]
     pub overwrite: bool,
@@ -46,6 +52,14 @@ pub struct TuneArgs {
 impl From<TuneError> for Failure {
     fn from(e: TuneError) -> Failure {
         if e.is_bad_input() { bad(e) } else { runtime(e) }
+    }
+}
+
+/// `--max-minutes`: a number of minutes above zero.
+fn minutes(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(m) if m.is_finite() && m > 0.0 => Ok(m),
+        _ => Err(format!("{text} is not a number of minutes above 0")),
     }
 }
 
@@ -103,6 +117,7 @@ pub fn run(a: TuneArgs) -> Result<(), Failure> {
         budget: usize::try_from(a.budget).unwrap_or(usize::MAX),
         seed: a.seed,
         threads,
+        max_minutes: a.max_minutes,
     };
     let name = &loaded.profile.name;
     let report = tune::tune(name, &loaded.profile, &data.scans, &options, &progress);
@@ -160,6 +175,15 @@ fn print_report(r: &TuneReport, a: &TuneArgs) {
         r.inner_split.describe(),
         r.method
     );
+    for l in &r.left_out {
+        crate::outln!(
+            "left out: {} {} feature setting(s) ({} settings): {}",
+            l.feature_settings,
+            l.family,
+            l.settings,
+            l.reason
+        );
+    }
     let chosen: Vec<String> = r
         .chosen
         .options
@@ -182,13 +206,31 @@ fn print_report(r: &TuneReport, a: &TuneArgs) {
         r.chosen.family,
         families.join(", ")
     );
-    for f in &r.outer_folds {
+    // Each outer fold on a line; under leave-one-out, one line for them all.
+    if r.outer_folds.len() <= 20 {
+        for f in &r.outer_folds {
+            crate::outln!(
+                "  outer fold: {}/{} right ({}), chosen at inner {}",
+                (f.accuracy * f.tested as f64).round(),
+                f.tested,
+                pct(f.accuracy),
+                pct(f.chosen.inner_accuracy)
+            );
+        }
+    } else {
+        let inner = |pick: fn(f64, f64) -> f64| {
+            r.outer_folds
+                .iter()
+                .map(|f| f.chosen.inner_accuracy)
+                .fold(f64::NAN, pick)
+        };
+        let wrong = r.outer_folds.iter().filter(|f| f.accuracy < 1.0).count();
         crate::outln!(
-            "  outer fold: {}/{} right ({}), chosen at inner {}",
-            (f.accuracy * f.tested as f64).round(),
-            f.tested,
-            pct(f.accuracy),
-            pct(f.chosen.inner_accuracy)
+            "  {} outer folds, {} with a test recording wrong, each chosen at inner {} to {} (every fold: --json)",
+            r.outer_folds.len(),
+            wrong,
+            pct(inner(f64::min)),
+            pct(inner(f64::max))
         );
     }
     crate::outln!(

@@ -284,3 +284,60 @@ fn after_a_k_fold_search_the_figure_to_quote_is_the_outer_one() {
     assert_eq!(r.code, Some(0), "{r:?}");
     assert!(!r.stdout.contains("tuned on these"), "{r:?}");
 }
+
+#[test]
+fn leave_one_out_says_its_folds_in_a_line_and_names_what_it_left_out() {
+    let dir = tempfile::tempdir().unwrap();
+    let rec = recordings(&dir.path().join("rec"), &["A", "B", "C"], 8, 8);
+    let prof = profile(dir.path(), "loo", "method = \"leave-one-out\"");
+    let out = dir.path().join("tuned.toml");
+    let r = run(&[
+        "tune",
+        p(&rec),
+        "-p",
+        p(&prof),
+        "--out",
+        p(&out),
+        "--budget",
+        "48",
+        "--max-minutes",
+        "0.0001",
+    ]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    // 24 outer folds of one recording: one line, not 24.
+    assert!(!r.stdout.contains("outer fold:"), "{r:?}");
+    assert!(
+        r.stdout.contains("  24 outer folds, ") && r.stdout.contains("(every fold: --json)"),
+        "{r:?}"
+    );
+    // The kernels, refitted in every fold, cost more than a few
+    // milliseconds of CPU here: left out, with what would search them.
+    let line = r
+        .stdout
+        .lines()
+        .find(|l| l.starts_with("left out: "))
+        .unwrap_or_else(|| panic!("{r:?}"));
+    assert!(
+        line.contains(" kernels feature setting(s) (") && line.contains("; --max-minutes "),
+        "{line}"
+    );
+    // Not a number of minutes above zero: refused in one line.
+    for bad in ["0", "-3", "soon", "NaN"] {
+        let flag = format!("--max-minutes={bad}");
+        let r = run(&[
+            "tune",
+            p(&rec),
+            "-p",
+            p(&prof),
+            "--out",
+            p(&out),
+            "--overwrite",
+            &flag,
+        ]);
+        assert_eq!(r.code, Some(2), "{bad}: {r:?}");
+        assert!(
+            r.stderr.contains("not a number of minutes above 0"),
+            "{r:?}"
+        );
+    }
+}

@@ -93,6 +93,7 @@ fn options(budget: usize, seed: u64) -> Options {
         budget,
         seed,
         threads: 2,
+        max_minutes: super::MAX_MINUTES,
     }
 }
 
@@ -616,4 +617,52 @@ fn a_small_budget_still_tries_every_family() {
         "{:?}",
         r.families
     );
+}
+
+#[test]
+fn kernels_too_costly_for_the_search_are_left_out_and_named() {
+    let mut o = options(10_000, 0);
+    // At the default every family is searched on these short windows.
+    let all = tune("t", &profile(HOLDOUT), &saws(), &o, &|_, _| {}).unwrap();
+    assert!(all.left_out.is_empty(), "{:?}", all.left_out);
+    assert!(all.families.iter().any(|f| f.family.starts_with("kernels")));
+    // With a hundredth of a second, the kernels are left out before any
+    // work and said to be; the rest is searched as before.
+    o.max_minutes = 1.0 / 6000.0;
+    let r = tune("t", &profile(HOLDOUT), &saws(), &o, &|_, _| {}).unwrap();
+    assert_eq!(r.left_out.len(), 1, "{:?}", r.left_out);
+    let l = &r.left_out[0];
+    assert_eq!(l.family, "kernels");
+    let kernels = all
+        .feature_settings_scored
+        .iter()
+        .filter(|f| f.0.iter().any(|(_, v)| v == "kernels"))
+        .count();
+    assert_eq!(l.feature_settings, kernels);
+    assert_eq!(r.grid + l.settings, all.grid);
+    assert!(l.reason.contains("--max-minutes"), "{}", l.reason);
+    assert!(!r.families.iter().any(|f| f.family.starts_with("kernels")));
+    assert!(r.families.iter().any(|f| f.family.starts_with("quantiles")));
+    // The tuned profile says so too.
+    let setting = r.chosen_setting.as_ref().unwrap();
+    let text = text::tuned_profile(&profile_text(HOLDOUT), setting, &r, "saws");
+    assert!(text.contains("\n# Left out: "), "{text}");
+}
+
+#[test]
+fn features_evaluate_would_refuse_are_never_searched() {
+    let p = profile(HOLDOUT);
+    let all = grid((&p.analysis, &p.classifier));
+    let work = cost::Work {
+        transformed: 10,
+        fits: 1,
+    };
+    // Over the limit of feature vectors evaluate and train keep to.
+    let (kept, left) = cost::affordable(all.clone(), crate::dataset::MAX_VECTORS + 1, work, 10.0);
+    assert!(kept.is_empty());
+    assert_eq!(left.iter().map(|l| l.settings).sum::<usize>(), all.len());
+    assert!(left.iter().all(|l| l.reason.contains("evaluate and train")));
+    let (kept, left) = cost::affordable(all.clone(), 20, work, 10.0);
+    assert_eq!(kept.len(), all.len());
+    assert!(left.is_empty());
 }

@@ -187,6 +187,13 @@ fn comment_block(r: &TuneReport, about: &str) -> String {
         r.chosen.family,
         families.join(", ")
     );
+    for l in &r.left_out {
+        let _ = writeln!(
+            w,
+            "# Left out: {} {} feature setting(s): {}.",
+            l.feature_settings, l.family, l.reason
+        );
+    }
     let _ = writeln!(w, "{}", r.tuned_on.line());
     let _ = writeln!(
         w,

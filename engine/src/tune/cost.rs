@@ -1,0 +1,257 @@
+//! What a feature setting would cost in one search, known before any
+//! work, and the settings a search leaves out for it ([`affordable`]):
+//!
+//! - those whose feature vectors `evaluate` and `train` would refuse on
+//!   these recordings ([`crate::dataset::check_size`]): a tuned profile
+//!   must run on the recordings it was tuned on;
+//! - random kernels whose transforms would take longer than
+//!   [`Options::max_minutes`](super::Options) of CPU over the whole search.
+//!   The kernels are fitted again in every inner and outer fold, and every
+//!   window the fold trains or tests on is transformed with them: on
+//!   5-second clips at 44.1 kHz under leave-one-out that is hours for one
+//!   setting, where the spectra take seconds.
+//!
+//! The estimate counts the work (points × features per window
+//! transformed, points × kernels and dilations per fit) at the rates
+//! measured on the project's 2-core lab PC (`BENCHMARKS.md`, "What tune
+//! leaves out"); it depends on the recordings and the plan only, never on
+//! the machine it runs on, so a search is the same anywhere.
+
+use serde::Serialize;
+
+use super::Part;
+use super::space::Setting;
+use crate::analysis::kernels::{KERNEL_COUNT, KernelLayout};
+use crate::dataset::check_size;
+use crate::profile::{Analysis, FeatureFamily};
+
+/// Seconds per point and feature of one window transformed (the counting
+/// of positive values, most of the transform).
+pub const TRANSFORM_SECONDS: f64 = 0.18e-9;
+/// Seconds per point and kernel-dilation pair of one fit (a convolution
+/// and the selection of its biases).
+pub const FIT_SECONDS: f64 = 14e-9;
+
+/// The work a search does per feature setting that is fitted fold by fold:
+/// recordings transformed (each fold's training and test recordings,
+/// over every inner fold of every part and every outer fold tested) and
+/// fits (one per fold).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Work {
+    pub transformed: usize,
+    pub fits: usize,
+}
+
+impl Work {
+    /// The work of a search over `parts` (the outer parts) with `inner`
+    /// (each part's inner folds).
+    pub fn of(parts: &[Part], inner: &[Vec<Part>]) -> Work {
+        let size = |p: &Part| p.train.len() + p.test.len();
+        let tested: Vec<&Part> = parts.iter().filter(|p| !p.test.is_empty()).collect();
+        Work {
+            transformed: inner.iter().flatten().map(size).sum::<usize>()
+                + tested.iter().map(|p| size(p)).sum::<usize>(),
+            fits: inner.iter().map(Vec::len).sum::<usize>() + tested.len(),
+        }
+    }
+}
+
+/// Feature settings of one family left out of a search for one reason.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LeftOut {
+    /// The feature family: `kernels`, `quantiles`, `spectrum`.
+    pub family: String,
+    /// Feature settings left out, and the settings (with every classifier)
+    /// they make.
+    pub feature_settings: usize,
+    pub settings: usize,
+    /// Why, in one sentence: the figure and what would search them.
+    pub reason: String,
+}
+
+/// The estimated CPU seconds of one kernel feature setting over a search
+/// of `work`, or `None` for features made once per recording.
+pub fn kernel_seconds(analysis: &Analysis, work: Work) -> Option<f64> {
+    if analysis.features != FeatureFamily::Kernels {
+        return None;
+    }
+    let points = analysis.points();
+    let layout = KernelLayout::new(points, analysis.kernel_features_asked()).ok()?;
+    let channels = (1 + analysis.channels.len()) as f64;
+    let per_recording = if analysis.windows.is_some() {
+        analysis.sub_windows().len()
+    } else {
+        1
+    } as f64;
+    let points = points as f64;
+    let window = channels * points * layout.feature_count() as f64 * TRANSFORM_SECONDS;
+    let fit = channels * points * (KERNEL_COUNT * layout.dilations.len()) as f64 * FIT_SECONDS;
+    Some(work.transformed as f64 * per_recording * window + work.fits as f64 * fit)
+}
+
+/// CPU time in the lab's words: minutes below two hours, else hours; a
+/// range in one unit.
+fn cpu_time(least: f64, most: f64) -> String {
+    let (unit, per) = if most < 7200.0 {
+        ("CPU-minutes", 60.0)
+    } else {
+        ("CPU-hours", 3600.0)
+    };
+    let digits = usize::from(unit == "CPU-hours");
+    let (a, b) = (
+        format!("{:.*}", digits, least / per),
+        format!("{:.*}", digits, most / per),
+    );
+    if a == b {
+        format!("{b} {unit}")
+    } else {
+        format!("{a} to {b} {unit}")
+    }
+}
+
+/// A whole number in groups of three: 21,436,128.
+fn counted(n: usize) -> String {
+    let digits = n.to_string();
+    let mut out = String::new();
+    for (i, c) in digits.chars().enumerate() {
+        if i > 0 && (digits.len() - i).is_multiple_of(3) {
+            out.push(',');
+        }
+        out.push(c);
+    }
+    out
+}
+
+/// Why a feature setting is left out.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Why {
+    /// Its vectors would hold this many values, over the dataset limit.
+    TooLarge(usize),
+    /// It would take this many CPU seconds, over the budget.
+    TooSlow(f64),
+}
+
+/// The feature settings of one family left out for one kind of reason:
+/// their keys, the settings they make, and the least and most figure.
+struct Tally {
+    family: String,
+    slow: bool,
+    keys: Vec<Vec<usize>>,
+    settings: usize,
+    least: f64,
+    most: f64,
+}
+
+/// The settings of `all` a search of `work` over `recordings` can afford,
+/// in their order, and those it leaves out, by family and reason.
+pub fn affordable(
+    all: Vec<Setting>,
+    recordings: usize,
+    work: Work,
+    max_minutes: f64,
+) -> (Vec<Setting>, Vec<LeftOut>) {
+    let mut tallies: Vec<Tally> = Vec::new();
+    let mut kept = Vec::new();
+    for s in all {
+        let why = match check_size(recordings, &s.analysis) {
+            Err(crate::dataset::DatasetError::TooLarge { values, .. }) => {
+                Some(Why::TooLarge(values))
+            }
+            _ => kernel_seconds(&s.analysis, work)
+                .filter(|&seconds| seconds > max_minutes * 60.0)
+                .map(Why::TooSlow),
+        };
+        let Some(why) = why else {
+            kept.push(s);
+            continue;
+        };
+        let (slow, figure) = match why {
+            Why::TooLarge(values) => (false, values as f64),
+            Why::TooSlow(seconds) => (true, seconds),
+        };
+        let family = crate::profile::options::plain_word(&s.analysis.features);
+        let key = s.feature_key();
+        match tallies
+            .iter_mut()
+            .find(|t| t.family == family && t.slow == slow)
+        {
+            Some(t) => {
+                if !t.keys.contains(&key) {
+                    t.keys.push(key);
+                }
+                t.settings += 1;
+                t.least = t.least.min(figure);
+                t.most = t.most.max(figure);
+            }
+            None => tallies.push(Tally {
+                family,
+                slow,
+                keys: vec![key],
+                settings: 1,
+                least: figure,
+                most: figure,
+            }),
+        }
+    }
+    let left = tallies
+        .into_iter()
+        .map(|t| LeftOut {
+            reason: if t.slow {
+                format!(
+                    "about {} each in this search ({} fits, {} recordings transformed), over --max-minutes {max_minutes}; --max-minutes {} searches them",
+                    cpu_time(t.least, t.most),
+                    counted(work.fits),
+                    counted(work.transformed),
+                    (t.most / 60.0).ceil()
+                )
+            } else {
+                format!(
+                    "their feature vectors would hold {} values or more, over the limit of {} that evaluate and train keep to",
+                    counted(t.least as usize),
+                    counted(crate::dataset::MAX_VALUES)
+                )
+            },
+            family: t.family,
+            feature_settings: t.keys.len(),
+            settings: t.settings,
+        })
+        .collect();
+    (kept, left)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn part(train: usize, test: usize) -> Part {
+        Part {
+            train: (0..train).collect(),
+            test: (train..train + test).collect(),
+        }
+    }
+
+    #[test]
+    fn the_work_counts_every_fold_that_fits_and_what_it_transforms() {
+        // Two outer folds of 10 + 10, each with 5 inner folds of 8 + 2, and
+        // the search over all 20 that chooses (no test part).
+        let parts = vec![part(10, 10), part(10, 10), part(20, 0)];
+        let inner = vec![
+            vec![part(8, 2); 5],
+            vec![part(8, 2); 5],
+            vec![part(16, 4); 5],
+        ];
+        let w = Work::of(&parts, &inner);
+        assert_eq!(w.fits, 15 + 2);
+        assert_eq!(w.transformed, 5 * 10 + 5 * 10 + 5 * 20 + 20 + 20);
+    }
+
+    #[test]
+    fn figures_read_as_a_person_writes_them() {
+        assert_eq!(cpu_time(600.0, 600.0), "10 CPU-minutes");
+        assert_eq!(cpu_time(600.0, 1800.0), "10 to 30 CPU-minutes");
+        assert_eq!(cpu_time(2.8 * 3600.0, 3.5 * 3600.0), "2.8 to 3.5 CPU-hours");
+        assert_eq!(counted(21_436_128), "21,436,128");
+        assert_eq!(counted(341), "341");
+        assert_eq!(counted(1000), "1,000");
+    }
+}
