@@ -1,9 +1,10 @@
 //! What a feature setting would cost in one search, known before any
 //! work, and the settings a search leaves out for it ([`affordable`]):
 //!
-//! - those whose feature vectors `evaluate` and `train` would refuse on
-//!   these recordings ([`crate::dataset::check_size`]): a tuned profile
-//!   must run on the recordings it was tuned on;
+//! - those `evaluate` or `train` would refuse on these recordings (their
+//!   feature vectors over [`crate::dataset::check_size`]'s limit, or their
+//!   validation over [`MAX_COMPARISONS`]): a tuned profile must run on the
+//!   recordings it was tuned on;
 //! - random kernels whose transforms would take longer than
 //!   [`Options::max_minutes`](super::Options) of CPU over the whole search.
 //!   The kernels are fitted again in every inner and outer fold, and every
@@ -22,6 +23,7 @@ use serde::Serialize;
 use super::Part;
 use super::space::Setting;
 use crate::analysis::kernels::{KERNEL_COUNT, KernelLayout};
+use crate::classify::{MAX_COMPARISONS, comparisons};
 use crate::dataset::check_size;
 use crate::profile::{Analysis, FeatureFamily};
 
@@ -122,20 +124,60 @@ fn counted(n: usize) -> String {
     out
 }
 
-/// Why a feature setting is left out.
+/// Why a feature setting is left out, with its figure.
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Why {
     /// Its vectors would hold this many values, over the dataset limit.
-    TooLarge(usize),
-    /// It would take this many CPU seconds, over the budget.
-    TooSlow(f64),
+    Values(f64),
+    /// Validating them would compare this many values, over the limit.
+    Comparisons(f64),
+    /// It would take this many CPU seconds, over --max-minutes.
+    Seconds(f64),
+}
+
+impl Why {
+    /// Why a setting over `recordings` in a search of `work` is left out.
+    fn of(analysis: &Analysis, recordings: usize, work: Work, max_minutes: f64) -> Option<Why> {
+        if let Err(crate::dataset::DatasetError::TooLarge { values, .. }) =
+            check_size(recordings, analysis)
+        {
+            return Some(Why::Values(values as f64));
+        }
+        let per_recording = if analysis.windows.is_some() {
+            analysis.sub_windows().len()
+        } else {
+            1
+        };
+        let vectors = recordings.saturating_mul(per_recording);
+        let compared = comparisons(vectors, vectors, analysis.fitted_feature_count());
+        if compared > MAX_COMPARISONS {
+            return Some(Why::Comparisons(compared));
+        }
+        kernel_seconds(analysis, work)
+            .filter(|&seconds| seconds > max_minutes * 60.0)
+            .map(Why::Seconds)
+    }
+
+    fn kind(self) -> u8 {
+        match self {
+            Why::Values(_) => 0,
+            Why::Comparisons(_) => 1,
+            Why::Seconds(_) => 2,
+        }
+    }
+
+    fn figure(self) -> f64 {
+        match self {
+            Why::Values(f) | Why::Comparisons(f) | Why::Seconds(f) => f,
+        }
+    }
 }
 
 /// The feature settings of one family left out for one kind of reason:
 /// their keys, the settings they make, and the least and most figure.
 struct Tally {
     family: String,
-    slow: bool,
+    kind: u8,
     keys: Vec<Vec<usize>>,
     settings: usize,
     least: f64,
@@ -153,27 +195,16 @@ pub fn affordable(
     let mut tallies: Vec<Tally> = Vec::new();
     let mut kept = Vec::new();
     for s in all {
-        let why = match check_size(recordings, &s.analysis) {
-            Err(crate::dataset::DatasetError::TooLarge { values, .. }) => {
-                Some(Why::TooLarge(values))
-            }
-            _ => kernel_seconds(&s.analysis, work)
-                .filter(|&seconds| seconds > max_minutes * 60.0)
-                .map(Why::TooSlow),
-        };
-        let Some(why) = why else {
+        let Some(why) = Why::of(&s.analysis, recordings, work, max_minutes) else {
             kept.push(s);
             continue;
         };
-        let (slow, figure) = match why {
-            Why::TooLarge(values) => (false, values as f64),
-            Why::TooSlow(seconds) => (true, seconds),
-        };
+        let (kind, figure) = (why.kind(), why.figure());
         let family = crate::profile::options::plain_word(&s.analysis.features);
         let key = s.feature_key();
         match tallies
             .iter_mut()
-            .find(|t| t.family == family && t.slow == slow)
+            .find(|t| t.family == family && t.kind == kind)
         {
             Some(t) => {
                 if !t.keys.contains(&key) {
@@ -185,7 +216,7 @@ pub fn affordable(
             }
             None => tallies.push(Tally {
                 family,
-                slow,
+                kind,
                 keys: vec![key],
                 settings: 1,
                 least: figure,
@@ -196,20 +227,23 @@ pub fn affordable(
     let left = tallies
         .into_iter()
         .map(|t| LeftOut {
-            reason: if t.slow {
-                format!(
+            reason: match t.kind {
+                0 => format!(
+                    "evaluate and train would refuse them on these recordings: their feature vectors would hold {} values or more, over the limit of {}",
+                    counted(t.least as usize),
+                    counted(crate::dataset::MAX_VALUES)
+                ),
+                1 => format!(
+                    "evaluate would refuse to validate them on these recordings: {:.1e} value comparisons or more, over the limit of {MAX_COMPARISONS:.0e}",
+                    t.least
+                ),
+                _ => format!(
                     "about {} each in this search ({} fits, {} recordings transformed), over --max-minutes {max_minutes}; --max-minutes {} searches them",
                     cpu_time(t.least, t.most),
                     counted(work.fits),
                     counted(work.transformed),
                     (t.most / 60.0).ceil()
-                )
-            } else {
-                format!(
-                    "their feature vectors would hold {} values or more, over the limit of {} that evaluate and train keep to",
-                    counted(t.least as usize),
-                    counted(crate::dataset::MAX_VALUES)
-                )
+                ),
             },
             family: t.family,
             feature_settings: t.keys.len(),

@@ -662,6 +662,28 @@ fn features_evaluate_would_refuse_are_never_searched() {
     assert!(kept.is_empty());
     assert_eq!(left.iter().map(|l| l.settings).sum::<usize>(), all.len());
     assert!(left.iter().all(|l| l.reason.contains("evaluate and train")));
+    // Few enough values, but too many to validate: 5000 recordings of
+    // hundreds of features compare over 10^10 values.
+    let (kept, left) = cost::affordable(all.clone(), 5000, work, 10.0);
+    assert!(
+        left.iter()
+            .any(|l| l.reason.contains("evaluate would refuse to validate")),
+        "{left:?}"
+    );
+    for s in &kept {
+        let vectors = 5000
+            * s.analysis
+                .windows
+                .map_or(1, |_| s.analysis.sub_windows().len());
+        assert!(
+            crate::evaluate::plan::check_comparisons(vectors, s.analysis.fitted_feature_count())
+                .is_ok()
+        );
+    }
+    assert_eq!(
+        kept.len() + left.iter().map(|l| l.settings).sum::<usize>(),
+        all.len()
+    );
     let (kept, left) = cost::affordable(all.clone(), 20, work, 10.0);
     assert_eq!(kept.len(), all.len());
     assert!(left.is_empty());
