@@ -291,18 +291,12 @@ fn leave_one_out_says_its_folds_in_a_line_and_names_what_it_left_out() {
     let rec = recordings(&dir.path().join("rec"), &["A", "B", "C"], 8, 8);
     let prof = profile(dir.path(), "loo", "method = \"leave-one-out\"");
     let out = dir.path().join("tuned.toml");
-    let r = run(&[
-        "tune",
-        p(&rec),
-        "-p",
-        p(&prof),
-        "--out",
-        p(&out),
-        "--budget",
-        "48",
-        "--max-minutes",
-        "0.0001",
-    ]);
+    let tune = |extra: &[&str]| {
+        let mut args = vec!["tune", p(&rec), "-p", p(&prof), "--out", p(&out)];
+        args.extend_from_slice(extra);
+        run(&args)
+    };
+    let r = tune(&["--budget", "48", "--max-minutes", "0.0001"]);
     assert_eq!(r.code, Some(0), "{r:?}");
     // 24 outer folds of one recording: one line, not 24.
     assert!(!r.stdout.contains("outer fold:"), "{r:?}");
@@ -323,17 +317,7 @@ fn leave_one_out_says_its_folds_in_a_line_and_names_what_it_left_out() {
     );
     // Not a number of minutes above zero: refused in one line.
     for bad in ["0", "-3", "soon", "NaN"] {
-        let flag = format!("--max-minutes={bad}");
-        let r = run(&[
-            "tune",
-            p(&rec),
-            "-p",
-            p(&prof),
-            "--out",
-            p(&out),
-            "--overwrite",
-            &flag,
-        ]);
+        let r = tune(&["--overwrite", &format!("--max-minutes={bad}")]);
         assert_eq!(r.code, Some(2), "{bad}: {r:?}");
         assert!(
             r.stderr.contains("not a number of minutes above 0"),
