@@ -26,6 +26,10 @@
 //! standardisation ([`score`]). The budget
 //! samples feature settings (seeded), each scored with every classifier
 //! setting, since those cost almost nothing once the features exist.
+//! Before any work, the settings `evaluate` would refuse on these
+//! recordings and the kernel settings estimated over
+//! [`Options::max_minutes`] of CPU are left out, and the report says so
+//! ([`cost`]).
 //! Like the rest of the engine this never prints: progress goes to a
 //! callback.
 
