@@ -14,9 +14,12 @@
 //!
 //! The estimate counts the work (points × features per window
 //! transformed, points × kernels and dilations per fit) at the rates
-//! measured on the project's 2-core lab PC (`BENCHMARKS.md`, "What tune
-//! leaves out"); it depends on the recordings and the plan only, never on
-//! the machine it runs on, so a search is the same anywhere.
+//! measured on the project's 2-core development machine (`BENCHMARKS.md`,
+//! "What tune leaves out"); it depends on the recordings and the plan
+//! only, never on the machine it runs on, so a search is the same
+//! anywhere. It leans high: every outer fold tested is counted for every
+//! kernel setting, though only the setting its search chose is fitted
+//! there.
 
 use serde::Serialize;
 
