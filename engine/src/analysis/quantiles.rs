@@ -46,25 +46,6 @@ pub fn quantile_sorted(sorted: &[f64], q: f64) -> f64 {
     }
 }
 
-/// [`quantile_sorted`] of `values` in any order (ordered by
-/// [`f64::total_cmp`], as sorting them would), by selecting the two order
-/// statistics it needs: the same number to the bit, in linear time.
-/// Leaves `values` reordered.
-pub fn quantile_unsorted(values: &mut [f64], q: f64) -> f64 {
-    let n = values.len();
-    if n == 1 {
-        return values[0];
-    }
-    let (lo, _, frac) = position(n, q);
-    let (_, &mut low, above) = values.select_nth_unstable_by(lo, f64::total_cmp);
-    if frac == 0.0 {
-        return low;
-    }
-    // The next order statistic is the least of those above.
-    let high = above.iter().copied().min_by(f64::total_cmp).unwrap_or(low);
-    low + frac * (high - low)
-}
-
 /// [`quantile_sorted`] of `values` in any order at each of `qs`, into
 /// `out` in their order: the same numbers to the bit, selecting only the
 /// order statistics they need, each within the part the last selection
@@ -320,13 +301,23 @@ mod tests {
                     .collect();
                 let mut sorted = values.clone();
                 sorted.sort_by(f64::total_cmp);
-                for q in [0.0, 1.0, 0.5, 0.618, (next() % 1000) as f64 / 999.0] {
+                let qs = [0.0, 1.0, 0.5, 0.618, (next() % 1000) as f64 / 999.0];
+                // Each quantile alone, and all of them selected together.
+                let mut together = Vec::new();
+                quantiles_unsorted(&mut values.clone(), &qs, &mut together);
+                for (&q, &c) in qs.iter().zip(&together) {
                     let mut scratch = values.clone();
-                    let a = quantile_unsorted(&mut scratch, q);
+                    let mut alone = Vec::new();
+                    quantiles_unsorted(&mut scratch, &[q], &mut alone);
+                    let a = alone[0];
                     let b = quantile_sorted(&sorted, q);
                     assert!(
                         a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
                         "{n} {q}: {a} {b}"
+                    );
+                    assert!(
+                        c.to_bits() == b.to_bits() || (c.is_nan() && b.is_nan()),
+                        "{n} {q} together: {c} {b}"
                     );
                 }
             }

@@ -28,6 +28,7 @@ use super::space::Setting;
 use crate::analysis::kernels::{KERNEL_COUNT, KernelLayout};
 use crate::classify::{MAX_COMPARISONS, comparisons};
 use crate::dataset::check_size;
+use crate::evaluate::plan::check_comparisons;
 use crate::profile::{Analysis, FeatureFamily};
 
 /// Seconds per point and feature of one window transformed (the counting
@@ -83,11 +84,7 @@ pub fn kernel_seconds(analysis: &Analysis, work: Work) -> Option<f64> {
     let points = analysis.points();
     let layout = KernelLayout::new(points, analysis.kernel_features_asked()).ok()?;
     let channels = (1 + analysis.channels.len()) as f64;
-    let per_recording = if analysis.windows.is_some() {
-        analysis.sub_windows().len()
-    } else {
-        1
-    } as f64;
+    let per_recording = analysis.sub_windows().len() as f64;
     let points = points as f64;
     let window = channels * points * layout.feature_count() as f64 * TRANSFORM_SECONDS;
     let fit = channels * points * (KERNEL_COUNT * layout.dilations.len()) as f64 * FIT_SECONDS;
@@ -127,60 +124,48 @@ fn counted(n: usize) -> String {
     out
 }
 
-/// Why a feature setting is left out, with its figure.
+/// Why a feature setting is left out.
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Why {
-    /// Its vectors would hold this many values, over the dataset limit.
-    Values(f64),
-    /// Validating them would compare this many values, over the limit.
-    Comparisons(f64),
-    /// It would take this many CPU seconds, over --max-minutes.
-    Seconds(f64),
+enum Reason {
+    /// `evaluate` and `train` would refuse its vectors (the figure: their
+    /// values).
+    Values,
+    /// `evaluate` would refuse to validate them (the figure: the value
+    /// comparisons).
+    Comparisons,
+    /// It would take over `--max-minutes` (the figure: CPU seconds).
+    Seconds,
 }
 
-impl Why {
-    /// Why a setting over `recordings` in a search of `work` is left out.
-    fn of(analysis: &Analysis, recordings: usize, work: Work, max_minutes: f64) -> Option<Why> {
-        if let Err(crate::dataset::DatasetError::TooLarge { values, .. }) =
-            check_size(recordings, analysis)
-        {
-            return Some(Why::Values(values as f64));
-        }
-        let per_recording = if analysis.windows.is_some() {
-            analysis.sub_windows().len()
-        } else {
-            1
-        };
-        let vectors = recordings.saturating_mul(per_recording);
-        let compared = comparisons(vectors, vectors, analysis.fitted_feature_count());
-        if compared > MAX_COMPARISONS {
-            return Some(Why::Comparisons(compared));
-        }
-        kernel_seconds(analysis, work)
-            .filter(|&seconds| seconds > max_minutes * 60.0)
-            .map(Why::Seconds)
+/// Why a setting over `recordings` in a search of `work` is left out, and
+/// the figure that says so: the checks `evaluate` makes before any work,
+/// then the kernels' estimated time.
+fn left_out_because(
+    analysis: &Analysis,
+    recordings: usize,
+    work: Work,
+    max_minutes: f64,
+) -> Option<(Reason, f64)> {
+    if let Err(crate::dataset::DatasetError::TooLarge { values, .. }) =
+        check_size(recordings, analysis)
+    {
+        return Some((Reason::Values, values as f64));
     }
-
-    fn kind(self) -> u8 {
-        match self {
-            Why::Values(_) => 0,
-            Why::Comparisons(_) => 1,
-            Why::Seconds(_) => 2,
-        }
+    let vectors = recordings.saturating_mul(analysis.sub_windows().len());
+    let features = analysis.fitted_feature_count();
+    if check_comparisons(vectors, features).is_err() {
+        return Some((Reason::Comparisons, comparisons(vectors, vectors, features)));
     }
-
-    fn figure(self) -> f64 {
-        match self {
-            Why::Values(f) | Why::Comparisons(f) | Why::Seconds(f) => f,
-        }
-    }
+    kernel_seconds(analysis, work)
+        .filter(|&seconds| seconds > max_minutes * 60.0)
+        .map(|seconds| (Reason::Seconds, seconds))
 }
 
-/// The feature settings of one family left out for one kind of reason:
-/// their keys, the settings they make, and the least and most figure.
+/// The feature settings of one family left out for one reason: their
+/// keys, the settings they make, and the least and most figure.
 struct Tally {
     family: String,
-    kind: u8,
+    reason: Reason,
     keys: Vec<Vec<usize>>,
     settings: usize,
     least: f64,
@@ -198,16 +183,16 @@ pub fn affordable(
     let mut tallies: Vec<Tally> = Vec::new();
     let mut kept = Vec::new();
     for s in all {
-        let Some(why) = Why::of(&s.analysis, recordings, work, max_minutes) else {
+        let Some((reason, figure)) = left_out_because(&s.analysis, recordings, work, max_minutes)
+        else {
             kept.push(s);
             continue;
         };
-        let (kind, figure) = (why.kind(), why.figure());
         let family = crate::profile::options::plain_word(&s.analysis.features);
         let key = s.feature_key();
         match tallies
             .iter_mut()
-            .find(|t| t.family == family && t.kind == kind)
+            .find(|t| t.family == family && t.reason == reason)
         {
             Some(t) => {
                 if !t.keys.contains(&key) {
@@ -219,7 +204,7 @@ pub fn affordable(
             }
             None => tallies.push(Tally {
                 family,
-                kind,
+                reason,
                 keys: vec![key],
                 settings: 1,
                 least: figure,
@@ -230,17 +215,17 @@ pub fn affordable(
     let left = tallies
         .into_iter()
         .map(|t| LeftOut {
-            reason: match t.kind {
-                0 => format!(
+            reason: match t.reason {
+                Reason::Values => format!(
                     "evaluate and train would refuse them on these recordings: their feature vectors would hold {} values or more, over the limit of {}",
                     counted(t.least as usize),
                     counted(crate::dataset::MAX_VALUES)
                 ),
-                1 => format!(
+                Reason::Comparisons => format!(
                     "evaluate would refuse to validate them on these recordings: {:.1e} value comparisons or more, over the limit of {MAX_COMPARISONS:.0e}",
                     t.least
                 ),
-                _ => format!(
+                Reason::Seconds => format!(
                     "about {} each in this search ({} fits, {} recordings transformed), over --max-minutes {max_minutes}; --max-minutes {} searches them",
                     cpu_time(t.least, t.most),
                     counted(work.fits),
