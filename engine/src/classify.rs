@@ -443,7 +443,7 @@ pub(crate) fn rank_classes(
 
 /// `features = "kernels"`: the kernels fitted on the examples' windows
 /// (every channel's points, as the analysis hands them on).
-fn fit_kernels(
+pub fn fit_kernels(
     analysis: &Analysis,
     examples: &[TrainingExample],
 ) -> Result<Option<KernelTransform>, ClassifyError> {
@@ -480,7 +480,10 @@ struct Fitted<'a> {
 
 /// The examples as the classifier sees them: transformed by the kernels
 /// when there are some (on every core), else as they are.
-fn fitted_rows(kernels: Option<&KernelTransform>, examples: &[TrainingExample]) -> Vec<Vec<f64>> {
+pub fn fitted_rows(
+    kernels: Option<&KernelTransform>,
+    examples: &[TrainingExample],
+) -> Vec<Vec<f64>> {
     let Some(k) = kernels else {
         return examples.iter().map(|e| e.features.clone()).collect();
     };
@@ -568,6 +571,39 @@ impl Model {
         classifiers: &[Classifier],
         examples: Vec<TrainingExample>,
     ) -> Result<Vec<Result<Model, ClassifyError>>, ClassifyError> {
+        Model::train_each_with(profile_name, analysis, classifiers, examples, None)
+    }
+
+    /// [`Model::train_each`] with kernels fitted before, on training
+    /// windows of the caller's that are among `examples` (tune's forward
+    /// inner folds share the windows every fold trains on), and `rows`
+    /// each example's window transformed by them.
+    #[allow(clippy::type_complexity)]
+    pub fn train_each_transformed(
+        profile_name: &str,
+        analysis: &Analysis,
+        classifiers: &[Classifier],
+        examples: Vec<TrainingExample>,
+        kernels: &KernelTransform,
+        rows: &[Vec<f64>],
+    ) -> Result<Vec<Result<Model, ClassifyError>>, ClassifyError> {
+        Model::train_each_with(
+            profile_name,
+            analysis,
+            classifiers,
+            examples,
+            Some((kernels, rows)),
+        )
+    }
+
+    #[allow(clippy::type_complexity)]
+    fn train_each_with(
+        profile_name: &str,
+        analysis: &Analysis,
+        classifiers: &[Classifier],
+        examples: Vec<TrainingExample>,
+        given: Option<(&KernelTransform, &[Vec<f64>])>,
+    ) -> Result<Vec<Result<Model, ClassifyError>>, ClassifyError> {
         let classifiers: Vec<(Classifier, bool)> = classifiers
             .iter()
             .map(|c| {
@@ -591,10 +627,26 @@ impl Model {
                 .map(Err)
                 .collect());
         }
-        // Fitted on these examples only: the caller's training part.
-        let kernels = fit_kernels(analysis, &examples)?;
+        let (kernels, made);
+        let rows = match given {
+            Some((k, rows)) => {
+                if rows.len() != examples.len() || rows.iter().any(|r| r.len() != k.feature_count())
+                {
+                    return Err(ClassifyError::Settings(
+                        "the transformed windows do not match the examples".into(),
+                    ));
+                }
+                kernels = Some(k.clone());
+                rows
+            }
+            None => {
+                // Fitted on these examples only: the caller's training part.
+                kernels = fit_kernels(analysis, &examples)?;
+                made = fitted_rows(kernels.as_ref(), &examples);
+                &made[..]
+            }
+        };
         let labels = sorted_labels(&examples);
-        let rows = fitted_rows(kernels.as_ref(), &examples);
         let classes = class_indices(&labels, &examples);
         let mut out = Vec::with_capacity(classifiers.len());
         let last = classifiers.len().saturating_sub(1);
@@ -615,7 +667,7 @@ impl Model {
                     Fitted {
                         kernels: kernels.clone(),
                         labels: labels.clone(),
-                        rows: &rows,
+                        rows,
                         classes: &classes,
                     },
                 )
@@ -912,7 +964,20 @@ impl Model {
     }
 
     pub fn classify(&self, features: &[f64]) -> Result<Prediction, ClassifyError> {
-        let expected = self.feature_count();
+        self.classify_as(features, false)
+    }
+
+    /// [`Model::classify`] of a window the model's kernels have already
+    /// transformed (as [`Model::train_each_transformed`]'s rows).
+    fn classify_as(
+        &self,
+        features: &[f64],
+        transformed: bool,
+    ) -> Result<Prediction, ClassifyError> {
+        let expected = match &self.kernels {
+            Some(k) if transformed => k.feature_count(),
+            _ => self.feature_count(),
+        };
         if features.len() != expected {
             return Err(ClassifyError::QueryLength {
                 expected,
@@ -925,13 +990,14 @@ impl Model {
         if self.examples.is_empty() {
             return Err(ClassifyError::NoExamples);
         }
-        let transformed;
+        let made;
         let features = match &self.kernels {
+            Some(_) if transformed => features,
             Some(kernels) => {
                 let mut out = vec![0.0; kernels.feature_count()];
                 kernels.transform(features, &mut kernels.convolution(), &mut out);
-                transformed = out;
-                transformed.as_slice()
+                made = out;
+                made.as_slice()
             }
             None => features,
         };
@@ -1032,11 +1098,28 @@ impl Model {
         &self,
         windows: &[Vec<f64>],
     ) -> Result<RecordingPrediction, ClassifyError> {
+        self.classify_windows_as(windows, false)
+    }
+
+    /// [`Model::classify_windows`] of windows the model's kernels have
+    /// already transformed.
+    pub fn classify_transformed(
+        &self,
+        windows: &[Vec<f64>],
+    ) -> Result<RecordingPrediction, ClassifyError> {
+        self.classify_windows_as(windows, true)
+    }
+
+    fn classify_windows_as(
+        &self,
+        windows: &[Vec<f64>],
+        transformed: bool,
+    ) -> Result<RecordingPrediction, ClassifyError> {
         let votes = windows
             .iter()
             .enumerate()
             .map(|(window, f)| {
-                self.classify(f).map(|p| WindowVote {
+                self.classify_as(f, transformed).map(|p| WindowVote {
                     window,
                     label: p.label,
                     votes: p.votes,

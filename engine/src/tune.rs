@@ -598,6 +598,14 @@ impl Search<'_> {
         // fitted once for all of them.
         let threads = self.threads.clamp(1, 2);
         let settings: Vec<&Setting> = members.iter().map(|&i| &self.settings[i]).collect();
+        let shared: Vec<Option<SharedKernels>> = match settings.first() {
+            Some(s) if s.analysis.features == FeatureFamily::Kernels => self
+                .inner
+                .iter()
+                .map(|folds| SharedKernels::fit(&s.analysis, self.scans, features, folds))
+                .collect(),
+            _ => Vec::new(),
+        };
         let results = par_map(&tasks, threads, |&(p, f)| {
             let part = &self.inner[p][f];
             let each = predict_part(
@@ -605,8 +613,8 @@ impl Search<'_> {
                 &settings,
                 self.scans,
                 features,
-                &part.train,
-                &part.test,
+                shared.get(p).and_then(Option::as_ref),
+                (&part.train, &part.test),
             );
             (p, each)
         });
@@ -746,9 +754,16 @@ pub fn tune(
                 e.insert(extract(scans, &setting.analysis, options.threads)?)
             }
         };
-        let rows = predict_part(name, &[setting], scans, features, &part.train, &part.test)?
-            .pop()
-            .unwrap_or(Ok(Vec::new()))?;
+        let rows = predict_part(
+            name,
+            &[setting],
+            scans,
+            features,
+            None,
+            (&part.train, &part.test),
+        )?
+        .pop()
+        .unwrap_or(Ok(Vec::new()))?;
         let right = rows.iter().filter(|r| r.label == r.predicted).count();
         outer_folds.push(OuterFold {
             chosen: scored(chosen, p),
@@ -825,6 +840,62 @@ pub fn tune(
     })
 }
 
+/// Random kernels fitted once for all of a part's inner folds, on the
+/// recordings every one of its folds trains on (under a time split, the
+/// earliest block: each forward fold trains on it and none tests it), and
+/// every window of the part's folds transformed by them once. Each fold's
+/// classifiers are still trained on its own training windows only; the
+/// transform, the search's costliest step, is done once instead of once a
+/// fold.
+struct SharedKernels {
+    kernels: crate::analysis::kernels::KernelTransform,
+    /// Each recording's windows, transformed (by recording index).
+    rows: BTreeMap<usize, Vec<Vec<f64>>>,
+}
+
+impl SharedKernels {
+    /// `None` when the folds share no training recording (shuffled,
+    /// grouped and block folds each test every recording once) or the
+    /// kernels cannot be fitted (each fold then fits and says why).
+    fn fit(
+        analysis: &Analysis,
+        scans: &[Entry],
+        features: &score::Features,
+        folds: &[Part],
+    ) -> Option<SharedKernels> {
+        let common = parts::trained_on_by_all(folds);
+        if common.is_empty() {
+            return None;
+        }
+        let examples = |recordings: &[usize]| -> Vec<TrainingExample> {
+            recordings
+                .iter()
+                .flat_map(|&r| {
+                    features[r].iter().map(move |w| TrainingExample {
+                        file: scans[r].file.clone(),
+                        label: scans[r].label.clone(),
+                        features: w.clone(),
+                    })
+                })
+                .collect()
+        };
+        let kernels = crate::classify::fit_kernels(analysis, &examples(&common)).ok()??;
+        let mut used: Vec<usize> = folds
+            .iter()
+            .flat_map(|f| f.train.iter().chain(&f.test).copied())
+            .collect();
+        used.sort_unstable();
+        used.dedup();
+        let mut transformed =
+            crate::classify::fitted_rows(Some(&kernels), &examples(&used)).into_iter();
+        let rows = used
+            .iter()
+            .map(|&r| (r, transformed.by_ref().take(features[r].len()).collect()))
+            .collect();
+        Some(SharedKernels { kernels, rows })
+    }
+}
+
 /// What models of each of `settings` (one analysis, several classifiers)
 /// trained on the recordings `train` say of each recording in `test`; the
 /// kernels, when there are some, fitted once for them all. The outer error
@@ -835,8 +906,8 @@ fn predict_part(
     settings: &[&Setting],
     scans: &[Entry],
     features: &score::Features,
-    train: &[usize],
-    test: &[usize],
+    shared: Option<&SharedKernels>,
+    (train, test): (&[usize], &[usize]),
 ) -> Result<Vec<Result<Vec<PredictionRow>, TuneError>>, TuneError> {
     let examples: Vec<TrainingExample> = train
         .iter()
@@ -859,14 +930,33 @@ fn predict_part(
     let Some(analysis) = settings.first().map(|s| &s.analysis) else {
         return Ok(Vec::new());
     };
-    let models = Model::train_each(name, analysis, &classifiers, examples)?;
+    let models = match shared {
+        Some(sh) => {
+            let rows: Vec<Vec<f64>> = train
+                .iter()
+                .flat_map(|r| sh.rows.get(r).into_iter().flatten().cloned())
+                .collect();
+            Model::train_each_transformed(
+                name,
+                analysis,
+                &classifiers,
+                examples,
+                &sh.kernels,
+                &rows,
+            )?
+        }
+        None => Model::train_each(name, analysis, &classifiers, examples)?,
+    };
     Ok(models
         .into_iter()
         .map(|model| {
             let model = model?;
             test.iter()
                 .map(|&r| {
-                    let p = model.classify_windows(&features[r])?;
+                    let p = match shared.and_then(|sh| sh.rows.get(&r)) {
+                        Some(rows) => model.classify_transformed(rows)?,
+                        None => model.classify_windows(&features[r])?,
+                    };
                     Ok(PredictionRow {
                         file: scans[r].file.clone(),
                         label: scans[r].label.clone(),

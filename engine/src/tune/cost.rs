@@ -24,6 +24,7 @@
 use serde::Serialize;
 
 use super::Part;
+use super::parts::trained_on_by_all;
 use super::space::Setting;
 use crate::analysis::kernels::{KERNEL_COUNT, KernelLayout};
 use crate::classify::{MAX_COMPARISONS, comparisons};
@@ -41,7 +42,9 @@ pub const FIT_SECONDS: f64 = 14e-9;
 /// The work a search does per feature setting that is fitted fold by fold:
 /// recordings transformed (each fold's training and test recordings,
 /// over every inner fold of every part and every outer fold tested) and
-/// fits (one per fold).
+/// fits (one per fold). A part whose inner folds all train on some
+/// recordings (forward folds under a time split) fits the kernels once on
+/// those and transforms each of its recordings once.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Work {
     pub transformed: usize,
@@ -54,10 +57,25 @@ impl Work {
     pub fn of(parts: &[Part], inner: &[Vec<Part>]) -> Work {
         let size = |p: &Part| p.train.len() + p.test.len();
         let tested: Vec<&Part> = parts.iter().filter(|p| !p.test.is_empty()).collect();
+        let (mut transformed, mut fits) = (0, 0);
+        for folds in inner {
+            if trained_on_by_all(folds).is_empty() {
+                transformed += folds.iter().map(size).sum::<usize>();
+                fits += folds.len();
+            } else {
+                let mut used: Vec<usize> = folds
+                    .iter()
+                    .flat_map(|f| f.train.iter().chain(&f.test).copied())
+                    .collect();
+                used.sort_unstable();
+                used.dedup();
+                transformed += used.len();
+                fits += 1;
+            }
+        }
         Work {
-            transformed: inner.iter().flatten().map(size).sum::<usize>()
-                + tested.iter().map(|p| size(p)).sum::<usize>(),
-            fits: inner.iter().map(Vec::len).sum::<usize>() + tested.len(),
+            transformed: transformed + tested.iter().map(|p| size(p)).sum::<usize>(),
+            fits: fits + tested.len(),
         }
     }
 }
@@ -252,19 +270,38 @@ mod tests {
         }
     }
 
+    /// `n` recordings (from `from`) dealt into 5 folds that each test
+    /// every fifth one and train on the rest.
+    fn dealt(from: usize, n: usize) -> Vec<Part> {
+        (0..5)
+            .map(|j| {
+                let (test, train): (Vec<usize>, Vec<usize>) =
+                    (from..from + n).partition(|r| r % 5 == j);
+                Part { train, test }
+            })
+            .collect()
+    }
+
     #[test]
     fn the_work_counts_every_fold_that_fits_and_what_it_transforms() {
         // Two outer folds of 10 + 10, each with 5 inner folds of 8 + 2, and
         // the search over all 20 that chooses (no test part).
         let parts = vec![part(10, 10), part(10, 10), part(20, 0)];
-        let inner = vec![
-            vec![part(8, 2); 5],
-            vec![part(8, 2); 5],
-            vec![part(16, 4); 5],
-        ];
+        let inner = vec![dealt(0, 10), dealt(0, 10), dealt(0, 20)];
         let w = Work::of(&parts, &inner);
         assert_eq!(w.fits, 15 + 2);
         assert_eq!(w.transformed, 5 * 10 + 5 * 10 + 5 * 20 + 20 + 20);
+        // Forward folds (fold j trains on blocks 0..=j, tests block j + 1)
+        // all train on the first block: one fit, each recording once.
+        let forward: Vec<Part> = (1..5)
+            .map(|j| Part {
+                train: (0..2 * j).collect(),
+                test: (2 * j..2 * j + 2).collect(),
+            })
+            .collect();
+        let w = Work::of(&[part(10, 10)], &[forward]);
+        assert_eq!(w.fits, 1 + 1);
+        assert_eq!(w.transformed, 10 + 20);
     }
 
     #[test]

@@ -230,3 +230,20 @@ pub fn inner_parts(
     };
     Ok((dealt_to_parts(train, &Dealt::plain(f)), made))
 }
+
+/// The recordings every one of `folds` trains on (none of them tests
+/// one, as a fold never tests what it trains on), in the first fold's
+/// order: under a time split, the earliest block of trials. Empty with
+/// fewer than two folds, and when the folds test every recording once
+/// (shuffled, grouped and block folds).
+pub fn trained_on_by_all(folds: &[Part]) -> Vec<usize> {
+    match folds.split_first() {
+        Some((first, rest)) if !rest.is_empty() => first
+            .train
+            .iter()
+            .copied()
+            .filter(|r| rest.iter().all(|f| f.train.contains(r)))
+            .collect(),
+        _ => Vec::new(),
+    }
+}

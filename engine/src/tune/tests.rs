@@ -688,3 +688,101 @@ fn features_evaluate_would_refuse_are_never_searched() {
     assert_eq!(kept.len(), all.len());
     assert!(left.is_empty());
 }
+
+#[test]
+fn forward_folds_share_kernels_fitted_on_what_every_fold_trains_on() {
+    let holdout = "method = \"holdout\"\ntrain_per_class = 10\ntest_per_class = 10";
+    let p = profile(holdout);
+    let s = saws();
+    let plan = Plan::new(&p, &Overrides::default());
+    let part = &outer_parts(&p, &s, &plan).unwrap()[0];
+    let (inner, _) = inner_parts(&s, None, &part.train, 0, InnerSplit::Forward).unwrap();
+    assert!(inner.len() >= 2);
+    let mut analysis = p.analysis.clone();
+    analysis.features = FeatureFamily::Kernels;
+    analysis.kernel_features = Some(84 * 4);
+    let features = extract(&s, &analysis, 1).unwrap();
+    let shared = SharedKernels::fit(&analysis, &s, &features, &inner)
+        .expect("forward folds all train on the earliest trials");
+    // Fitted on the recordings every fold trains on: none an inner test.
+    let common: Vec<usize> = part
+        .train
+        .iter()
+        .copied()
+        .filter(|r| inner.iter().all(|f| f.train.contains(r)))
+        .collect();
+    assert!(!common.is_empty() && common.len() < part.train.len());
+    assert!(
+        inner
+            .iter()
+            .all(|f| f.test.iter().all(|t| !common.contains(t)))
+    );
+    let (s, features) = (&s[..], &features);
+    let examples = |recordings: &[usize]| -> Vec<TrainingExample> {
+        recordings
+            .iter()
+            .flat_map(|&r| {
+                features[r].iter().map(move |w| TrainingExample {
+                    file: s[r].file.clone(),
+                    label: s[r].label.clone(),
+                    features: w.clone(),
+                })
+            })
+            .collect()
+    };
+    let fitted = crate::classify::fit_kernels(&analysis, &examples(&common))
+        .unwrap()
+        .unwrap();
+    assert_eq!(shared.kernels, fitted);
+    // Every window of the folds transformed once, as the kernels transform it.
+    let mut used: Vec<usize> = inner
+        .iter()
+        .flat_map(|f| f.train.iter().chain(&f.test).copied())
+        .collect();
+    used.sort_unstable();
+    used.dedup();
+    assert_eq!(shared.rows.keys().copied().collect::<Vec<_>>(), used);
+    let mut conv = fitted.convolution();
+    for (r, rows) in &shared.rows {
+        assert_eq!(rows.len(), features[*r].len());
+        for (w, row) in features[*r].iter().zip(rows) {
+            let mut out = vec![0.0; fitted.feature_count()];
+            fitted.transform(w, &mut conv, &mut out);
+            assert_eq!(row, &out);
+        }
+    }
+    // A fold's models are trained on its own training windows only, and
+    // classify as models trained on raw windows with those kernels do.
+    let classifiers = [crate::profile::Classifier {
+        method: Method::Ridge,
+        ..p.classifier.clone()
+    }];
+    let fold = &inner[inner.len() - 1];
+    let rows: Vec<Vec<f64>> = fold
+        .train
+        .iter()
+        .flat_map(|r| shared.rows[r].clone())
+        .collect();
+    let model = Model::train_each_transformed(
+        "t",
+        &analysis,
+        &classifiers,
+        examples(&fold.train),
+        &shared.kernels,
+        &rows,
+    )
+    .unwrap()
+    .pop()
+    .unwrap()
+    .unwrap();
+    assert_eq!(model.examples.len(), rows.len());
+    for &t in &fold.test {
+        assert_eq!(
+            model.classify_transformed(&shared.rows[&t]).unwrap(),
+            model.classify_windows(&features[t]).unwrap()
+        );
+    }
+    // Shuffled folds test every recording once: nothing to share.
+    let (shuffled, _) = inner_parts(s, None, &part.train, 0, InnerSplit::Shuffled).unwrap();
+    assert!(SharedKernels::fit(&analysis, s, features, &shuffled).is_none());
+}
