@@ -4,9 +4,9 @@
 //!
 //! - `trace FILE`: the recording's signal along the analysis axis with the
 //!   analysis window shaded, and its spectrum with the kept bins marked
-//!   (the thesis's Figs 4.5–4.8);
+//!   (the thesis's Figs 4.5–4.8), a panel and a spectrum per channel;
 //! - `confusion REPORT.json`: the confusion matrix of `evaluate --json` as a
-//!   grey heat map with the counts written in;
+//!   grey heat map with the counts written in, and the validation named;
 //! - `features PATH… --per-class N`: the features of N recordings of each
 //!   class, one panel per class (Fig 4.3); with `[analysis] windows`, each
 //!   recording's first sub-window;
@@ -27,6 +27,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use crate::analysis::FeatureExtractor;
 use crate::dataset::{self, features_of, label_of};
+use crate::profile::FeatureFamily;
 use crate::recording;
 use crate::support::{Existing, Failure, ProfileArg, load_profile};
 
@@ -56,7 +57,7 @@ pub struct PlotArgs {
 pub enum Figure {
     /// A recording's trace with its analysis window, and its spectrum (Figs 4.5–4.8).
     #[command(
-        after_help = "The top panel is the recorded trace against distance along the scan, with the profile's analysis window shaded and the resampled signal over it; the bottom panel is the spectrum the classifier is given (49 magnitudes under the thesis profile).\n\nExamples:\n  hapticlab plot trace recordings/thesis-sim/S2/S2_001.csv.gz --out s2.png\n  hapticlab plot trace recordings/thesis-sim/S4/S4_001.csv.gz -p profiles/thesis.toml --out s4.svg"
+        after_help = "The top half is the recorded trace against distance along the scan, with the profile's analysis window shaded and the resampled signal over it, one panel for each channel the profile analyses (`channel`, then `channels`); the bottom half is each channel's spectrum, with the bins the classifier is given in black (49 magnitudes under the thesis profile). The key is a line under the title.\n\nExamples:\n  hapticlab plot trace recordings/thesis-sim/S2/S2_001.csv.gz --out s2.png\n  hapticlab plot trace recordings/thesis-sim/S4/S4_001.csv.gz -p profiles/thesis.toml --out s4.svg"
     )]
     Trace {
         #[command(flatten)]
@@ -223,15 +224,25 @@ enum Data {
 struct Trace {
     title: String,
     axis_name: String,
-    channel: String,
     axis: Vec<f64>,
-    signal: Vec<f64>,
     window: [f64; 2],
-    resampled: Vec<(f64, f64)>,
-    spectrum: Vec<(f64, f64)>,
+    /// The profile's `channel`, then each of its `channels`.
+    channels: Vec<TraceChannel>,
     kept: [usize; 2],
     freq_unit: String,
     kind: String,
+    /// The feature family: a spectrum's kept bins are the features; the
+    /// other families' are not drawn, and the key says so.
+    family: FeatureFamily,
+}
+
+/// One analysed channel of a trace: its recorded values, the points the
+/// analysis resampled, and the spectrum it gives the classifier.
+struct TraceChannel {
+    name: String,
+    signal: Vec<f64>,
+    resampled: Vec<(f64, f64)>,
+    spectrum: Vec<(f64, f64)>,
 }
 
 /// An evaluation's confusion matrix.
@@ -239,6 +250,9 @@ struct Confusion {
     labels: Vec<String>,
     confusion: Vec<Vec<f64>>,
     accuracy: f64,
+    /// How the counts were made, as the report says it ("5-fold
+    /// cross-validation, seed 0"; a holdout's sizes).
+    validation: String,
 }
 
 /// A few recordings' features, class by class.
@@ -295,38 +309,49 @@ impl Data {
                 let lp = load_profile(profile)?;
                 let a = &lp.profile.analysis;
                 let rec = recording::read(file).map_err(bad)?;
-                let mut fx = FeatureExtractor::new(a);
-                features_of(&rec, file, &mut fx)?;
                 let axis_raw = rec.column(&a.axis).unwrap_or_default();
-                let signal = rec.column(&a.channel).unwrap_or_default().to_vec();
                 // Distance along travel from the first sample, as the analysis sees it.
                 let (o, l) = (axis_raw[0], axis_raw[axis_raw.len() - 1]);
                 let s = if l >= o { 1.0 } else { -1.0 };
                 let axis: Vec<f64> = axis_raw.iter().map(|x| s * (x - o)).collect();
-                let resampled = fx
-                    .resampled()
-                    .iter()
-                    .enumerate()
-                    .map(|(i, &v)| (fx.grid_position(i), v))
-                    .collect();
-                let spectrum = fx
-                    .spectrum()
-                    .iter()
-                    .enumerate()
-                    .map(|(k, &v)| (fx.frequency(k), v))
-                    .collect();
+                // Each channel analysed alone, as the analysis does it
+                // before it puts their features side by side.
+                let mut channels = Vec::new();
+                for name in std::iter::once(&a.channel).chain(&a.channels) {
+                    let one = crate::profile::Analysis {
+                        channel: name.clone(),
+                        channels: Vec::new(),
+                        ..a.clone()
+                    };
+                    let mut fx = FeatureExtractor::new(&one);
+                    features_of(&rec, file, &mut fx)?;
+                    channels.push(TraceChannel {
+                        name: name.clone(),
+                        signal: rec.column(name).unwrap_or_default().to_vec(),
+                        resampled: fx
+                            .resampled()
+                            .iter()
+                            .enumerate()
+                            .map(|(i, &v)| (fx.grid_position(i), v))
+                            .collect(),
+                        spectrum: fx
+                            .spectrum()
+                            .iter()
+                            .enumerate()
+                            .map(|(k, &v)| (fx.frequency(k), v))
+                            .collect(),
+                    });
+                }
                 Ok(Data::Trace(Trace {
                     title: format!("{} ({})", file.display(), label_of(&rec, file)?),
                     axis_name: a.axis.clone(),
-                    channel: a.channel.clone(),
                     axis,
-                    signal,
                     window: a.window,
-                    resampled,
-                    spectrum,
+                    channels,
                     kept: a.kept_bins(),
                     freq_unit: a.frequency_unit().to_string(),
                     kind: format!("{:?}", a.spectrum).to_lowercase(),
+                    family: a.features,
                 }))
             }
             Figure::Confusion { report } => {
@@ -350,10 +375,20 @@ impl Data {
                         report.display()
                     )));
                 }
+                let files = |key: &str| v[key].as_array().map_or(0, Vec::len);
+                let validation = match v["method"].as_str() {
+                    Some(method) => method.to_string(),
+                    None => format!(
+                        "holdout: {} training, {} test recording(s)",
+                        files("train"),
+                        files("test")
+                    ),
+                };
                 Ok(Data::Confusion(Confusion {
                     labels,
                     confusion,
                     accuracy,
+                    validation,
                 }))
             }
             Figure::Features {
@@ -422,115 +457,169 @@ impl Data {
 }
 
 impl Trace {
-    /// The signal over the analysis window above, its spectrum below (the
-    /// thesis's Figs 4.5–4.8).
+    /// Each channel's signal over the analysis window above, one panel a
+    /// channel; their spectra below, side by side (the thesis's Figs
+    /// 4.5–4.8). The key is a line under the title, so it never covers
+    /// the data.
     fn draw<DB: DrawingBackend>(&self, root: &Area<DB>) -> Result<(), Failure>
     where
         DB::ErrorType: 'static,
     {
         let root = root.titled(&self.title, ("sans-serif", 20)).map_err(fail)?;
-        let (top, bottom) = root.split_vertically(root.dim_in_pixel().1 / 2);
-        self.draw_signal(&top)?;
-        self.draw_spectrum(&bottom)
+        let lines = "grey: recorded · black: resampled · shaded: analysis window";
+        let family = match self.family {
+            _ if self.channels.iter().all(|c| c.spectrum.is_empty()) => None,
+            FeatureFamily::Spectrum => Some("spectrum bars: black kept as features, grey left out"),
+            FeatureFamily::Kernels => Some(
+                "the features are random kernels of the black line: the spectrum (grey) is not used",
+            ),
+            FeatureFamily::Quantiles => Some(
+                "the features are interval quantiles of the black line: the spectrum (grey) is not used",
+            ),
+        };
+        let mut root = root.titled(lines, LABELS).map_err(fail)?;
+        if let Some(family) = family {
+            root = root.titled(family, LABELS).map_err(fail)?;
+        }
+        let spectra = self.channels.iter().any(|c| !c.spectrum.is_empty());
+        let (top, bottom) = if spectra {
+            root.split_vertically(root.dim_in_pixel().1 / 2)
+        } else {
+            let h = root.dim_in_pixel().1;
+            root.split_vertically(h)
+        };
+        let n = self.channels.len().max(1);
+        let rows = top.split_evenly((n, 1));
+        for (i, (area, channel)) in rows.iter().zip(&self.channels).enumerate() {
+            self.draw_signal(area, channel, i + 1 == n)?;
+        }
+        if spectra {
+            let columns = bottom.split_evenly((1, n));
+            for (area, channel) in columns.iter().zip(&self.channels) {
+                self.draw_spectrum(area, channel, n > 1)?;
+            }
+        }
+        Ok(())
     }
 
-    /// The recorded and the resampled signal, the window shaded.
-    fn draw_signal<DB: DrawingBackend>(&self, top: &Area<DB>) -> Result<(), Failure>
+    /// One channel's recorded and resampled signal, the window shaded;
+    /// the distance axis described under the last panel only.
+    fn draw_signal<DB: DrawingBackend>(
+        &self,
+        area: &Area<DB>,
+        channel: &TraceChannel,
+        last: bool,
+    ) -> Result<(), Failure>
     where
         DB::ErrorType: 'static,
     {
-        let Trace {
-            axis_name,
-            channel,
-            axis,
+        let (axis_name, axis, window) = (&self.axis_name, &self.axis, &self.window);
+        let TraceChannel {
+            name,
             signal,
-            window,
             resampled,
             ..
-        } = self;
+        } = channel;
         let (xu, xs) = unit_of(axis_name);
-        let (yu, ys) = unit_of(channel);
+        let (yu, ys) = unit_of(name);
         let xmax = axis.iter().fold(f64::MIN, |m, v| m.max(*v)) * xs;
-        let (ymin, ymax) = signal.iter().fold((f64::MAX, f64::MIN), |(a, b), v| {
-            (a.min(*v * ys), b.max(*v * ys))
-        });
+        let xmax = xmax.max(window[1] * xs);
+        // Every value drawn is inside the axes: the range holds the
+        // recorded and the resampled values (finite ones; a gap is a gap).
+        let (ymin, ymax) = signal
+            .iter()
+            .chain(resampled.iter().map(|(_, v)| v))
+            .filter(|v| v.is_finite())
+            .fold((f64::MAX, f64::MIN), |(a, b), v| {
+                (a.min(*v * ys), b.max(*v * ys))
+            });
+        let (ymin, ymax) = if ymin <= ymax {
+            (ymin, ymax)
+        } else {
+            (-1.0, 1.0)
+        };
         let pad = (ymax - ymin).max(1e-12) * 0.05;
-        let mut c = ChartBuilder::on(top)
-            .margin(10)
-            .x_label_area_size(45)
+        let (lo, hi) = (ymin - pad, ymax + pad);
+        let mut c = ChartBuilder::on(area)
+            .margin(8)
+            .x_label_area_size(if last { 45 } else { 25 })
             .y_label_area_size(70)
-            .build_cartesian_2d(0.0..xmax.max(window[1] * xs), (ymin - pad)..(ymax + pad))
+            .build_cartesian_2d(0.0..xmax, lo..hi)
             .map_err(fail)?;
+        let x_desc = if last {
+            format!("distance along {axis_name} from the scan's start ({xu})").replace(" ()", "")
+        } else {
+            String::new()
+        };
+        let rows = self.channels.len().max(1);
         c.configure_mesh()
             .disable_mesh()
-            .x_desc(
-                format!("distance along {axis_name} from the scan's start ({xu})")
-                    .replace(" ()", ""),
-            )
+            .y_labels((10 / rows).max(3))
+            .x_desc(x_desc)
             .y_desc(if yu.is_empty() {
-                channel.clone()
+                name.clone()
             } else {
-                format!("{channel} ({yu})")
+                format!("{name} ({yu})")
             })
             .label_style(LABELS)
             .draw()
             .map_err(fail)?;
         c.draw_series(std::iter::once(Rectangle::new(
-            [(window[0] * xs, ymin - pad), (window[1] * xs, ymax + pad)],
+            [(window[0] * xs, lo), (window[1] * xs, hi)],
             RGBColor(225, 225, 225).filled(),
         )))
-        .map_err(fail)?
-        .label("analysis window")
-        .legend(|(x, y)| {
-            Rectangle::new(
-                [(x, y - 6), (x + 20, y + 6)],
-                RGBColor(225, 225, 225).filled(),
-            )
-        });
-        c.draw_series(LineSeries::new(
-            axis.iter().zip(signal).map(|(a, v)| (a * xs, v * ys)),
-            GREYS[1].stroke_width(1),
-        ))
-        .map_err(fail)?
-        .label("recorded trace")
-        .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], GREYS[1]));
-        c.draw_series(LineSeries::new(
-            resampled.iter().map(|(a, v)| (a * xs, v * ys)),
-            BLACK.stroke_width(2),
-        ))
-        .map_err(fail)?
-        .label("resampled")
-        .legend(|(x, y)| PathElement::new([(x, y), (x + 20, y)], BLACK.stroke_width(2)));
-        c.configure_series_labels()
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .label_font(LABELS)
-            .draw()
-            .map_err(fail)?;
+        .map_err(fail)?;
+        // A line is broken where a value is missing, never drawn through it.
+        let runs = |points: Vec<(f64, f64)>| {
+            points
+                .split(|(x, y)| !(x.is_finite() && y.is_finite()))
+                .filter(|run| !run.is_empty())
+                .map(<[(f64, f64)]>::to_vec)
+                .collect::<Vec<_>>()
+        };
+        for run in runs(
+            axis.iter()
+                .zip(signal)
+                .map(|(a, v)| (a * xs, v * ys))
+                .collect(),
+        ) {
+            c.draw_series(LineSeries::new(run, GREYS[1].stroke_width(1)))
+                .map_err(fail)?;
+        }
+        for run in runs(resampled.iter().map(|(a, v)| (a * xs, v * ys)).collect()) {
+            c.draw_series(LineSeries::new(run, BLACK.stroke_width(2)))
+                .map_err(fail)?;
+        }
         Ok(())
     }
 
-    /// The spectrum, the bins kept black and the rest grey.
-    fn draw_spectrum<DB: DrawingBackend>(&self, bottom: &Area<DB>) -> Result<(), Failure>
+    /// One channel's spectrum, the bins kept black and the rest grey.
+    fn draw_spectrum<DB: DrawingBackend>(
+        &self,
+        area: &Area<DB>,
+        channel: &TraceChannel,
+        named: bool,
+    ) -> Result<(), Failure>
     where
         DB::ErrorType: 'static,
     {
-        let Trace {
-            spectrum,
-            kept,
-            freq_unit,
-            kind,
-            ..
-        } = self;
+        let (kept, freq_unit, kind) = (&self.kept, &self.freq_unit, &self.kind);
+        let spectrum = &channel.spectrum;
         let fmax = spectrum.last().map_or(1.0, |p| p.0).max(1e-12);
         let (smin, smax) = spectrum
             .iter()
+            .filter(|(_, v)| v.is_finite())
             .fold((f64::MAX, f64::MIN), |(a, b), (_, v)| {
                 (a.min(*v), b.max(*v))
             });
+        let (smin, smax) = if smin <= smax {
+            (smin, smax)
+        } else {
+            (0.0, 1.0)
+        };
         let smin = smin.min(0.0);
-        let mut c = ChartBuilder::on(bottom)
-            .margin(10)
+        let mut c = ChartBuilder::on(area)
+            .margin(8)
             .x_label_area_size(45)
             .y_label_area_size(70)
             .build_cartesian_2d(
@@ -538,36 +627,37 @@ impl Trace {
                 smin..(smax + (smax - smin).abs().max(1e-30) * 0.05),
             )
             .map_err(fail)?;
+        let y_desc = if named {
+            format!("{}: {kind} spectrum", channel.name)
+        } else {
+            format!("{kind} spectrum")
+        };
+        let columns = self.channels.len().max(1);
         c.configure_mesh()
             .disable_mesh()
+            .x_labels((10 / columns).max(3))
             .x_desc(format!("frequency ({freq_unit})"))
-            .y_desc(format!("{kind} spectrum"))
+            .y_desc(y_desc)
             .label_style(LABELS)
             .draw()
             .map_err(fail)?;
-        c.draw_series(spectrum.iter().enumerate().map(|(k, &(f, v))| {
-            let inside = k >= kept[0] && k <= kept[1];
-            let style = if inside {
-                BLACK.filled()
-            } else {
-                GREYS[2].filled()
-            };
-            let w = fmax / spectrum.len() as f64 * 0.35;
-            Rectangle::new([(f - w, smin), (f + w, v)], style)
-        }))
-        .map_err(fail)?
-        .label("bins kept as features")
-        .legend(|(x, y)| Rectangle::new([(x, y - 6), (x + 20, y + 6)], BLACK.filled()));
-        c.draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
-            .map_err(fail)?
-            .label("bins left out")
-            .legend(|(x, y)| Rectangle::new([(x, y - 6), (x + 20, y + 6)], GREYS[2].filled()));
-        c.configure_series_labels()
-            .background_style(WHITE.mix(0.9))
-            .border_style(BLACK)
-            .label_font(LABELS)
-            .draw()
-            .map_err(fail)?;
+        c.draw_series(
+            spectrum
+                .iter()
+                .enumerate()
+                .filter(|(_, (_, v))| v.is_finite())
+                .map(|(k, &(f, v))| {
+                    let inside = k >= kept[0] && k <= kept[1];
+                    let style = if inside {
+                        BLACK.filled()
+                    } else {
+                        GREYS[2].filled()
+                    };
+                    let w = fmax / spectrum.len() as f64 * 0.35;
+                    Rectangle::new([(f - w, smin), (f + w, v)], style)
+                }),
+        )
+        .map_err(fail)?;
         Ok(())
     }
 }
@@ -582,10 +672,12 @@ impl Confusion {
             labels,
             confusion,
             accuracy,
+            validation,
         } = self;
         let n = labels.len();
         let title = format!("Confusion matrix (accuracy {:.1} %)", 100.0 * accuracy);
         let root = root.titled(&title, ("sans-serif", 22)).map_err(fail)?;
+        let root = root.titled(validation, LABELS).map_err(fail)?;
         let mut c = ChartBuilder::on(&root)
             .margin(20)
             .x_label_area_size(50)
