@@ -511,14 +511,7 @@ impl Search<'_> {
         kinds.sort_by_key(|&(m, s)| (m as u8, s));
         kinds.dedup();
         // Every recording an inner fold trains or tests on.
-        let mut searched: Vec<usize> = self
-            .inner
-            .iter()
-            .flatten()
-            .flat_map(|p| p.train.iter().chain(&p.test).copied())
-            .collect();
-        searched.sort_unstable();
-        searched.dedup();
+        let searched = parts::recordings_of(self.inner.iter().flatten());
         // One table of window pairs per metric scored unscaled.
         let tables: Vec<(Metric, Option<Pairwise>)> = kinds
             .iter()
@@ -867,25 +860,9 @@ impl SharedKernels {
         if common.is_empty() {
             return None;
         }
-        let examples = |recordings: &[usize]| -> Vec<TrainingExample> {
-            recordings
-                .iter()
-                .flat_map(|&r| {
-                    features[r].iter().map(move |w| TrainingExample {
-                        file: scans[r].file.clone(),
-                        label: scans[r].label.clone(),
-                        features: w.clone(),
-                    })
-                })
-                .collect()
-        };
+        let examples = |recordings: &[usize]| examples_of(scans, features, recordings);
         let kernels = crate::classify::fit_kernels(analysis, &examples(&common)).ok()??;
-        let mut used: Vec<usize> = folds
-            .iter()
-            .flat_map(|f| f.train.iter().chain(&f.test).copied())
-            .collect();
-        used.sort_unstable();
-        used.dedup();
+        let used = parts::recordings_of(folds);
         let mut transformed =
             crate::classify::fitted_rows(Some(&kernels), &examples(&used)).into_iter();
         let rows = used
@@ -894,6 +871,25 @@ impl SharedKernels {
             .collect();
         Some(SharedKernels { kernels, rows })
     }
+}
+
+/// The windows of `recordings` as training examples, recording after
+/// recording, each's windows in order.
+fn examples_of(
+    scans: &[Entry],
+    features: &score::Features,
+    recordings: &[usize],
+) -> Vec<TrainingExample> {
+    recordings
+        .iter()
+        .flat_map(|&r| {
+            features[r].iter().map(move |w| TrainingExample {
+                file: scans[r].file.clone(),
+                label: scans[r].label.clone(),
+                features: w.clone(),
+            })
+        })
+        .collect()
 }
 
 /// What models of each of `settings` (one analysis, several classifiers)
@@ -909,16 +905,7 @@ fn predict_part(
     shared: Option<&SharedKernels>,
     (train, test): (&[usize], &[usize]),
 ) -> Result<Vec<Result<Vec<PredictionRow>, TuneError>>, TuneError> {
-    let examples: Vec<TrainingExample> = train
-        .iter()
-        .flat_map(|&r| {
-            features[r].iter().map(move |w| TrainingExample {
-                file: scans[r].file.clone(),
-                label: scans[r].label.clone(),
-                features: w.clone(),
-            })
-        })
-        .collect();
+    let examples = examples_of(scans, features, train);
     let classifiers: Vec<crate::profile::Classifier> = settings
         .iter()
         .map(|s| {

@@ -24,7 +24,7 @@
 use serde::Serialize;
 
 use super::Part;
-use super::parts::trained_on_by_all;
+use super::parts::{recordings_of, trained_on_by_all};
 use super::space::Setting;
 use crate::analysis::kernels::{KERNEL_COUNT, KernelLayout};
 use crate::classify::{MAX_COMPARISONS, comparisons};
@@ -63,13 +63,7 @@ impl Work {
                 transformed += folds.iter().map(size).sum::<usize>();
                 fits += folds.len();
             } else {
-                let mut used: Vec<usize> = folds
-                    .iter()
-                    .flat_map(|f| f.train.iter().chain(&f.test).copied())
-                    .collect();
-                used.sort_unstable();
-                used.dedup();
-                transformed += used.len();
+                transformed += recordings_of(folds).len();
                 fits += 1;
             }
         }

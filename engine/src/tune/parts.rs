@@ -247,3 +247,14 @@ pub fn trained_on_by_all(folds: &[Part]) -> Vec<usize> {
         _ => Vec::new(),
     }
 }
+
+/// Every recording `folds` train or test on, sorted, each once.
+pub fn recordings_of<'a>(folds: impl IntoIterator<Item = &'a Part>) -> Vec<usize> {
+    let mut used: Vec<usize> = folds
+        .into_iter()
+        .flat_map(|f| f.train.iter().chain(&f.test).copied())
+        .collect();
+    used.sort_unstable();
+    used.dedup();
+    used
+}

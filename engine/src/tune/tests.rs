@@ -718,18 +718,7 @@ fn forward_folds_share_kernels_fitted_on_what_every_fold_trains_on() {
             .all(|f| f.test.iter().all(|t| !common.contains(t)))
     );
     let (s, features) = (&s[..], &features);
-    let examples = |recordings: &[usize]| -> Vec<TrainingExample> {
-        recordings
-            .iter()
-            .flat_map(|&r| {
-                features[r].iter().map(move |w| TrainingExample {
-                    file: s[r].file.clone(),
-                    label: s[r].label.clone(),
-                    features: w.clone(),
-                })
-            })
-            .collect()
-    };
+    let examples = |recordings: &[usize]| examples_of(s, features, recordings);
     let fitted = crate::classify::fit_kernels(&analysis, &examples(&common))
         .unwrap()
         .unwrap();
@@ -737,10 +726,12 @@ fn forward_folds_share_kernels_fitted_on_what_every_fold_trains_on() {
     // Every window of the folds transformed once, as the kernels transform it.
     let mut used: Vec<usize> = inner
         .iter()
-        .flat_map(|f| f.train.iter().chain(&f.test).copied())
+        .flat_map(|f| f.train.iter().chain(&f.test))
+        .copied()
         .collect();
     used.sort_unstable();
     used.dedup();
+    assert_eq!(used, parts::recordings_of(&inner));
     assert_eq!(shared.rows.keys().copied().collect::<Vec<_>>(), used);
     let mut conv = fitted.convolution();
     for (r, rows) in &shared.rows {
