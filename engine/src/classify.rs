@@ -574,10 +574,10 @@ impl Model {
         Model::train_each_with(profile_name, analysis, classifiers, examples, None)
     }
 
-    /// [`Model::train_each`] with kernels fitted before, on training
-    /// windows of the caller's that are among `examples` (tune's forward
-    /// inner folds share the windows every fold trains on), and `rows`
-    /// each example's window transformed by them.
+    /// [`Model::train_each`] with kernels the caller fitted before, on
+    /// training windows only (tune's forward inner folds: the windows every
+    /// fold trains on), and `rows` each example's window transformed by
+    /// them; nothing is fitted or transformed again.
     #[allow(clippy::type_complexity)]
     pub fn train_each_transformed(
         profile_name: &str,

@@ -26,6 +26,9 @@
 //! standardisation ([`score`]). The budget
 //! samples feature settings (seeded), each scored with every classifier
 //! setting, since those cost almost nothing once the features exist.
+//! Under a time split the random kernels are fitted once per part, on the
+//! trials every forward inner fold trains on, and each recording is
+//! transformed once for all the folds.
 //! Before any work, the settings `evaluate` would refuse on these
 //! recordings and the kernel settings estimated over
 //! [`Options::max_minutes`] of CPU are left out, and the report says so
@@ -894,7 +897,8 @@ fn examples_of(
 
 /// What models of each of `settings` (one analysis, several classifiers)
 /// trained on the recordings `train` say of each recording in `test`; the
-/// kernels, when there are some, fitted once for them all. The outer error
+/// kernels, when there are some, fitted once for them all (or taken with
+/// every window's transform from `shared`). The outer error
 /// is the shared part's, the inner each setting's.
 #[allow(clippy::type_complexity)]
 fn predict_part(
