@@ -231,8 +231,9 @@ struct Trace {
     kept: [usize; 2],
     freq_unit: String,
     kind: String,
-    /// The feature family: a spectrum's kept bins are the features; the
-    /// other families' are not drawn, and the key says so.
+    /// The feature family: a spectrum's kept bins are the features; under
+    /// the other families the spectrum is drawn grey, and the key says it
+    /// is not the features.
     family: FeatureFamily,
 }
 
@@ -456,6 +457,14 @@ impl Data {
     }
 }
 
+/// The least and the greatest of the finite `values`; `None` when none is.
+fn finite_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
+    values.filter(|v| v.is_finite()).fold(None, |r, v| match r {
+        None => Some((v, v)),
+        Some((lo, hi)) => Some((v.min(lo), v.max(hi))),
+    })
+}
+
 impl Trace {
     /// Each channel's signal over the analysis window above, one panel a
     /// channel; their spectra below, side by side (the thesis's Figs
@@ -466,9 +475,10 @@ impl Trace {
         DB::ErrorType: 'static,
     {
         let root = root.titled(&self.title, ("sans-serif", 20)).map_err(fail)?;
+        let spectra = self.channels.iter().any(|c| !c.spectrum.is_empty());
         let lines = "grey: recorded · black: resampled · shaded: analysis window";
         let family = match self.family {
-            _ if self.channels.iter().all(|c| c.spectrum.is_empty()) => None,
+            _ if !spectra => None,
             FeatureFamily::Spectrum => Some("spectrum bars: black kept as features, grey left out"),
             FeatureFamily::Kernels => Some(
                 "the features are random kernels of the black line: the spectrum (grey) is not used",
@@ -481,19 +491,18 @@ impl Trace {
         if let Some(family) = family {
             root = root.titled(family, LABELS).map_err(fail)?;
         }
-        let spectra = self.channels.iter().any(|c| !c.spectrum.is_empty());
         let (top, bottom) = if spectra {
-            root.split_vertically(root.dim_in_pixel().1 / 2)
+            let (top, bottom) = root.split_vertically(root.dim_in_pixel().1 / 2);
+            (top, Some(bottom))
         } else {
-            let h = root.dim_in_pixel().1;
-            root.split_vertically(h)
+            (root, None)
         };
         let n = self.channels.len().max(1);
         let rows = top.split_evenly((n, 1));
         for (i, (area, channel)) in rows.iter().zip(&self.channels).enumerate() {
             self.draw_signal(area, channel, i + 1 == n)?;
         }
-        if spectra {
+        if let Some(bottom) = bottom {
             let columns = bottom.split_evenly((1, n));
             for (area, channel) in columns.iter().zip(&self.channels) {
                 self.draw_spectrum(area, channel, n > 1)?;
@@ -526,18 +535,13 @@ impl Trace {
         let xmax = xmax.max(window[1] * xs);
         // Every value drawn is inside the axes: the range holds the
         // recorded and the resampled values (finite ones; a gap is a gap).
-        let (ymin, ymax) = signal
-            .iter()
-            .chain(resampled.iter().map(|(_, v)| v))
-            .filter(|v| v.is_finite())
-            .fold((f64::MAX, f64::MIN), |(a, b), v| {
-                (a.min(*v * ys), b.max(*v * ys))
-            });
-        let (ymin, ymax) = if ymin <= ymax {
-            (ymin, ymax)
-        } else {
-            (-1.0, 1.0)
-        };
+        let (ymin, ymax) = finite_range(
+            signal
+                .iter()
+                .chain(resampled.iter().map(|(_, v)| v))
+                .map(|v| v * ys),
+        )
+        .unwrap_or((-1.0, 1.0));
         let pad = (ymax - ymin).max(1e-12) * 0.05;
         let (lo, hi) = (ymin - pad, ymax + pad);
         let mut c = ChartBuilder::on(area)
@@ -606,17 +610,7 @@ impl Trace {
         let (kept, freq_unit, kind) = (&self.kept, &self.freq_unit, &self.kind);
         let spectrum = &channel.spectrum;
         let fmax = spectrum.last().map_or(1.0, |p| p.0).max(1e-12);
-        let (smin, smax) = spectrum
-            .iter()
-            .filter(|(_, v)| v.is_finite())
-            .fold((f64::MAX, f64::MIN), |(a, b), (_, v)| {
-                (a.min(*v), b.max(*v))
-            });
-        let (smin, smax) = if smin <= smax {
-            (smin, smax)
-        } else {
-            (0.0, 1.0)
-        };
+        let (smin, smax) = finite_range(spectrum.iter().map(|(_, v)| *v)).unwrap_or((0.0, 1.0));
         let smin = smin.min(0.0);
         let mut c = ChartBuilder::on(area)
             .margin(8)
