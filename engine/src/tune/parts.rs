@@ -238,12 +238,31 @@ pub fn inner_parts(
 /// (shuffled, grouped and block folds).
 pub fn trained_on_by_all(folds: &[Part]) -> Vec<usize> {
     match folds.split_first() {
-        Some((first, rest)) if !rest.is_empty() => first
-            .train
-            .iter()
-            .copied()
-            .filter(|r| rest.iter().all(|f| f.train.contains(r)))
-            .collect(),
+        Some((first, rest)) if !rest.is_empty() => {
+            // `trained_by[r]`: how many of the other folds, one after
+            // another from the first, train on recording `r` (each fold
+            // counted once): one pass over each fold, not a search of
+            // every fold for every recording.
+            let top = folds
+                .iter()
+                .flat_map(|f| f.train.iter())
+                .max()
+                .map_or(0, |&r| r + 1);
+            let mut trained_by = vec![0usize; top];
+            for (i, f) in rest.iter().enumerate() {
+                for &r in &f.train {
+                    if trained_by[r] == i {
+                        trained_by[r] = i + 1;
+                    }
+                }
+            }
+            first
+                .train
+                .iter()
+                .copied()
+                .filter(|&r| trained_by[r] == rest.len())
+                .collect()
+        }
         _ => Vec::new(),
     }
 }

@@ -777,3 +777,35 @@ fn forward_folds_share_kernels_fitted_on_what_every_fold_trains_on() {
     let (shuffled, _) = inner_parts(s, None, &part.train, 0, InnerSplit::Shuffled).unwrap();
     assert!(SharedKernels::fit(&analysis, s, features, &shuffled).is_none());
 }
+
+#[test]
+fn what_every_fold_trains_on_is_found_as_by_asking_each_fold() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    for _ in 0..200 {
+        let recordings = rng.random_range(1..40usize);
+        let folds: Vec<Part> = (0..rng.random_range(0..6usize))
+            .map(|_| {
+                let pick = |rng: &mut rand_chacha::ChaCha8Rng| -> Vec<usize> {
+                    (0..rng.random_range(0..recordings + 5))
+                        .map(|_| rng.random_range(0..recordings))
+                        .collect()
+                };
+                Part {
+                    train: pick(&mut rng),
+                    test: pick(&mut rng),
+                }
+            })
+            .collect();
+        let want: Vec<usize> = match folds.split_first() {
+            Some((first, rest)) if !rest.is_empty() => first
+                .train
+                .iter()
+                .copied()
+                .filter(|r| rest.iter().all(|f| f.train.contains(r)))
+                .collect(),
+            _ => Vec::new(),
+        };
+        assert_eq!(parts::trained_on_by_all(&folds), want, "{folds:?}");
+    }
+}
