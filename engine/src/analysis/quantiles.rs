@@ -101,9 +101,8 @@ pub struct Quantiles {
     points: usize,
     /// Per series, its intervals.
     intervals: [Vec<[usize; 2]>; 4],
-    /// Per series, per interval, the level it is one of the dyadic
-    /// intervals of (not when it is a shifted one).
-    level_of: [Vec<Option<usize>>; 4],
+    /// Per series, per interval, where its values come sorted from.
+    source: [Vec<Source>; 4],
     /// Per series, per level, its intervals' ends.
     ends: [Vec<Vec<usize>>; 4],
     /// Per series, per level, the series with each of the level's
@@ -125,21 +124,17 @@ impl Quantiles {
                 .collect::<Vec<_>>()
         });
         let intervals = lengths.map(|n| quantile_intervals(n, QUANTILE_DEPTH));
-        let level_of = std::array::from_fn(|s| {
+        let source = std::array::from_fn(|s| {
             intervals[s]
                 .iter()
-                .map(|&[a, b]| {
-                    ends[s]
-                        .iter()
-                        .position(|e: &Vec<usize>| e.windows(2).any(|w| w[0] == a && w[1] == b))
-                })
+                .map(|&interval| Source::of(interval, &ends[s]))
                 .collect()
         });
         Quantiles {
             points,
             levels: std::array::from_fn(|s| vec![vec![0.0; lengths[s]]; ends[s].len()]),
             intervals,
-            level_of,
+            source,
             ends,
             spectrum: MagnitudeSpectrum::new(points),
             series: lengths.map(|n| vec![0.0; n]),
@@ -193,12 +188,22 @@ impl Quantiles {
         self.sort_levels();
         let mut f = 0;
         for (s, (series, intervals)) in self.series.iter().zip(&self.intervals).enumerate() {
-            for (&[a, b], level) in intervals.iter().zip(&self.level_of[s]) {
+            for (&[a, b], source) in intervals.iter().zip(&self.source[s]) {
                 let part = &series[a..b];
                 let q = quantiles_in(part.len());
-                let sorted = match level {
-                    Some(k) => &self.levels[s][*k][a..b],
-                    None => {
+                let sorted = match *source {
+                    Source::Level(k) => &self.levels[s][k][a..b],
+                    Source::Merged { level, child } => {
+                        let e = &self.ends[s][level];
+                        let (ca, mid, cb) = (e[child], e[child + 1], e[child + 2]);
+                        let run = &self.levels[s][level];
+                        self.sorted.clear();
+                        self.sorted.resize(cb - ca, 0.0);
+                        merge(&run[ca..mid], &run[mid..cb], &mut self.sorted);
+                        refit(&mut self.sorted, series, [ca, cb], [a, b]);
+                        &self.sorted[..]
+                    }
+                    Source::Sorted => {
                         self.sorted.clear();
                         self.sorted.extend_from_slice(part);
                         self.sorted.sort_unstable_by(f64::total_cmp);
@@ -219,6 +224,62 @@ impl Quantiles {
             }
         }
         debug_assert_eq!(f, out.len());
+    }
+}
+
+/// Where an interval's values come sorted from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Source {
+    /// It is one of level `k`'s intervals, sorted with the level.
+    Level(usize),
+    /// A shifted interval: within two values at each end of `level`'s
+    /// intervals `child` and `child + 1`, which are merged and the few
+    /// values either side taken out or put in ([`refit`]).
+    Merged { level: usize, child: usize },
+    /// Neither: sorted on its own.
+    Sorted,
+}
+
+impl Source {
+    /// How the interval `[a, b)` of a series whose levels end at `ends` is
+    /// sorted.
+    fn of([a, b]: [usize; 2], ends: &[Vec<usize>]) -> Source {
+        if let Some(k) = ends
+            .iter()
+            .position(|e| e.windows(2).any(|w| w[0] == a && w[1] == b))
+        {
+            return Source::Level(k);
+        }
+        let near = |x: usize, y: usize| x.abs_diff(y) <= 2;
+        for (level, e) in ends.iter().enumerate().rev() {
+            let child = e.partition_point(|&end| end + 2 < a);
+            if child + 2 < e.len() && near(e[child], a) && near(e[child + 2], b) {
+                return Source::Merged { level, child };
+            }
+        }
+        Source::Sorted
+    }
+}
+
+/// `sorted`, the values of `series[from[0]..from[1]]` in order, made the
+/// values of `series[to[0]..to[1]]` in order: the values of the first
+/// range outside the second taken out, then those of the second outside
+/// the first put in, each where [`f64::total_cmp`] places it (a value
+/// equal to another in that order has the same bits, so which of two
+/// equal ones goes does not matter).
+fn refit(sorted: &mut Vec<f64>, series: &[f64], from: [usize; 2], to: [usize; 2]) {
+    let at = |sorted: &[f64], v: f64| sorted.partition_point(|x| x.total_cmp(&v).is_lt());
+    let [ca, cb] = from;
+    let [a, b] = to;
+    let gone = (ca..a.min(cb)).chain(b.max(ca)..cb);
+    for i in gone {
+        let j = at(sorted, series[i]);
+        sorted.remove(j);
+    }
+    let new = (a..ca.min(b)).chain(cb.max(a)..b);
+    for i in new {
+        let j = at(sorted, series[i]);
+        sorted.insert(j, series[i]);
     }
 }
 
@@ -329,7 +390,7 @@ mod tests {
     /// ties and signed zeros.
     #[test]
     fn merged_levels_give_each_interval_sorted_on_its_own_to_the_bit() {
-        for n in [4, 5, 63, 100, 257, 1000] {
+        for n in [4, 5, 6, 7, 9, 17, 31, 63, 100, 257, 1000, 1023, 13178] {
             let x: Vec<f64> = (0..n)
                 .map(|j| match j % 11 {
                     3 => 0.0,
@@ -359,12 +420,37 @@ mod tests {
             }
             let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&out), bits(&want), "{n} points");
-            // Some intervals of each series come from the merged levels.
+            // Some intervals of each series come from the merged levels,
+            // and beyond 16 points every shifted one from merging two.
             assert!(
-                qt.level_of
+                qt.source
                     .iter()
-                    .all(|l| l.iter().filter(|k| k.is_some()).count() > 1)
+                    .all(|l| { l.iter().filter(|k| matches!(k, Source::Level(_))).count() > 1 })
             );
+            if n > 16 {
+                let merged = qt.source.iter().flatten();
+                assert!(
+                    merged
+                        .filter(|k| matches!(k, Source::Merged { .. }))
+                        .count()
+                        >= 4
+                );
+                for (s, sources) in qt.source.iter().enumerate() {
+                    let levels = qt.ends[s].len();
+                    for (&source, &[a, b]) in sources.iter().zip(&qt.intervals[s]) {
+                        let shifted_above_deepest = !matches!(source, Source::Level(_))
+                            && qt.ends[s][..levels - 1]
+                                .iter()
+                                .any(|e| e.windows(2).any(|w| w[1] - w[0] == b - a));
+                        if shifted_above_deepest {
+                            assert!(
+                                matches!(source, Source::Merged { .. }),
+                                "{n} points, series {s}, [{a}, {b}): {source:?}"
+                            );
+                        }
+                    }
+                }
+            }
         }
     }
 
