@@ -56,7 +56,7 @@ use thiserror::Error;
 
 use crate::classify::{ClassifyError, Model, TrainingExample, plural};
 use crate::dataset::{DatasetError, Entry};
-use crate::evaluate::plan::{Overrides, Plan};
+use crate::evaluate::plan::{Fits, Overrides, Plan};
 use crate::evaluate::{EvaluateError, PredictionRow, Report, count};
 use crate::profile::options::same_grid;
 use crate::profile::tuned::{TunedOn, fingerprint};
@@ -701,7 +701,9 @@ pub fn tune(
         ));
     }
     let work = cost::Work::of(&parts, &inner);
-    let (all, left_out) = cost::affordable(all, scans.len(), work, options.max_minutes);
+    let per_label = Fits::per_label(scans.iter().map(|e| (e.label.as_str(), e.file.as_str())));
+    let fits = Fits::of(&plan, profile.evaluation.train_per_class, &per_label);
+    let (all, left_out) = cost::affordable(all, fits, work, options.max_minutes);
     if all.is_empty() {
         let why: Vec<String> = left_out
             .iter()

@@ -21,7 +21,7 @@ use crate::classify::{KFallback, Model, TrainingExample};
 use crate::dataset::Unusable;
 use crate::dataset::{self, Entry, Keep, Options, Skipped};
 use crate::folds::{Segment, Shared};
-use crate::profile::{Analysis, Profile, SplitMethod};
+use crate::profile::{Analysis, Method, Profile, SplitMethod};
 
 fn bad(m: impl std::fmt::Display) -> EvaluateError {
     EvaluateError::Input(m.to_string())
@@ -346,21 +346,123 @@ pub fn validate(
     validate_with_votes(profile, examples, related, plan).map(|v| v.report)
 }
 
-/// At most this many feature-value comparisons (vectors² × features, what
-/// a k-NN validation over every vector costs): the classifier's limit.
+/// At most this many value operations in a validation: feature-value
+/// comparisons for k-NN (vectors² × features), multiply-adds of the fits
+/// for ridge and LDA ([`validation_work`]). The classifier's limit.
 pub const MAX_COMPARISONS: f64 = crate::classify::MAX_COMPARISONS;
 
-/// Refuses a validation that would compare more than [`MAX_COMPARISONS`]
-/// feature values, before any is made.
-pub fn check_comparisons(vectors: usize, features: usize) -> Result<(), EvaluateError> {
-    let comparisons = crate::classify::comparisons(vectors, vectors, features);
-    if comparisons > MAX_COMPARISONS {
-        return Err(bad(format!(
-            "validating {vectors} feature vectors of {features} features compares each with every other: {comparisons:.1e} value comparisons, over the limit of {MAX_COMPARISONS:.0e} that keeps evaluate within seconds; use a longer windows.hop or a shorter windows.length (fewer sub-windows), fewer bins, or fewer recordings (at most about {} vectors of {features} features)",
-            (MAX_COMPARISONS / features.max(1) as f64).sqrt() as usize
-        )));
+/// How a validation splits the recordings: the models it fits and the
+/// most recordings one of them trains on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Fits {
+    /// The recordings validated.
+    pub recordings: usize,
+    /// Models fitted: one for a holdout, one per fold, one per recording
+    /// (or group) left out.
+    pub fits: usize,
+    /// The most recordings one model trains on.
+    pub train: usize,
+}
+
+impl Fits {
+    /// The fits `plan` makes over `per_label` recordings of each label:
+    /// a holdout trains on `train_per_class` of each label once; k-fold
+    /// on all but a fold, `folds` times (all but one recording with
+    /// `group_by`, whose folds may be uneven); leave-one-out on all but
+    /// one, once per recording (a bound on the groups).
+    pub fn of(plan: &Plan, train_per_class: usize, per_label: &[usize]) -> Fits {
+        let recordings: usize = per_label.iter().sum();
+        let (fits, train) = match plan.method {
+            SplitMethod::Holdout => (1, per_label.iter().map(|&n| n.min(train_per_class)).sum()),
+            SplitMethod::KFold => {
+                let folds = plan.folds.clamp(1, recordings.max(1));
+                let train = if plan.group_by.is_some() {
+                    recordings.saturating_sub(1)
+                } else {
+                    recordings - recordings / folds
+                };
+                (folds, train)
+            }
+            SplitMethod::LeaveOneOut => (recordings, recordings.saturating_sub(1)),
+        };
+        Fits {
+            recordings,
+            fits,
+            train,
+        }
     }
-    Ok(())
+
+    /// Recordings of each label, in label order, as `of` counts them.
+    pub fn per_label<'a>(labels: impl IntoIterator<Item = (&'a str, &'a str)>) -> Vec<usize> {
+        let mut files: BTreeMap<&str, std::collections::BTreeSet<&str>> = BTreeMap::new();
+        for (label, file) in labels {
+            files.entry(label).or_default().insert(file);
+        }
+        files.values().map(|f| f.len()).collect()
+    }
+}
+
+/// The value operations the limit counts in validating `method` on
+/// `vectors` feature vectors of `features`, split as `fits` says. k-NN
+/// compares every test vector with every training one: vectors² ×
+/// features at most, over the whole validation. Ridge and LDA compare
+/// nothing; they fit a model on each training part, `n` vectors of `p`
+/// features in about `n·p·min(n, p)` multiply-adds (the Gram or
+/// covariance matrix; its eigendecomposition, `min(n, p)³`, is smaller),
+/// and score each test vector in `p` per class: the largest fit is
+/// counted, which is never more than k-NN's count for the same vectors,
+/// so nothing validated before this count is refused by it.
+pub fn validation_work(method: Method, vectors: usize, features: usize, fits: Fits) -> f64 {
+    match method {
+        Method::Knn => crate::classify::comparisons(vectors, vectors, features),
+        Method::Ridge | Method::Lda => {
+            let n = training_vectors(vectors, fits) as f64;
+            let p = features as f64;
+            n * p * n.min(p)
+        }
+    }
+}
+
+/// The most vectors one fit trains on: `fits.train` recordings' share of
+/// `vectors` (never more than all of them).
+fn training_vectors(vectors: usize, fits: Fits) -> usize {
+    (fits.train * vectors.div_ceil(fits.recordings.max(1))).min(vectors)
+}
+
+/// Refuses a validation of more than [`MAX_COMPARISONS`] value operations
+/// ([`validation_work`]), before any is made.
+pub fn check_validation(
+    method: Method,
+    vectors: usize,
+    features: usize,
+    fits: Fits,
+) -> Result<(), EvaluateError> {
+    let work = validation_work(method, vectors, features, fits);
+    if work <= MAX_COMPARISONS {
+        return Ok(());
+    }
+    let fewer = "use a longer windows.hop or a shorter windows.length (fewer sub-windows), fewer bins, or fewer recordings";
+    Err(bad(match method {
+        Method::Knn => format!(
+            "validating {vectors} feature vectors of {features} features compares each with every other: {work:.1e} value comparisons, over the limit of {MAX_COMPARISONS:.0e} that keeps evaluate within seconds; {fewer} (at most about {} vectors of {features} features)",
+            (MAX_COMPARISONS / features.max(1) as f64).sqrt() as usize
+        ),
+        Method::Ridge | Method::Lda => format!(
+            "validating {} on {vectors} feature vectors of {features} features fits it {} on up to {} of them: about {work:.1e} multiply-adds a fit, over the limit of {MAX_COMPARISONS:.0e} that keeps evaluate within seconds; {fewer}",
+            crate::profile::options::plain_word(&method),
+            plural_times(fits.fits),
+            training_vectors(vectors, fits)
+        ),
+    }))
+}
+
+/// "once", "8 times".
+fn plural_times(n: usize) -> String {
+    if n == 1 {
+        "once".into()
+    } else {
+        format!("{n} times")
+    }
 }
 
 /// [`validate`], with the sub-window votes of each test recording when the
@@ -372,7 +474,13 @@ pub fn validate_with_votes(
     plan: &Plan,
 ) -> Result<Validated, EvaluateError> {
     super::check_two_labels(&examples)?;
-    check_comparisons(examples.len(), profile.analysis.fitted_feature_count())?;
+    let per_label = Fits::per_label(examples.iter().map(|e| (e.label.as_str(), e.file.as_str())));
+    check_validation(
+        profile.classifier.method,
+        examples.len(),
+        profile.analysis.fitted_feature_count(),
+        Fits::of(plan, profile.evaluation.train_per_class, &per_label),
+    )?;
     if plan.method == SplitMethod::Holdout {
         return holdout(profile, examples, related, plan).map(|h| h.pooled(plan.seed));
     }
@@ -607,4 +715,78 @@ fn validate_plain(
         plan.seed,
         plan.threads,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plan(method: SplitMethod, folds: usize) -> Plan {
+        Plan {
+            method,
+            folds,
+            group_by: None,
+            seed: 0,
+            holdout_shuffle: None,
+            threads: 1,
+            overrides: Overrides::default(),
+        }
+    }
+
+    /// The generated long IMU set with random kernels in half-second
+    /// sub-windows: 5 labels of 30 recordings, 7 sub-windows each, 9996
+    /// features. k-NN would compare 1.1e10 values; ridge and LDA under its
+    /// 21 + 9 holdout fit once on 735 vectors, 5.4e9 multiply-adds.
+    #[test]
+    fn ridge_and_lda_are_counted_by_their_fits_and_k_nn_by_its_comparisons() {
+        let (vectors, features) = (150 * 7, 9996);
+        let holdout = Fits::of(&plan(SplitMethod::Holdout, 10), 21, &[30; 5]);
+        assert_eq!(
+            holdout,
+            Fits {
+                recordings: 150,
+                fits: 1,
+                train: 105
+            }
+        );
+        let knn = check_validation(Method::Knn, vectors, features, holdout);
+        assert!(
+            knn.as_ref()
+                .is_err_and(|e| e.to_string().contains("compares each with every other")),
+            "{knn:?}"
+        );
+        for method in [Method::Ridge, Method::Lda] {
+            let work = validation_work(method, vectors, features, holdout);
+            assert_eq!(work, 735.0 * 9996.0 * 735.0);
+            assert!(check_validation(method, vectors, features, holdout).is_ok());
+        }
+        // Leave-one-out fits 150 models on 149 recordings each: 1.09e10 a
+        // fit, refused, saying so.
+        let loo = Fits::of(&plan(SplitMethod::LeaveOneOut, 10), 21, &[30; 5]);
+        assert_eq!((loo.fits, loo.train), (150, 149));
+        let e = check_validation(Method::Ridge, vectors, features, loo).unwrap_err();
+        assert!(
+            e.to_string().contains("fits it 150 times on up to 1043"),
+            "{e}"
+        );
+        // k-fold: all but a fold, once a fold: 945 vectors a fit, 8.9e9.
+        let kfold = Fits::of(&plan(SplitMethod::KFold, 10), 21, &[30; 5]);
+        assert_eq!((kfold.fits, kfold.train), (10, 135));
+        assert!(check_validation(Method::Lda, vectors, features, kfold).is_ok());
+        // Never more than k-NN's count, whatever the split.
+        for fits in [holdout, loo, kfold] {
+            for (v, p) in [(1050, 9996), (1050, 49), (7, 100_000), (20_000, 3)] {
+                assert!(
+                    validation_work(Method::Ridge, v, p, fits)
+                        <= validation_work(Method::Knn, v, p, fits)
+                );
+            }
+        }
+        // Fewer features than vectors: the covariance, n·p², not n²·p.
+        let narrow = validation_work(Method::Lda, 1050, 49, holdout);
+        assert_eq!(narrow, 735.0 * 49.0 * 49.0);
+        // Recordings of each label, counted once however many windows.
+        let pairs = [("a", "1"), ("a", "1"), ("b", "2"), ("a", "3"), ("c", "4")];
+        assert_eq!(Fits::per_label(pairs), vec![2, 1, 1]);
+    }
 }

@@ -3,7 +3,8 @@
 //!
 //! - those `evaluate` or `train` would refuse on these recordings (their
 //!   feature vectors over [`crate::dataset::check_size`]'s limit, or their
-//!   validation over [`MAX_COMPARISONS`]): a tuned profile must run on the
+//!   validation over [`MAX_COMPARISONS`] value operations, counted for
+//!   their classifier): a tuned profile must run on the
 //!   recordings it was tuned on;
 //! - random kernels whose transforms would take longer than
 //!   [`Options::max_minutes`](super::Options) of CPU over the whole search.
@@ -27,9 +28,9 @@ use super::Part;
 use super::parts::{recordings_of, trained_on_by_all};
 use super::space::Setting;
 use crate::analysis::kernels::{KERNEL_COUNT, KernelLayout};
-use crate::classify::{MAX_COMPARISONS, comparisons};
+use crate::classify::MAX_COMPARISONS;
 use crate::dataset::check_size;
-use crate::evaluate::plan::check_comparisons;
+use crate::evaluate::plan::{Fits, check_validation, validation_work};
 use crate::profile::{Analysis, FeatureFamily};
 
 /// Seconds per point and feature of one window transformed (the counting
@@ -143,7 +144,7 @@ enum Reason {
     /// values).
     Values,
     /// `evaluate` would refuse to validate them (the figure: the value
-    /// comparisons).
+    /// comparisons or multiply-adds, [`validation_work`]).
     Comparisons,
     /// It would take over `--max-minutes` (the figure: CPU seconds).
     Seconds,
@@ -153,20 +154,25 @@ enum Reason {
 /// the figure that says so: the checks `evaluate` makes before any work,
 /// then the kernels' estimated time.
 fn left_out_because(
-    analysis: &Analysis,
-    recordings: usize,
+    setting: &Setting,
+    fits: Fits,
     work: Work,
     max_minutes: f64,
 ) -> Option<(Reason, f64)> {
+    let analysis = &setting.analysis;
     if let Err(crate::dataset::DatasetError::TooLarge { values, .. }) =
-        check_size(recordings, analysis)
+        check_size(fits.recordings, analysis)
     {
         return Some((Reason::Values, values as f64));
     }
-    let vectors = recordings.saturating_mul(analysis.sub_windows().len());
+    let vectors = fits.recordings.saturating_mul(analysis.sub_windows().len());
     let features = analysis.fitted_feature_count();
-    if check_comparisons(vectors, features).is_err() {
-        return Some((Reason::Comparisons, comparisons(vectors, vectors, features)));
+    let method = setting.classifier.method;
+    if check_validation(method, vectors, features, fits).is_err() {
+        return Some((
+            Reason::Comparisons,
+            validation_work(method, vectors, features, fits),
+        ));
     }
     kernel_seconds(analysis, work)
         .filter(|&seconds| seconds > max_minutes * 60.0)
@@ -184,19 +190,19 @@ struct Tally {
     most: f64,
 }
 
-/// The settings of `all` a search of `work` over `recordings` can afford,
-/// in their order, and those it leaves out, by family and reason.
+/// The settings of `all` a search of `work` over the recordings `evaluate`
+/// would validate as `fits` says can afford, in their order, and those it
+/// leaves out, by family and reason.
 pub fn affordable(
     all: Vec<Setting>,
-    recordings: usize,
+    fits: Fits,
     work: Work,
     max_minutes: f64,
 ) -> (Vec<Setting>, Vec<LeftOut>) {
     let mut tallies: Vec<Tally> = Vec::new();
     let mut kept = Vec::new();
     for s in all {
-        let Some((reason, figure)) = left_out_because(&s.analysis, recordings, work, max_minutes)
-        else {
+        let Some((reason, figure)) = left_out_because(&s, fits, work, max_minutes) else {
             kept.push(s);
             continue;
         };
@@ -234,7 +240,7 @@ pub fn affordable(
                     counted(crate::dataset::MAX_VALUES)
                 ),
                 Reason::Comparisons => format!(
-                    "evaluate would refuse to validate them on these recordings: {:.1e} value comparisons or more, over the limit of {MAX_COMPARISONS:.0e}",
+                    "evaluate would refuse to validate them on these recordings: {:.1e} value comparisons (k-NN) or multiply-adds a fit (ridge and LDA) or more, over the limit of {MAX_COMPARISONS:.0e}",
                     t.least
                 ),
                 Reason::Seconds => format!(

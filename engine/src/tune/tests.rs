@@ -657,14 +657,25 @@ fn features_evaluate_would_refuse_are_never_searched() {
         transformed: 10,
         fits: 1,
     };
+    // A holdout of `n` recordings in two labels, half of each trained on.
+    let holdout = |n: usize| Fits {
+        recordings: n,
+        fits: 1,
+        train: n / 2,
+    };
     // Over the limit of feature vectors evaluate and train keep to.
-    let (kept, left) = cost::affordable(all.clone(), crate::dataset::MAX_VECTORS + 1, work, 10.0);
+    let (kept, left) = cost::affordable(
+        all.clone(),
+        holdout(crate::dataset::MAX_VECTORS + 1),
+        work,
+        10.0,
+    );
     assert!(kept.is_empty());
     assert_eq!(left.iter().map(|l| l.settings).sum::<usize>(), all.len());
     assert!(left.iter().all(|l| l.reason.contains("evaluate and train")));
     // Few enough values, but too many to validate: 5000 recordings of
     // hundreds of features compare over 10^10 values.
-    let (kept, left) = cost::affordable(all.clone(), 5000, work, 10.0);
+    let (kept, left) = cost::affordable(all.clone(), holdout(5000), work, 10.0);
     assert!(
         left.iter()
             .any(|l| l.reason.contains("evaluate would refuse to validate")),
@@ -676,15 +687,20 @@ fn features_evaluate_would_refuse_are_never_searched() {
                 .windows
                 .map_or(1, |_| s.analysis.sub_windows().len());
         assert!(
-            crate::evaluate::plan::check_comparisons(vectors, s.analysis.fitted_feature_count())
-                .is_ok()
+            crate::evaluate::plan::check_validation(
+                s.classifier.method,
+                vectors,
+                s.analysis.fitted_feature_count(),
+                holdout(5000)
+            )
+            .is_ok()
         );
     }
     assert_eq!(
         kept.len() + left.iter().map(|l| l.settings).sum::<usize>(),
         all.len()
     );
-    let (kept, left) = cost::affordable(all.clone(), 20, work, 10.0);
+    let (kept, left) = cost::affordable(all.clone(), holdout(20), work, 10.0);
     assert_eq!(kept.len(), all.len());
     assert!(left.is_empty());
 }
