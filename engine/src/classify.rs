@@ -186,10 +186,13 @@ pub struct KFallback {
     pub folds: usize,
 }
 
-/// At most this many feature-value comparisons in one run of k-NN (query
-/// vectors × training vectors × features): 10^10 is seconds on one core.
-/// `evaluate` (every vector against every other) and a prediction (a
-/// recording's sub-windows against the model's examples) both refuse more,
+/// At most this many value operations in one run: feature-value
+/// comparisons of k-NN (query vectors × training vectors × features), or
+/// the multiply-adds of one ridge or LDA fit ([`linear_fit_work`]); 10^10
+/// is seconds on one core. `evaluate` (every vector against every other,
+/// or each fold's fit) and a prediction (a recording's sub-windows against
+/// the model's examples, after the model is trained again without it when
+/// it is one of them: [`crate::predictor::answer_work`]) both refuse more,
 /// before any is made. The thesis set's validation costs 7·10^5.
 pub const MAX_COMPARISONS: f64 = 1e10;
 
@@ -197,6 +200,14 @@ pub const MAX_COMPARISONS: f64 = 1e10;
 /// `examples` training vectors of `features` features.
 pub fn comparisons(queries: usize, examples: usize, features: usize) -> f64 {
     queries as f64 * examples as f64 * features as f64
+}
+
+/// The multiply-adds of fitting a ridge or an LDA on `n` vectors of `p`
+/// features: about `n·p·min(n, p)` (the Gram or covariance matrix; its
+/// eigendecomposition, `min(n, p)³`, is smaller).
+pub fn linear_fit_work(n: usize, p: usize) -> f64 {
+    let (n, p) = (n as f64, p as f64);
+    n * p * n.min(p)
 }
 
 /// "S1 has 5 scans" in words: "1 scan", "5 scans".

@@ -26,6 +26,7 @@ use thiserror::Error;
 use crate::analysis::FeatureExtractor;
 use crate::classify::{ClassifyError, Model, Prediction, RecordingPrediction};
 use crate::dataset::{self, DatasetError};
+use crate::profile::Method;
 use crate::recording::Recording;
 
 /// Why there is no answer for a recording.
@@ -53,20 +54,11 @@ pub enum PredictError {
     NoOtherScans { label: String },
     #[error("the model votes over sub-windows but the profile has no [analysis] windows")]
     NoSubWindows,
-    #[error(
-        "{file}: classifying its {queries} sub-window(s) against the model's {examples} \
-         training vectors of {features} features compares {comparisons:.1e} values, over the \
-         limit of {limit:.0e} that keeps a prediction within seconds; train the model with a \
-         longer windows.hop or a shorter windows.length (fewer sub-windows), or fewer bins",
-        comparisons = crate::classify::comparisons(*.queries, *.examples, *.features),
-        limit = crate::classify::MAX_COMPARISONS
-    )]
-    TooMuchWork {
-        file: String,
-        queries: usize,
-        examples: usize,
-        features: usize,
-    },
+    /// The answer would take more value operations than
+    /// [`crate::classify::MAX_COMPARISONS`] ([`answer_work`]); `what`
+    /// says which and what to do.
+    #[error("{file}: {what}")]
+    TooMuchWork { file: String, what: String },
 }
 
 fn incomplete_suffix(incomplete: &Option<String>) -> String {
@@ -208,7 +200,9 @@ impl<'m> Predictor<'m> {
     /// The answer for a recording's features (made by [`Query::of`] under
     /// the model's analysis), `file` naming it for the leave-out.
     pub fn answer(&self, q: &Query, file: &Path) -> Result<Answer, PredictError> {
-        self.check_work(q, file)?;
+        let same = self.same_recording(file, q);
+        let own = self.model.examples.iter().filter(|e| same(&e.file)).count();
+        self.check_work(q, file, own)?;
         match (&q.features, self.model.analysis.windows.is_some()) {
             (Features::Whole(_), true) => return Err(PredictError::NoSubWindows),
             // A model of whole windows classifies the first sub-window's
@@ -221,7 +215,11 @@ impl<'m> Predictor<'m> {
             }
             _ => {}
         }
-        let reduced = self.leaving_out(file, q)?;
+        let reduced = if own > 0 {
+            Some(self.without(&same)?)
+        } else {
+            None
+        };
         let model = reduced.as_ref().unwrap_or(self.model);
         let mut a = match &q.features {
             Features::Windows(w) => Answer::of_windows(model.classify_windows(w)?),
@@ -237,24 +235,23 @@ impl<'m> Predictor<'m> {
         Ok(a)
     }
 
-    /// Refuses a query whose k-NN would compare more than
-    /// [`crate::classify::MAX_COMPARISONS`] values, before any is made.
-    fn check_work(&self, q: &Query, file: &Path) -> Result<(), PredictError> {
+    /// Refuses a query whose answer would take more than
+    /// [`crate::classify::MAX_COMPARISONS`] value operations
+    /// ([`answer_work`]), before any is made; `own` is how many of the
+    /// model's examples are the recording's (left out first).
+    fn check_work(&self, q: &Query, file: &Path, own: usize) -> Result<(), PredictError> {
         let queries = match &q.features {
             Features::Whole(_) => 1,
             Features::Windows(w) => w.len(),
         };
-        let (examples, features) = (self.model.examples.len(), self.model.fitted_feature_count());
-        let work = crate::classify::comparisons(queries, examples, features);
-        if work > crate::classify::MAX_COMPARISONS {
-            return Err(PredictError::TooMuchWork {
-                file: file.display().to_string(),
-                queries,
-                examples,
-                features,
-            });
+        let work = answer_work(self.model, queries, own);
+        if work.total() <= crate::classify::MAX_COMPARISONS {
+            return Ok(());
         }
-        Ok(())
+        Err(PredictError::TooMuchWork {
+            file: file.display().to_string(),
+            what: work.describe(self.model, queries),
+        })
     }
 
     /// Whether `file` is one of the model's training recordings (the same
@@ -264,17 +261,25 @@ impl<'m> Predictor<'m> {
         self.model.examples.iter().any(|e| same(&e.file))
     }
 
-    /// The model without `file`'s examples when it is one of its training
-    /// recordings, by its name or, moved since, by its features
-    /// ([`Self::moved_here`]) (k as the profile asked, chosen again without it where it
-    /// needed choosing: no leak of the test scan); `None` when it is not.
-    fn leaving_out(&self, file: &Path, q: &Query) -> Result<Option<Model>, PredictError> {
+    /// "Names the same recording as `file`": by its name, or, moved since
+    /// training, by its features ([`Self::moved_here`]).
+    fn same_recording(&self, file: &Path, q: &Query) -> impl Fn(&str) -> bool {
         let named = same_file(file);
         let moved = self.moved_here(q);
-        let same = |f: &str| named(f) || moved.as_deref() == Some(f);
-        let Some(own) = self.model.examples.iter().find(|e| same(&e.file)) else {
-            return Ok(None);
-        };
+        move |f: &str| named(f) || moved.as_deref() == Some(f)
+    }
+
+    /// The model trained again without the examples `same` names (k as
+    /// the profile asked, chosen again without them where it needed
+    /// choosing: no leak of the test scan); an error when that leaves no
+    /// example of their label, or none at all.
+    fn without(&self, same: &impl Fn(&str) -> bool) -> Result<Model, PredictError> {
+        let own = self
+            .model
+            .examples
+            .iter()
+            .find(|e| same(&e.file))
+            .ok_or(PredictError::OnlyScan)?;
         let rest: Vec<_> = self
             .model
             .examples
@@ -291,12 +296,12 @@ impl<'m> Predictor<'m> {
             });
         }
         let m = self.model;
-        Ok(Some(Model::train_adapting_k(
+        Ok(Model::train_adapting_k(
             &m.profile,
             &m.analysis,
             &m.asked_classifier(),
             rest,
-        )?))
+        )?)
     }
 
     /// The training recording whose file is gone and whose feature vectors
@@ -318,6 +323,94 @@ impl<'m> Predictor<'m> {
                     && !Path::new(&own[0].file).exists()
             })
             .map(|own| own[0].file.clone())
+    }
+}
+
+/// The value operations of answering `queries` feature vectors with a
+/// model, trained again first without the recording's own examples when
+/// it is one of its training recordings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Work {
+    /// Training it again: nothing for a k-NN of a fixed k; choosing k
+    /// again compares every remaining example with every other (as
+    /// `evaluate` counts a k-NN validation); a ridge or an LDA is fitted
+    /// again ([`crate::classify::linear_fit_work`]).
+    pub refit: f64,
+    /// Classifying: each query against every remaining example (k-NN),
+    /// one score a label (ridge, LDA).
+    pub classify: f64,
+    /// The examples it classifies against (all but the recording's own).
+    pub examples: usize,
+    /// Features a vector, as the classifier sees them.
+    pub features: usize,
+}
+
+impl Work {
+    pub fn total(&self) -> f64 {
+        self.refit + self.classify
+    }
+
+    /// What the work is, over the limit, and what to do, in one line.
+    fn describe(&self, model: &Model, queries: usize) -> String {
+        let Work {
+            examples: n,
+            features: p,
+            ..
+        } = *self;
+        let limit = crate::classify::MAX_COMPARISONS;
+        let fewer = "train the model with a longer windows.hop or a shorter windows.length (fewer sub-windows), or fewer bins";
+        let its = if model.analysis.windows.is_some() {
+            format!("its {queries} sub-window(s)")
+        } else {
+            "it".to_string()
+        };
+        let total = self.total();
+        match model.classifier.method {
+            Method::Knn if self.refit > 0.0 => format!(
+                "it is one of the model's training recordings, so k is chosen again without it, comparing each of the {n} other training vectors of {p} features with every other, and {its} against them: {total:.1e} value comparisons, over the limit of {limit:.0e} that keeps a prediction within seconds; {fewer}"
+            ),
+            Method::Knn => format!(
+                "classifying {its} against the model's {n} training vectors of {p} features compares {total:.1e} values, over the limit of {limit:.0e} that keeps a prediction within seconds; {fewer}"
+            ),
+            method if self.refit > 0.0 => format!(
+                "it is one of the model's training recordings, so the {} is fitted again without it, on {n} vectors of {p} features: about {total:.1e} multiply-adds, over the limit of {limit:.0e} that keeps a prediction within seconds; classify recordings the model was not trained on, or {fewer}",
+                method.name()
+            ),
+            method => format!(
+                "scoring {its} ({p} features) for {} labels with the {} takes {total:.1e} multiply-adds, over the limit of {limit:.0e} that keeps a prediction within seconds; {fewer}",
+                model.labels.len(),
+                method.name()
+            ),
+        }
+    }
+}
+
+/// The [`Work`] of answering `queries` feature vectors with `model`, `own`
+/// of whose examples are the recording's (left out first when there are
+/// any).
+pub fn answer_work(model: &Model, queries: usize, own: usize) -> Work {
+    let n = model.examples.len().saturating_sub(own);
+    let p = model.fitted_feature_count();
+    let refit = if own == 0 {
+        0.0
+    } else {
+        match model.classifier.method {
+            Method::Knn if model.asked_classifier().k != model.classifier.k => {
+                crate::classify::comparisons(n, n, p)
+            }
+            Method::Knn => 0.0,
+            Method::Ridge | Method::Lda => crate::classify::linear_fit_work(n, p),
+        }
+    };
+    let classify = match model.classifier.method {
+        Method::Knn => crate::classify::comparisons(queries, n, p),
+        Method::Ridge | Method::Lda => queries as f64 * p as f64 * model.labels.len() as f64,
+    };
+    Work {
+        refit,
+        classify,
+        examples: n,
+        features: p,
     }
 }
 

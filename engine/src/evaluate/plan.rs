@@ -406,19 +406,15 @@ impl Fits {
 /// `vectors` feature vectors of `features`, split as `fits` says. k-NN
 /// compares every test vector with every training one: vectors² ×
 /// features at most, over the whole validation. Ridge and LDA compare
-/// nothing; they fit a model on each training part, `n` vectors of `p`
-/// features in about `n·p·min(n, p)` multiply-adds (the Gram or
-/// covariance matrix; its eigendecomposition, `min(n, p)³`, is smaller),
-/// and score each test vector in `p` per class: the largest fit is
-/// counted, which is never more than k-NN's count for the same vectors,
+/// nothing; they fit a model on each training part
+/// ([`crate::classify::linear_fit_work`]) and score each test vector in
+/// `p` per class: the largest fit is counted, which is never more than k-NN's count for the same vectors,
 /// so nothing validated before this count is refused by it.
 pub fn validation_work(method: Method, vectors: usize, features: usize, fits: Fits) -> f64 {
     match method {
         Method::Knn => crate::classify::comparisons(vectors, vectors, features),
         Method::Ridge | Method::Lda => {
-            let n = training_vectors(vectors, fits) as f64;
-            let p = features as f64;
-            n * p * n.min(p)
+            crate::classify::linear_fit_work(training_vectors(vectors, fits), features)
         }
     }
 }

@@ -233,3 +233,109 @@ fn a_relabelled_training_recording_is_left_out_by_its_features() {
     assert!(!near.left_out, "a near copy is another recording");
     assert_eq!(near.prediction.label, "S1");
 }
+
+/// A sub-window analysis of 24 features and `count` windows, ten a file,
+/// of two labels.
+fn sub_window_examples(count: usize) -> (crate::profile::Analysis, Vec<TrainingExample>) {
+    let mut an = LoadedProfile::thesis().profile.analysis.clone();
+    an.windows = Some(crate::profile::Windows {
+        length: 0.0147,
+        hop: 0.0075,
+    });
+    an.bins = [1, 24];
+    let n = an.features_per_channel();
+    let examples = (0..count)
+        .map(|i| {
+            let label = i % 2;
+            let mut f = vec![10.0 * label as f64; n];
+            f[i % n] += 0.5;
+            TrainingExample {
+                file: format!("d/S{label}/{}.csv", i / 20),
+                label: format!("S{label}"),
+                features: f,
+            }
+        })
+        .collect();
+    (an, examples)
+}
+
+#[test]
+fn a_ridge_model_is_counted_by_its_scores_not_by_a_k_nn_s_comparisons() {
+    let (an, examples) = sub_window_examples(10_000);
+    let n = an.features_per_channel();
+    // 50,000 sub-windows × 10,000 examples × 24 features > 10^10 for a
+    // k-NN; one score a label for a ridge.
+    let q = Query {
+        features: Features::Windows(vec![vec![10.0; n]; 50_000]),
+        incomplete: None,
+    };
+    let knn = crate::profile::Classifier {
+        k: 1,
+        ..Default::default()
+    };
+    let m = Model::train("t", &an, &knn, examples.clone()).unwrap();
+    let e = Predictor::new(&m)
+        .answer(&q, Path::new("d/S1/long.csv"))
+        .unwrap_err();
+    assert!(matches!(e, PredictError::TooMuchWork { .. }), "{e}");
+    let ridge = crate::profile::Classifier {
+        method: Method::Ridge,
+        ..Default::default()
+    };
+    let m = Model::train("t", &an, &ridge, examples).unwrap();
+    let a = Predictor::new(&m)
+        .answer(&q, Path::new("d/S1/long.csv"))
+        .unwrap();
+    assert_eq!(a.prediction.label, "S1");
+    let w = answer_work(&m, 50_000, 0);
+    assert_eq!((w.refit, w.classify), (0.0, 50_000.0 * n as f64 * 2.0));
+}
+
+#[test]
+fn a_training_recording_s_answer_counts_the_model_trained_again_without_it() {
+    let (an, examples) = sub_window_examples(400);
+    let n = an.features_per_channel();
+    // d/S1/0.csv is 10 of the 400 windows: 390 are left.
+    let own = 10;
+    let fixed = crate::profile::Classifier {
+        k: 1,
+        ..Default::default()
+    };
+    let m = Model::train("t", &an, &fixed, examples.clone()).unwrap();
+    let w = answer_work(&m, 3, own);
+    // A fixed k: nothing fitted again, the queries against the rest.
+    assert_eq!((w.refit, w.classify), (0.0, 3.0 * 390.0 * n as f64));
+    assert_eq!((w.examples, w.features), (390, n));
+    let auto = crate::profile::Classifier {
+        k: crate::profile::K_AUTO,
+        ..Default::default()
+    };
+    let m = Model::train("t", &an, &auto, examples.clone()).unwrap();
+    // k chosen again: every remaining example against every other.
+    assert_eq!(answer_work(&m, 3, own).refit, 390.0 * 390.0 * n as f64);
+    assert_eq!(answer_work(&m, 3, 0).refit, 0.0);
+    for method in [Method::Ridge, Method::Lda] {
+        let c = crate::profile::Classifier {
+            method,
+            ..Default::default()
+        };
+        let m = Model::train("t", &an, &c, examples.clone()).unwrap();
+        let w = answer_work(&m, 3, own);
+        assert_eq!(w.refit, crate::classify::linear_fit_work(390, n));
+        assert_eq!(w.refit, 390.0 * n as f64 * n as f64);
+        assert_eq!(w.classify, 3.0 * n as f64 * 2.0);
+        let text = w.describe(&m, 3);
+        assert!(
+            text.contains("fitted again without it, on 390 vectors of 24 features"),
+            "{text}"
+        );
+    }
+    // A training recording of the model is found and its windows counted.
+    let q = Query {
+        features: Features::Windows(vec![vec![10.0; n]; 3]),
+        incomplete: None,
+    };
+    let p = Predictor::new(&m);
+    let same = p.same_recording(Path::new("d/S1/0.csv"), &q);
+    assert_eq!(m.examples.iter().filter(|e| same(&e.file)).count(), own);
+}
