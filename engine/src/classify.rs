@@ -191,8 +191,8 @@ pub struct KFallback {
 /// the multiply-adds of one ridge or LDA fit ([`linear_fit_work`]); 10^10
 /// is seconds on one core. `evaluate` (every vector against every other,
 /// or each fold's fit) and a prediction (a recording's sub-windows against
-/// the model's examples, after the model is trained again without it when
-/// it is one of them: [`crate::predictor::answer_work`]) both refuse more,
+/// the model's examples, or scored by a ridge or LDA:
+/// [`crate::predictor::answer_work`]) both refuse more,
 /// before any is made. The thesis set's validation costs 7·10^5.
 pub const MAX_COMPARISONS: f64 = 1e10;
 
@@ -481,23 +481,16 @@ fn class_indices(labels: &[String], examples: &[TrainingExample]) -> Vec<usize> 
 }
 
 /// What every classifier trained on the same examples shares.
-struct Fitted<'a> {
+struct Shared {
     kernels: Option<KernelTransform>,
     labels: Vec<String>,
-    /// The examples as the classifier sees them.
-    rows: &'a [Vec<f64>],
-    classes: &'a [usize],
+    classes: Vec<usize>,
 }
 
-/// The examples as the classifier sees them: transformed by the kernels
-/// when there are some (on every core), else as they are.
-pub fn fitted_rows(
-    kernels: Option<&KernelTransform>,
-    examples: &[TrainingExample],
-) -> Vec<Vec<f64>> {
-    let Some(k) = kernels else {
-        return examples.iter().map(|e| e.features.clone()).collect();
-    };
+/// The examples transformed by `kernels` (on every core): the rows the
+/// classifier sees of a kernel model.
+pub fn transformed_rows(kernels: &KernelTransform, examples: &[TrainingExample]) -> Vec<Vec<f64>> {
+    let k = kernels;
     let threads = std::thread::available_parallelism()
         .map_or(1, |t| t.get())
         .min(examples.len().max(1));
@@ -526,9 +519,64 @@ pub fn fitted_rows(
     })
 }
 
-/// Rows of a row-major matrix of feature vectors, scaled as the model does.
-fn prepare(rows: &[Vec<f64>], scaling: Option<&Scaling>, metric: Metric) -> (Vec<f64>, Vec<f64>) {
-    let d = rows.first().map_or(0, Vec::len);
+/// The examples as the classifier sees them: `transformed` (by the
+/// kernels) when there are some, else the examples' own features,
+/// borrowed, not copied.
+fn row_refs<'a>(
+    transformed: Option<&'a [Vec<f64>]>,
+    examples: &'a [TrainingExample],
+) -> Vec<&'a [f64]> {
+    match transformed {
+        Some(rows) => rows.iter().map(Vec::as_slice).collect(),
+        None => examples.iter().map(|e| e.features.as_slice()).collect(),
+    }
+}
+
+/// What one classifier fits on the rows it sees: the scaling, the
+/// ridge's or LDA's weights, and for k-NN the distance-ready copy of the
+/// rows ([`prepare`]).
+struct Parts {
+    scaling: Option<Scaling>,
+    ridge: Option<RidgeFit>,
+    lda: Option<LdaFit>,
+    matrix: Vec<f64>,
+    norms: Vec<f64>,
+}
+
+impl Parts {
+    fn fit(
+        classifier: &Classifier,
+        rows: &[&[f64]],
+        classes: &[usize],
+        labels: usize,
+    ) -> Result<Parts, ClassifyError> {
+        let mut parts = Parts {
+            scaling: None,
+            ridge: None,
+            lda: None,
+            matrix: Vec::new(),
+            norms: Vec::new(),
+        };
+        match classifier.method {
+            Method::Knn => {
+                parts.scaling = classifier.standardize.then(|| Scaling::fit(rows));
+                (parts.matrix, parts.norms) =
+                    prepare(rows, parts.scaling.as_ref(), classifier.metric);
+            }
+            Method::Ridge => {
+                parts.ridge =
+                    Some(RidgeFit::fit(rows, classes, labels).map_err(ClassifyError::Fit)?);
+            }
+            Method::Lda => {
+                parts.lda = Some(LdaFit::fit(rows, classes, labels).map_err(ClassifyError::Fit)?);
+            }
+        }
+        Ok(parts)
+    }
+}
+
+fn prepare(rows: &[&[f64]], scaling: Option<&Scaling>, metric: Metric) -> (Vec<f64>, Vec<f64>) {
+    let d = rows.first().map_or(0, |r| r.len());
     let mut matrix = vec![0.0; d * rows.len()];
     for (row, features) in matrix.chunks_exact_mut(d.max(1)).zip(rows) {
         match scaling {
@@ -596,7 +644,7 @@ impl Model {
         classifiers: &[Classifier],
         examples: Vec<TrainingExample>,
         kernels: &KernelTransform,
-        rows: &[Vec<f64>],
+        rows: &[&[f64]],
     ) -> Result<Vec<Result<Model, ClassifyError>>, ClassifyError> {
         Model::train_each_with(
             profile_name,
@@ -613,7 +661,7 @@ impl Model {
         analysis: &Analysis,
         classifiers: &[Classifier],
         examples: Vec<TrainingExample>,
-        given: Option<(&KernelTransform, &[Vec<f64>])>,
+        given: Option<(&KernelTransform, &[&[f64]])>,
     ) -> Result<Vec<Result<Model, ClassifyError>>, ClassifyError> {
         let classifiers: Vec<(Classifier, bool)> = classifiers
             .iter()
@@ -648,76 +696,78 @@ impl Model {
                     ));
                 }
                 kernels = Some(k.clone());
-                rows
+                rows.to_vec()
             }
             None => {
                 // Fitted on these examples only: the caller's training part.
                 kernels = fit_kernels(analysis, &examples)?;
-                made = fitted_rows(kernels.as_ref(), &examples);
-                &made[..]
+                made = kernels.as_ref().map(|k| transformed_rows(k, &examples));
+                row_refs(made.as_deref(), &examples)
             }
         };
         let labels = sorted_labels(&examples);
         let classes = class_indices(&labels, &examples);
+        // Every classifier's fit first, on rows that may borrow the
+        // examples; then the examples move into the models.
+        let fits: Vec<Result<Parts, ClassifyError>> = classifiers
+            .iter()
+            .zip(checked)
+            .map(|((c, _), check)| {
+                check.and_then(|()| Parts::fit(c, &rows, &classes, labels.len()))
+            })
+            .collect();
+        drop(rows);
         let mut out = Vec::with_capacity(classifiers.len());
         let last = classifiers.len().saturating_sub(1);
         let mut examples = Some(examples);
-        for (i, ((classifier, auto), check)) in classifiers.into_iter().zip(checked).enumerate() {
+        for (i, ((classifier, auto), parts)) in classifiers.into_iter().zip(fits).enumerate() {
             let own = if i == last {
                 examples.take().unwrap_or_default()
             } else {
                 examples.clone().unwrap_or_default()
             };
-            out.push(check.and_then(|()| {
-                Model::fitted(
+            out.push(parts.map(|parts| {
+                Model::of_parts(
                     profile_name,
                     analysis,
                     classifier,
                     auto,
                     own,
-                    Fitted {
+                    Shared {
                         kernels: kernels.clone(),
                         labels: labels.clone(),
-                        rows,
-                        classes: &classes,
+                        classes: classes.clone(),
                     },
+                    parts,
                 )
             }));
         }
         Ok(out)
     }
 
-    /// One classifier's model on examples already checked, with what
-    /// every classifier shares.
-    fn fitted(
+    /// One classifier's model from what it fitted and what every
+    /// classifier shares; k chosen by inner cross-validation when asked.
+    fn of_parts(
         profile_name: &str,
         analysis: &Analysis,
         classifier: Classifier,
         auto: bool,
         examples: Vec<TrainingExample>,
-        shared: Fitted,
-    ) -> Result<Model, ClassifyError> {
-        let Fitted {
+        shared: Shared,
+        parts: Parts,
+    ) -> Model {
+        let Shared {
             kernels,
             labels,
-            rows,
             classes,
         } = shared;
-        let knn = classifier.method == Method::Knn;
-        let refs: Vec<&[f64]> = rows.iter().map(Vec::as_slice).collect();
-        let scaling = (classifier.standardize && knn).then(|| Scaling::fit(&refs));
-        let (mut ridge, mut lda) = (None, None);
-        match classifier.method {
-            Method::Knn => {}
-            Method::Ridge => {
-                ridge =
-                    Some(RidgeFit::fit(&refs, classes, labels.len()).map_err(ClassifyError::Fit)?);
-            }
-            Method::Lda => {
-                lda = Some(LdaFit::fit(&refs, classes, labels.len()).map_err(ClassifyError::Fit)?);
-            }
-        }
-        drop(refs);
+        let Parts {
+            scaling,
+            ridge,
+            lda,
+            matrix,
+            norms,
+        } = parts;
         let format = if kernels.is_some() || ridge.is_some() || lda.is_some() {
             MODEL_FORMAT_V2
         } else {
@@ -737,11 +787,10 @@ impl Model {
             kernels,
             ridge,
             lda,
-            matrix: Vec::new(),
-            norms: Vec::new(),
-            classes: Vec::new(),
+            matrix,
+            norms,
+            classes,
         };
-        model.prepare_rows(rows, classes.to_vec());
         if auto {
             let recording_of = recording_numbers(&model.examples);
             let scores = select_k(
@@ -767,7 +816,7 @@ impl Model {
             model.classifier.k = best;
             model.k_selection = Some(scores);
         }
-        Ok(model)
+        model
     }
 
     /// Train as the lab does: with the classifier's k where every texture has
@@ -893,25 +942,22 @@ impl Model {
     }
 
     /// Builds the distance-ready copy of the examples (a loaded model's:
-    /// transformed again by its kernels).
+    /// transformed again by its kernels); none for a ridge or an LDA,
+    /// which need only their weights.
     fn prepare(&mut self) {
-        let rows = fitted_rows(self.kernels.as_ref(), &self.examples);
-        let classes = class_indices(&self.labels, &self.examples);
-        self.prepare_rows(&rows, classes);
-    }
-
-    /// Builds the distance-ready copy of the examples' fitted rows (none
-    /// for a ridge or an LDA, which need only their weights).
-    fn prepare_rows(&mut self, rows: &[Vec<f64>], classes: Vec<usize>) {
-        self.classes = classes;
+        self.classes = class_indices(&self.labels, &self.examples);
+        (self.matrix, self.norms) = (Vec::new(), Vec::new());
         if self.ridge.is_some() || self.lda.is_some() {
-            self.matrix = Vec::new();
-            self.norms = Vec::new();
             return;
         }
-        let (matrix, norms) = prepare(rows, self.scaling.as_ref(), self.classifier.metric);
-        self.matrix = matrix;
-        self.norms = norms;
+        let made = self
+            .kernels
+            .as_ref()
+            .map(|k| transformed_rows(k, &self.examples));
+        let rows = row_refs(made.as_deref(), &self.examples);
+        let (matrix, norms) = prepare(&rows, self.scaling.as_ref(), self.classifier.metric);
+        drop(rows);
+        (self.matrix, self.norms) = (matrix, norms);
     }
 
     /// The classifier in a few words: `k-NN (k = 3)`, `ridge`, `LDA`.

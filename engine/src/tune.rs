@@ -869,7 +869,7 @@ impl SharedKernels {
         let kernels = crate::classify::fit_kernels(analysis, &examples(&common)).ok()??;
         let used = parts::recordings_of(folds);
         let mut transformed =
-            crate::classify::fitted_rows(Some(&kernels), &examples(&used)).into_iter();
+            crate::classify::transformed_rows(&kernels, &examples(&used)).into_iter();
         let rows = used
             .iter()
             .map(|&r| (r, transformed.by_ref().take(features[r].len()).collect()))
@@ -925,9 +925,9 @@ fn predict_part(
     };
     let models = match shared {
         Some(sh) => {
-            let rows: Vec<Vec<f64>> = train
+            let rows: Vec<&[f64]> = train
                 .iter()
-                .flat_map(|r| sh.rows.get(r).into_iter().flatten().cloned())
+                .flat_map(|r| sh.rows.get(r).into_iter().flatten().map(Vec::as_slice))
                 .collect();
             Model::train_each_transformed(
                 name,

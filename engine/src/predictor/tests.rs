@@ -288,32 +288,26 @@ fn a_ridge_model_is_counted_by_its_scores_not_by_a_k_nn_s_comparisons() {
         .unwrap();
     assert_eq!(a.prediction.label, "S1");
     let w = answer_work(&m, 50_000, 0);
-    assert_eq!((w.refit, w.classify), (0.0, 50_000.0 * n as f64 * 2.0));
+    assert_eq!(w.classify, 50_000.0 * n as f64 * 2.0);
 }
 
 #[test]
-fn a_training_recording_s_answer_counts_the_model_trained_again_without_it() {
+fn a_training_recording_s_answer_counts_the_examples_left_once_it_is_left_out() {
     let (an, examples) = sub_window_examples(400);
     let n = an.features_per_channel();
     // d/S1/0.csv is 10 of the 400 windows: 390 are left.
     let own = 10;
-    let fixed = crate::profile::Classifier {
-        k: 1,
-        ..Default::default()
-    };
-    let m = Model::train("t", &an, &fixed, examples.clone()).unwrap();
-    let w = answer_work(&m, 3, own);
-    // A fixed k: nothing fitted again, the queries against the rest.
-    assert_eq!((w.refit, w.classify), (0.0, 3.0 * 390.0 * n as f64));
-    assert_eq!((w.examples, w.features), (390, n));
-    let auto = crate::profile::Classifier {
-        k: crate::profile::K_AUTO,
-        ..Default::default()
-    };
-    let m = Model::train("t", &an, &auto, examples.clone()).unwrap();
-    // k chosen again: every remaining example against every other.
-    assert_eq!(answer_work(&m, 3, own).refit, 390.0 * 390.0 * n as f64);
-    assert_eq!(answer_work(&m, 3, 0).refit, 0.0);
+    for k in [1, crate::profile::K_AUTO] {
+        let c = crate::profile::Classifier {
+            k,
+            ..Default::default()
+        };
+        let m = Model::train("t", &an, &c, examples.clone()).unwrap();
+        let w = answer_work(&m, 3, own);
+        assert_eq!(w.classify, 3.0 * 390.0 * n as f64);
+        assert_eq!((w.examples, w.features), (390, n));
+        assert_eq!(answer_work(&m, 3, 0).classify, 3.0 * 400.0 * n as f64);
+    }
     for method in [Method::Ridge, Method::Lda] {
         let c = crate::profile::Classifier {
             method,
@@ -321,12 +315,10 @@ fn a_training_recording_s_answer_counts_the_model_trained_again_without_it() {
         };
         let m = Model::train("t", &an, &c, examples.clone()).unwrap();
         let w = answer_work(&m, 3, own);
-        assert_eq!(w.refit, crate::classify::linear_fit_work(390, n));
-        assert_eq!(w.refit, 390.0 * n as f64 * n as f64);
         assert_eq!(w.classify, 3.0 * n as f64 * 2.0);
         let text = w.describe(&m, 3);
         assert!(
-            text.contains("fitted again without it, on 390 vectors of 24 features"),
+            text.contains("scoring its 3 sub-window(s) (24 features) for 2 labels"),
             "{text}"
         );
     }
@@ -335,7 +327,16 @@ fn a_training_recording_s_answer_counts_the_model_trained_again_without_it() {
         features: Features::Windows(vec![vec![10.0; n]; 3]),
         incomplete: None,
     };
+    let m = model_of(&an, examples);
     let p = Predictor::new(&m);
     let same = p.same_recording(Path::new("d/S1/0.csv"), &q);
     assert_eq!(m.examples.iter().filter(|e| same(&e.file)).count(), own);
+}
+
+fn model_of(an: &crate::profile::Analysis, examples: Vec<TrainingExample>) -> Model {
+    let c = crate::profile::Classifier {
+        k: 1,
+        ..Default::default()
+    };
+    Model::train("t", an, &c, examples).unwrap()
 }

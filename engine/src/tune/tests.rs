@@ -765,10 +765,10 @@ fn forward_folds_share_kernels_fitted_on_what_every_fold_trains_on() {
         ..p.classifier.clone()
     }];
     let fold = &inner[inner.len() - 1];
-    let rows: Vec<Vec<f64>> = fold
+    let rows: Vec<&[f64]> = fold
         .train
         .iter()
-        .flat_map(|r| shared.rows[r].clone())
+        .flat_map(|r| shared.rows[r].iter().map(Vec::as_slice))
         .collect();
     let model = Model::train_each_transformed(
         "t",
