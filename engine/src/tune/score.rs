@@ -122,9 +122,10 @@ pub fn extract(
     })
 }
 
-/// The most points a kept grid ([`Resampled`]) holds (64 MiB of values);
+/// The most points a kept grid ([`Resampled`]) holds: as many as a
+/// dataset's feature values ([`crate::dataset::MAX_VALUES`], 256 MB);
 /// above that, each feature setting resamples again ([`extract`]).
-pub const RESAMPLED_MOST: usize = 8 << 20;
+pub const RESAMPLED_MOST: usize = crate::dataset::MAX_VALUES;
 
 /// How many points resampling every scan onto `analysis`'s grids gives
 /// (sub-windows × points × channels per scan).
