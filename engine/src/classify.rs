@@ -575,6 +575,8 @@ impl Parts {
     }
 }
 
+/// Rows of a row-major matrix of feature vectors, scaled as the model
+/// does, and their norms under the cosine metric.
 fn prepare(rows: &[&[f64]], scaling: Option<&Scaling>, metric: Metric) -> (Vec<f64>, Vec<f64>) {
     let d = rows.first().map_or(0, |r| r.len());
     let mut matrix = vec![0.0; d * rows.len()];
