@@ -408,8 +408,9 @@ impl Fits {
 /// features at most, over the whole validation. Ridge and LDA compare
 /// nothing; they fit a model on each training part
 /// ([`crate::classify::linear_fit_work`]) and score each test vector in
-/// `p` per class: the largest fit is counted, which is never more than k-NN's count for the same vectors,
-/// so nothing validated before this count is refused by it.
+/// `p` per class: the largest fit is counted, which is never more than
+/// k-NN's count for the same vectors, so nothing validated before this
+/// count is refused by it.
 pub fn validation_work(method: Method, vectors: usize, features: usize, fits: Fits) -> f64 {
     match method {
         Method::Knn => crate::classify::comparisons(vectors, vectors, features),
