@@ -487,10 +487,9 @@ struct Shared {
     classes: Vec<usize>,
 }
 
-/// The examples transformed by `kernels` (on every core): the rows the
+/// The examples transformed by the kernels `k` (on every core): the rows the
 /// classifier sees of a kernel model.
-pub fn transformed_rows(kernels: &KernelTransform, examples: &[TrainingExample]) -> Vec<Vec<f64>> {
-    let k = kernels;
+pub fn transformed_rows(k: &KernelTransform, examples: &[TrainingExample]) -> Vec<Vec<f64>> {
     let threads = std::thread::available_parallelism()
         .map_or(1, |t| t.get())
         .min(examples.len().max(1));

@@ -200,9 +200,11 @@ impl<'m> Predictor<'m> {
     /// The answer for a recording's features (made by [`Query::of`] under
     /// the model's analysis), `file` naming it for the leave-out.
     pub fn answer(&self, q: &Query, file: &Path) -> Result<Answer, PredictError> {
+        // Which of the model's examples are this recording's, asked once
+        // (a name comparison, or two paths made canonical, per example).
         let same = self.same_recording(file, q);
-        let own = self.model.examples.iter().filter(|e| same(&e.file)).count();
-        self.check_work(q, file, own)?;
+        let own: Vec<bool> = self.model.examples.iter().map(|e| same(&e.file)).collect();
+        self.check_work(q, file, own.iter().filter(|&&o| o).count())?;
         match (&q.features, self.model.analysis.windows.is_some()) {
             (Features::Whole(_), true) => return Err(PredictError::NoSubWindows),
             // A model of whole windows classifies the first sub-window's
@@ -215,8 +217,8 @@ impl<'m> Predictor<'m> {
             }
             _ => {}
         }
-        let reduced = if own > 0 {
-            Some(self.without(&same)?)
+        let reduced = if own.contains(&true) {
+            Some(self.without(&own)?)
         } else {
             None
         };
@@ -245,7 +247,7 @@ impl<'m> Predictor<'m> {
             Features::Windows(w) => w.len(),
         };
         let work = answer_work(self.model, queries, own);
-        if work.total() <= crate::classify::MAX_COMPARISONS {
+        if work.classify <= crate::classify::MAX_COMPARISONS {
             return Ok(());
         }
         Err(PredictError::TooMuchWork {
@@ -269,30 +271,30 @@ impl<'m> Predictor<'m> {
         move |f: &str| named(f) || moved.as_deref() == Some(f)
     }
 
-    /// The model trained again without the examples `same` names (k as
+    /// The model trained again without the examples `own` marks (k as
     /// the profile asked, chosen again without them where it needed
     /// choosing: no leak of the test scan); an error when that leaves no
     /// example of their label, or none at all.
-    fn without(&self, same: &impl Fn(&str) -> bool) -> Result<Model, PredictError> {
-        let own = self
-            .model
-            .examples
+    fn without(&self, own: &[bool]) -> Result<Model, PredictError> {
+        let examples = &self.model.examples;
+        let mine = examples
             .iter()
-            .find(|e| same(&e.file))
+            .zip(own)
+            .find(|&(_, &o)| o)
+            .map(|(e, _)| e)
             .ok_or(PredictError::OnlyScan)?;
-        let rest: Vec<_> = self
-            .model
-            .examples
+        let rest: Vec<_> = examples
             .iter()
-            .filter(|e| !same(&e.file))
-            .cloned()
+            .zip(own)
+            .filter(|&(_, &o)| !o)
+            .map(|(e, _)| e.clone())
             .collect();
         if rest.is_empty() {
             return Err(PredictError::OnlyScan);
         }
-        if !rest.iter().any(|e| e.label == own.label) {
+        if !rest.iter().any(|e| e.label == mine.label) {
             return Err(PredictError::NoOtherScans {
-                label: own.label.clone(),
+                label: mine.label.clone(),
             });
         }
         let m = self.model;
@@ -344,10 +346,6 @@ pub struct Work {
 }
 
 impl Work {
-    pub fn total(&self) -> f64 {
-        self.classify
-    }
-
     /// What the work is, over the limit, and what to do, in one line.
     fn describe(&self, model: &Model, queries: usize) -> String {
         let Work {
@@ -362,7 +360,7 @@ impl Work {
         } else {
             "it".to_string()
         };
-        let total = self.total();
+        let total = self.classify;
         match model.classifier.method {
             Method::Knn => format!(
                 "classifying {its} against the model's {n} training vectors of {p} features compares {total:.1e} values, over the limit of {limit:.0e} that keeps a prediction within seconds; {fewer}"
