@@ -66,7 +66,9 @@
 //! interval quantiles ([`quantiles`], QUANT); with `features = "kernels"`
 //! its detrended points are the features handed on, and the model fits
 //! and applies the random kernels ([`kernels`], MiniRocket), because their
-//! biases are fitted on training windows only. The spectrum is still
+//! biases are fitted on training windows only; with `features = "hydra"`
+//! its detrended window and first difference become the wins and losses
+//! of competing random kernels ([`hydra`], Hydra). The spectrum is still
 //! computed, for display.
 //!
 //! # Several channels
@@ -74,6 +76,7 @@
 //! and analysed alike; the feature vector is their features concatenated.
 
 mod bands;
+pub mod hydra;
 pub mod kernels;
 pub mod quantiles;
 mod resample;
@@ -86,6 +89,7 @@ use thiserror::Error;
 use crate::profile::{Analysis, FeatureFamily};
 use crate::profile::{check_options, check_windows};
 use bands::BandFeatures;
+use hydra::Hydra;
 use quantiles::Quantiles;
 use resample::Resampler;
 use spectrum::Spectrum;
@@ -255,6 +259,8 @@ pub struct FeatureExtractor {
     bands: Option<BandFeatures>,
     /// `features = "quantiles"`: the interval quantile transform.
     quantiles: Option<Quantiles>,
+    /// `features = "hydra"`: the competing kernels.
+    hydra: Option<Hydra>,
     /// One channel's band features.
     band_values: Vec<f64>,
     has_spectrum: bool,
@@ -327,6 +333,7 @@ impl FeatureExtractor {
             band_values: vec![0.0; bands.as_ref().map_or(0, BandFeatures::len)],
             bands,
             quantiles: (settings.features == FeatureFamily::Quantiles).then(|| Quantiles::new(n)),
+            hydra: (settings.features == FeatureFamily::Hydra).then(|| Hydra::new(n)),
             has_spectrum: false,
             sub_windows: settings.sub_windows(),
             in_order: false,
@@ -422,10 +429,11 @@ impl FeatureExtractor {
     /// transformed, into their place in `self.features`.
     fn keep_channel(&mut self, c: usize, per: usize) {
         let slot = &mut self.features[c * per..(c + 1) * per];
-        match (self.settings.features, &mut self.quantiles) {
+        match (self.settings.features, &mut self.quantiles, &mut self.hydra) {
             // The model's kernels transform the detrended points.
-            (FeatureFamily::Kernels, _) => slot.copy_from_slice(&self.detrended),
-            (FeatureFamily::Quantiles, Some(q)) => q.compute(&self.detrended, slot),
+            (FeatureFamily::Kernels, ..) => slot.copy_from_slice(&self.detrended),
+            (FeatureFamily::Quantiles, Some(q), _) => q.compute(&self.detrended, slot),
+            (FeatureFamily::Hydra, _, Some(h)) => h.compute(&self.detrended, slot),
             _ => {
                 if let Some(b) = &mut self.bands {
                     b.compute(&self.values, &mut self.band_values);

@@ -107,16 +107,18 @@ pub struct Options {
     /// Seeds the sampling of the grid and the inner folds.
     pub seed: u64,
     pub threads: usize,
-    /// CPU minutes (estimated, [`cost`]) a feature setting fitted fold by
-    /// fold may take over the whole search; costlier ones are left out.
+    /// CPU minutes (estimated, [`cost`]) a costly feature setting (random
+    /// kernels fitted fold by fold, competing kernels) may take over the
+    /// whole search; costlier ones are left out.
     pub max_minutes: f64,
 }
 
-/// The CPU minutes a fitted feature setting may take by default: the
-/// random kernels on the generated sets' windows take seconds to a few
-/// minutes under their README plans; on 5-second clips at 44.1 kHz under
-/// leave-one-out, hours.
-pub const MAX_MINUTES: f64 = 10.0;
+/// The CPU minutes a costly feature setting may take by default, half a
+/// minute: on the generated 200-trial fingertip set (6 s at 2.2 kHz) the
+/// random kernels take seconds a setting and the competing kernels most
+/// of a minute, more than the rest of the search together; on 5-second
+/// clips at 44.1 kHz under leave-one-out the random kernels take hours.
+pub const MAX_MINUTES: f64 = 0.5;
 
 /// A setting with its inner scores ([`InnerScore`]).
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -325,8 +327,10 @@ pub fn check_plan(scans: &[Entry], plan: &Plan) -> Result<(), TuneError> {
 /// setting) up to the budget. In grid order.
 ///
 /// The feature settings are drawn family by family in turn (the spectrum,
-/// the quantiles, the kernels: each a shuffled list), so a budget smaller
-/// than the grid still tries every family.
+/// the quantiles, the kernels, the competing kernels: each a shuffled
+/// list), in each turn the family whose next feature setting brings the
+/// fewest settings first, so a budget smaller than the grid still tries
+/// every family.
 fn sample(grid: Vec<Setting>, budget: usize, seed: u64) -> Vec<Setting> {
     if grid.len() <= budget {
         return grid;
@@ -352,20 +356,17 @@ fn sample(grid: Vec<Setting>, budget: usize, seed: u64) -> Vec<Setting> {
         .collect();
     let mut out: Vec<Setting> = Vec::new();
     'draw: loop {
-        let mut drew = false;
-        for q in &mut queues {
-            if let Some(group) = q.next() {
-                drew = true;
-                for s in group {
-                    if out.len() == budget {
-                        break 'draw;
-                    }
-                    out.push(s);
-                }
-            }
-        }
-        if !drew {
+        let mut turn: Vec<Vec<Setting>> = queues.iter_mut().filter_map(Iterator::next).collect();
+        if turn.is_empty() {
             break;
+        }
+        // Stable: between equal sizes, in family order.
+        turn.sort_by_key(Vec::len);
+        for s in turn.into_iter().flatten() {
+            if out.len() == budget {
+                break 'draw;
+            }
+            out.push(s);
         }
     }
     out.sort_by(|a, b| a.values.cmp(&b.values));

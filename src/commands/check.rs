@@ -25,6 +25,7 @@ fn summary(lp: &LoadedProfile) -> String {
     let features = match a.features {
         FeatureFamily::Spectrum => format!("{} features", a.feature_count()),
         FeatureFamily::Quantiles => format!("{} interval-quantile features", a.feature_count()),
+        FeatureFamily::Hydra => format!("{} competing-kernel features", a.feature_count()),
         FeatureFamily::Kernels => format!(
             "{} random-kernel features ({} asked, a multiple of 84 per channel) of {} points",
             a.fitted_feature_count(),

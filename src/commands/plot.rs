@@ -276,6 +276,7 @@ fn feature_axis(a: &crate::profile::Analysis) -> (usize, &'static str) {
         FeatureNames::Cepstra { first } => (first, "feature (cepstral coefficient)"),
         FeatureNames::Points => (0, "feature (window point, for random kernels)"),
         FeatureNames::Quantiles => (0, "feature (interval quantile)"),
+        FeatureNames::Hydra => (0, "feature (competing kernel's wins or losses)"),
     }
 }
 
@@ -485,6 +486,9 @@ impl Trace {
             ),
             FeatureFamily::Quantiles => Some(
                 "the features are interval quantiles of the black line: the spectrum (grey) is not used",
+            ),
+            FeatureFamily::Hydra => Some(
+                "the features are competing kernels of the black line: the spectrum (grey) is not used",
             ),
         };
         let mut root = root.titled(lines, LABELS).map_err(fail)?;

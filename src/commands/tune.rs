@@ -36,9 +36,10 @@ pub struct TuneArgs {
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// CPU minutes (estimated from the recordings and the plan, the same on
-    /// any machine) a feature setting refitted in every fold may take over
-    /// the whole search: costlier ones (random kernels on long windows
-    /// under leave-one-out can take hours) are left out and named.
+    /// any machine) a costly feature setting (random kernels, refitted in
+    /// every fold; competing kernels) may take over the whole search:
+    /// costlier ones (random kernels on long windows under leave-one-out
+    /// can take hours) are left out and named.
     #[arg(long, value_name = "MINUTES", default_value_t = tune::MAX_MINUTES, value_parser = minutes)]
     pub max_minutes: f64,
     /// Replace --out when it exists (never a recording or the input profile).

@@ -144,6 +144,7 @@ fn classifier_text(lp: &LoadedProfile, ev: &Evaluation) -> String {
         FeatureFamily::Spectrum => "",
         FeatureFamily::Kernels => "random kernels, ",
         FeatureFamily::Quantiles => "interval quantiles, ",
+        FeatureFamily::Hydra => "competing kernels, ",
     };
     match p.classifier.method {
         Method::Knn => format!("{features}k-NN k = {}", k_text(lp, ev)),

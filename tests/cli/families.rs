@@ -171,7 +171,7 @@ fn settings_the_families_cannot_use_are_refused_by_key() {
         &["check", &word],
         &[
             "analysis.features",
-            "\"spectrum\", \"kernels\" or \"quantiles\"",
+            "\"spectrum\", \"kernels\", \"quantiles\" or \"hydra\"",
         ],
     );
     let method = tiny_with(dir.path(), "method.toml", "", "method = \"lasso\"");
@@ -224,5 +224,69 @@ fn check_names_the_family_and_the_classifier() {
     assert!(
         r.stdout.contains("interval-quantile features, LDA"),
         "{r:?}"
+    );
+}
+
+/// Competing kernels (Hydra) go through the same commands: nothing fitted
+/// but the classifier, so the model file holds no kernels; `check` counts
+/// their features; a window shorter than a kernel's span of the first
+/// difference is refused by key.
+#[test]
+fn competing_kernels_train_classify_and_evaluate() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = format!("{SMALL}/two-labels");
+    let profile = tiny_with(
+        dir.path(),
+        "h.toml",
+        "features = \"hydra\"",
+        "method = \"ridge\"",
+    );
+    let r = run(&["check", &profile]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    // 16 points: one dilation, 64 groups of 8 kernels, wins and losses.
+    assert!(
+        r.stdout.contains("1024 competing-kernel features, ridge"),
+        "{r:?}"
+    );
+    let model = dir.path().join("m.json");
+    let r = run(&["train", "-p", &profile, "--out", p(&model), &data]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    let saved: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&model).unwrap()).unwrap();
+    assert_eq!(saved["analysis"]["features"], "hydra");
+    assert!(
+        saved.get("kernels").is_none(),
+        "nothing of the features is fitted"
+    );
+    assert_eq!(saved["ridge"]["weights"].as_array().unwrap().len(), 2);
+    let r = run(&["classify", "-p", &profile, "--model", p(&model), &data]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert_eq!(
+        r.stdout.matches("left out of the model").count(),
+        6,
+        "{r:?}"
+    );
+    let r = run(&["evaluate", "-p", &profile, &data]);
+    assert_eq!(r.code, Some(0), "{r:?}");
+    assert!(r.stdout.contains("competing kernels, ridge"), "{r:?}");
+    // Under the spectrum the model is refused, as any family's.
+    refused(
+        &["classify", "-p", TINY, "--model", p(&model), &data],
+        &["analysis.features", "\"hydra\"", "\"spectrum\""],
+    );
+    let text = std::fs::read_to_string(&profile).unwrap();
+    let short = dir.path().join("short.toml");
+    std::fs::write(
+        &short,
+        text.replace("window = [0.0, 0.015]", "window = [0.0, 0.008]"),
+    )
+    .unwrap();
+    refused(
+        &["check", p(&short)],
+        &[
+            "analysis.window",
+            "9 points",
+            "competing kernels need at least 10",
+        ],
     );
 }

@@ -441,6 +441,7 @@ impl Analysis {
             FeatureFamily::Spectrum => {}
             FeatureFamily::Kernels => return self.points(),
             FeatureFamily::Quantiles => return quantile_feature_count(self.points()),
+            FeatureFamily::Hydra => return super::families::hydra_feature_count(self.points()),
         }
         if let Some(m) = self.cepstra {
             return m - usize::from(self.drop_level);
@@ -597,6 +598,19 @@ fn check_family(s: &Analysis) -> Result<(), (String, String)> {
                 format!("must be {lo} to {hi}, got {asked}"),
             );
         }
+    }
+    let least = super::families::HYDRA_MIN_POINTS;
+    if s.features == FeatureFamily::Hydra && n < least {
+        return bad(
+            if s.windows.is_some() {
+                "windows"
+            } else {
+                "window"
+            },
+            format!(
+                "holds {n} points; competing kernels need at least {least} (a kernel spans 9 of the first difference)"
+            ),
+        );
     }
     Ok(())
 }

@@ -20,6 +20,10 @@ pub enum FeatureFamily {
     /// Quantiles over dyadic intervals of the signal, its differences and
     /// its magnitude spectrum (QUANT): fixed, nothing fitted.
     Quantiles,
+    /// Competing random kernels (Hydra): in each group of kernels, how
+    /// often each wins (responds most) and loses (least) along the signal
+    /// and its first difference. Fixed, nothing fitted.
+    Hydra,
 }
 
 impl FeatureFamily {
@@ -37,6 +41,35 @@ pub const KERNEL_FEATURES_RANGE: [usize; 2] = [84, 100_000];
 pub const KERNEL_COUNT: usize = 84;
 /// Random kernels: the fewest points a window may have (one kernel's span).
 pub const KERNEL_MIN_POINTS: usize = 9;
+
+/// Competing kernels: groups of kernels, half over the signal and half
+/// over its first difference (Hydra's default, 64).
+pub const HYDRA_GROUPS: usize = 64;
+/// Competing kernels: the kernels of a group, which compete at each point
+/// (Hydra's default, 8).
+pub const HYDRA_KERNELS: usize = 8;
+/// Competing kernels: taps of every kernel.
+pub const HYDRA_LENGTH: usize = 9;
+/// Competing kernels: the fewest points a window may have (its first
+/// difference then spans one kernel).
+pub const HYDRA_MIN_POINTS: usize = HYDRA_LENGTH + 1;
+
+/// Competing kernels: the dilations for a window of `points`, 1, 2, 4, …
+/// up to the largest whose kernel spans the window (`8·d ≤ points − 1`);
+/// none below [`HYDRA_MIN_POINTS`].
+pub fn hydra_dilations(points: usize) -> Vec<usize> {
+    if points < HYDRA_MIN_POINTS {
+        return Vec::new();
+    }
+    let most = (points - 1) / (HYDRA_LENGTH - 1);
+    (0..=most.ilog2()).map(|e| 1usize << e).collect()
+}
+
+/// Competing-kernel features of one channel's window of `points`: per
+/// dilation, per group and kernel, its wins and its losses.
+pub fn hydra_feature_count(points: usize) -> usize {
+    hydra_dilations(points).len() * HYDRA_GROUPS * HYDRA_KERNELS * 2
+}
 
 /// The deepest level of dyadic intervals (QUANT's default).
 pub const QUANTILE_DEPTH: usize = 6;
@@ -171,5 +204,17 @@ mod tests {
         assert_eq!(quantiles_in(100), 25);
         assert_eq!(quantile_series(100), [100, 99, 98, 51]);
         assert!(quantile_feature_count(100) > 100);
+    }
+
+    #[test]
+    fn competing_kernels_dilate_until_one_spans_the_window() {
+        // 8·d ≤ points − 1.
+        assert!(hydra_dilations(9).is_empty());
+        assert_eq!(hydra_dilations(10), [1]);
+        assert_eq!(hydra_dilations(16), [1]);
+        assert_eq!(hydra_dilations(17), [1, 2]);
+        assert_eq!(hydra_dilations(199), [1, 2, 4, 8, 16]);
+        assert_eq!(hydra_feature_count(199), 5 * 1024);
+        assert_eq!(hydra_feature_count(9), 0);
     }
 }

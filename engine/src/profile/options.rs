@@ -86,6 +86,8 @@ pub enum FeatureNames {
     Points,
     /// Interval quantiles (QUANT), numbered from 0.
     Quantiles,
+    /// Competing kernels' wins and losses (Hydra), numbered from 0.
+    Hydra,
 }
 
 impl FeatureNames {
@@ -280,19 +282,20 @@ pub const ANALYSIS_OPTIONS: &[AnalysisOption] = &[
     opt(
         "analysis.features",
         Kind::Choice,
-        &["spectrum", "kernels", "quantiles"],
+        &["spectrum", "kernels", "quantiles", "hydra"],
         "",
         true,
         Group::Spectrum,
-        "spectrum as the thesis; kernels (MiniRocket) or quantiles (QUANT) for vibration or motion a spectrum misses, best with classifier.method = \"ridge\" or \"lda\"",
+        "spectrum as the thesis; kernels (MiniRocket), quantiles (QUANT) or hydra (competing kernels) for vibration or motion a spectrum misses, best with classifier.method = \"ridge\" or \"lda\"",
         field!(features),
     )
     // Simplest first: the thesis's spectrum, then the cheaper family.
-    .searched(&["spectrum", "quantiles", "kernels"])
+    .searched(&["spectrum", "quantiles", "kernels", "hydra"])
     .labelled(|a| match a.features {
         FeatureFamily::Spectrum => None,
         FeatureFamily::Kernels => Some(FeatureNames::Points),
         FeatureFamily::Quantiles => Some(FeatureNames::Quantiles),
+        FeatureFamily::Hydra => Some(FeatureNames::Hydra),
     }),
     opt(
         "analysis.kernel_features",

@@ -11,7 +11,9 @@
 //!   The kernels are fitted again in every inner and outer fold, and every
 //!   window the fold trains or tests on is transformed with them: on
 //!   5-second clips at 44.1 kHz under leave-one-out that is hours for one
-//!   setting, where the spectra take seconds.
+//!   setting, where the spectra take seconds;
+//! - competing kernels whose features, made once per recording, would take
+//!   longer than that: on the same clips, 20 minutes a setting.
 //!
 //! The estimate counts the work (points × features per window
 //! transformed, points × kernels and dilations per fit) at the rates
@@ -39,6 +41,9 @@ pub const TRANSFORM_SECONDS: f64 = 0.18e-9;
 /// Seconds per point and kernel-dilation pair of one fit (a convolution
 /// and the selection of its biases).
 pub const FIT_SECONDS: f64 = 14e-9;
+/// Seconds per point and dilation of one window's competing kernels (64
+/// groups of 8 over the signal and its difference).
+pub const HYDRA_SECONDS: f64 = 1.3e-6;
 
 /// The work a search does per feature setting that is fitted fold by fold:
 /// recordings transformed (each fold's training and test recordings,
@@ -88,16 +93,24 @@ pub struct LeftOut {
     pub reason: String,
 }
 
-/// The estimated CPU seconds of one kernel feature setting over a search
-/// of `work`, or `None` for features made once per recording.
-pub fn kernel_seconds(analysis: &Analysis, work: Work) -> Option<f64> {
-    if analysis.features != FeatureFamily::Kernels {
-        return None;
+/// The estimated CPU seconds of one feature setting over a search of
+/// `work` on `recordings`: random kernels fitted fold by fold, competing
+/// kernels made once per recording; `None` for the cheap families.
+pub fn setting_seconds(analysis: &Analysis, work: Work, recordings: usize) -> Option<f64> {
+    let channels = (1 + analysis.channels.len()) as f64;
+    let per_recording = analysis.sub_windows().len() as f64;
+    match analysis.features {
+        FeatureFamily::Kernels => {}
+        FeatureFamily::Hydra => {
+            let points = analysis.points();
+            let dilations = crate::profile::families::hydra_dilations(points).len();
+            let window = channels * (points * dilations) as f64 * HYDRA_SECONDS;
+            return Some(recordings as f64 * per_recording * window);
+        }
+        FeatureFamily::Spectrum | FeatureFamily::Quantiles => return None,
     }
     let points = analysis.points();
     let layout = KernelLayout::new(points, analysis.kernel_features_asked()).ok()?;
-    let channels = (1 + analysis.channels.len()) as f64;
-    let per_recording = analysis.sub_windows().len() as f64;
     let points = points as f64;
     let window = channels * points * layout.feature_count() as f64 * TRANSFORM_SECONDS;
     let fit = channels * points * (KERNEL_COUNT * layout.dilations.len()) as f64 * FIT_SECONDS;
@@ -174,7 +187,7 @@ fn left_out_because(
             validation_work(method, vectors, features, fits),
         ));
     }
-    kernel_seconds(analysis, work)
+    setting_seconds(analysis, work, fits.recordings)
         .filter(|&seconds| seconds > max_minutes * 60.0)
         .map(|seconds| (Reason::Seconds, seconds))
 }
@@ -244,10 +257,17 @@ pub fn affordable(
                     t.least
                 ),
                 Reason::Seconds => format!(
-                    "about {} each in this search ({} fits, {} recordings transformed), over --max-minutes {max_minutes}; --max-minutes {} searches them",
+                    "about {} each in this search ({}), over --max-minutes {max_minutes}; --max-minutes {} searches them",
                     cpu_time(t.least, t.most),
-                    counted(work.fits),
-                    counted(work.transformed),
+                    if t.family == "hydra" {
+                        format!("the features of {} recordings, made once", counted(fits.recordings))
+                    } else {
+                        format!(
+                            "{} fits, {} recordings transformed",
+                            counted(work.fits),
+                            counted(work.transformed)
+                        )
+                    },
                     (t.most / 60.0).ceil()
                 ),
             },

@@ -268,14 +268,14 @@ pub fn resolve(base: (&Analysis, &Classifier), values: &[usize]) -> Option<Setti
     // spectrum's options mean nothing to another family and k nearest
     // neighbours' nothing to a linear classifier: those settings are
     // searched once, with the options they do not use at their first value
-    // (written as left out). The random kernels go to linear classifiers
-    // only, as their paper pairs them: each fold fits its own kernels, and
-    // ten thousand proportions of positive values are made for a linear
-    // decision, not for distances.
+    // (written as left out). The random kernels and the competing kernels
+    // go to linear classifiers only, as their papers pair them: thousands
+    // of proportions of positive values, or of wins and losses, are made
+    // for a linear decision, not for distances.
     let word = |option: &str| chosen.iter().find(|(r, _)| r.option == option).map(|x| x.1);
     let spectrum = word("features").is_none_or(|f| f == "spectrum");
     let neighbours = word("method").is_none_or(|m| m == "knn");
-    if word("features") == Some("kernels") && neighbours {
+    if matches!(word("features"), Some("kernels" | "hydra")) && neighbours {
         return None;
     }
     let unused = |option: &str| {
@@ -424,14 +424,17 @@ mod tests {
         assert_eq!(count("spectrum + ridge"), spectra);
         assert_eq!(count("spectrum + lda"), spectra);
         // The other families: only the sub-windows (none, a quarter, a
-        // half); the kernels with the linear classifiers only.
+        // half); both kinds of kernels with the linear classifiers only.
         assert_eq!(count("quantiles + knn"), 3 * neighbours);
         assert_eq!(count("quantiles + ridge"), 3);
         assert_eq!(count("quantiles + lda"), 3);
         assert_eq!(count("kernels + knn"), 0);
         assert_eq!(count("kernels + ridge"), 3);
         assert_eq!(count("kernels + lda"), 3);
-        assert_eq!(g.len(), (spectra + 3) * (neighbours + 2) + 6);
+        assert_eq!(count("hydra + knn"), 0);
+        assert_eq!(count("hydra + ridge"), 3);
+        assert_eq!(count("hydra + lda"), 3);
+        assert_eq!(g.len(), (spectra + 3) * (neighbours + 2) + 6 + 6);
         // A family's unused options are at their defaults and said as `-`.
         for s in g.iter().filter(|s| s.family() == "kernels + ridge") {
             assert_eq!(s.analysis.welch_segment, None);

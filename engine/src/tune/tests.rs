@@ -148,8 +148,8 @@ fn a_seed_gives_one_answer_and_the_budget_caps_the_settings() {
     assert_eq!(a, b);
     assert_eq!(a.configurations, 96);
     assert_eq!(
-        a.feature_settings, 3,
-        "the families in turn: a spectrum (50 classifier settings), a kernels (2), a quantiles setting (the rest)"
+        a.feature_settings, 4,
+        "the families in turn, fewest settings first: a kernels and a competing kernels setting (2 each), a spectrum (50 classifier settings), a quantiles setting (the rest)"
     );
     let c = run(&p, &s, 96, 6);
     assert_eq!(c.configurations, 96);
@@ -571,9 +571,9 @@ fn a_texture_no_spectrum_tells_apart_goes_to_another_family() {
             .unwrap_or_else(|| panic!("{family} not scored: {:?}", r.families))
             .inner_accuracy
     };
-    // Every family and classifier was scored (the kernels with the
-    // linear classifier only).
-    assert_eq!(r.families.len(), 8, "{:?}", r.families);
+    // Every family and classifier was scored (both kinds of kernels with
+    // the linear classifiers only).
+    assert_eq!(r.families.len(), 10, "{:?}", r.families);
     // The best of a thousand spectrum settings scores above chance by
     // luck in folds of four, but below the family that sees the shape.
     assert!(
@@ -613,7 +613,7 @@ fn a_small_budget_still_tries_every_family() {
     features.dedup();
     assert_eq!(
         features,
-        ["kernels", "quantiles", "spectrum"],
+        ["hydra", "kernels", "quantiles", "spectrum"],
         "{:?}",
         r.families
     );
@@ -626,22 +626,32 @@ fn kernels_too_costly_for_the_search_are_left_out_and_named() {
     let all = tune("t", &profile(HOLDOUT), &saws(), &o, &|_, _| {}).unwrap();
     assert!(all.left_out.is_empty(), "{:?}", all.left_out);
     assert!(all.families.iter().any(|f| f.family.starts_with("kernels")));
-    // With a hundredth of a second, the kernels are left out before any
-    // work and said to be; the rest is searched as before.
+    // With a hundredth of a second, the random kernels (fitted fold by
+    // fold) and the competing kernels (made once per recording, but dear)
+    // are left out before any work and said to be; the rest is searched
+    // as before.
     o.max_minutes = 1.0 / 6000.0;
     let r = tune("t", &profile(HOLDOUT), &saws(), &o, &|_, _| {}).unwrap();
-    assert_eq!(r.left_out.len(), 1, "{:?}", r.left_out);
-    let l = &r.left_out[0];
-    assert_eq!(l.family, "kernels");
-    let kernels = all
-        .feature_settings_scored
-        .iter()
-        .filter(|f| f.0.iter().any(|(_, v)| v == "kernels"))
-        .count();
-    assert_eq!(l.feature_settings, kernels);
-    assert_eq!(r.grid + l.settings, all.grid);
-    assert!(l.reason.contains("--max-minutes"), "{}", l.reason);
-    assert!(!r.families.iter().any(|f| f.family.starts_with("kernels")));
+    assert_eq!(r.left_out.len(), 2, "{:?}", r.left_out);
+    for (l, family, work) in [
+        (&r.left_out[0], "kernels", "fits"),
+        (&r.left_out[1], "hydra", "made once"),
+    ] {
+        assert_eq!(l.family, family);
+        let scored = all
+            .feature_settings_scored
+            .iter()
+            .filter(|f| f.0.iter().any(|(_, v)| v == family))
+            .count();
+        assert_eq!(l.feature_settings, scored);
+        assert!(l.reason.contains("--max-minutes"), "{}", l.reason);
+        assert!(l.reason.contains(work), "{}", l.reason);
+        assert!(!r.families.iter().any(|f| f.family.starts_with(family)));
+    }
+    assert_eq!(
+        r.grid + r.left_out[0].settings + r.left_out[1].settings,
+        all.grid
+    );
     assert!(r.families.iter().any(|f| f.family.starts_with("quantiles")));
     // The tuned profile says so too.
     let setting = r.chosen_setting.as_ref().unwrap();

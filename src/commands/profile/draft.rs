@@ -483,6 +483,10 @@ fn family_groups() -> Vec<OptionGroup> {
                 ("kernel_features", DEFAULT_KERNEL_FEATURES.to_string()),
             ],
         },
+        OptionGroup {
+            when: "competing random kernels (Hydra), how often each kernel of a group matches the signal and its difference best and worst: motion or vibration sampled slowly (an IMU), short windows; with method = \"ridge\" or \"lda\" below".into(),
+            keys: vec![("features", "\"hydra\"".into())],
+        },
     ]
 }
 

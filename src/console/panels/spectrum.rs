@@ -49,7 +49,9 @@ fn value_text(names: &FeatureNames, v: f64) -> String {
         FeatureNames::Bins { value } | FeatureNames::Bands { value, .. } => {
             format!("{value} {v:.2e}")
         }
-        FeatureNames::Cepstra { .. } | FeatureNames::Quantiles => format!("{v:.2}"),
+        FeatureNames::Cepstra { .. } | FeatureNames::Quantiles | FeatureNames::Hydra => {
+            format!("{v:.2}")
+        }
         FeatureNames::Points => format!("{v:.2e}"),
     }
 }
@@ -63,6 +65,7 @@ fn name(s: &ScanView, i: usize) -> String {
         FeatureNames::Cepstra { first } => format!("c{}", first + i),
         FeatureNames::Points => format!("{i}"),
         FeatureNames::Quantiles => format!("q{i}"),
+        FeatureNames::Hydra => format!("h{i}"),
     }
 }
 
@@ -140,6 +143,12 @@ fn titles(s: &ScanView, f: &[f64], per: usize, peak_i: usize) -> Vec<String> {
             format!("Interval quantiles: {per}{of}"),
             format!("Interval quantiles: {per}"),
             "Quantiles".into(),
+        ],
+        FeatureNames::Hydra => vec![
+            format!("Competing kernels: {per} wins and losses {in_ch}(signal, difference){of}"),
+            format!("Competing kernels: {per}{of}"),
+            format!("Competing kernels: {per}"),
+            "Hydra".into(),
         ],
     }
 }
