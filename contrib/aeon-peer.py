@@ -41,6 +41,8 @@ the first call; --no-warm-up times that too):
 - minirocket: aeon's MiniRocketClassifier (MiniRocket's 9996 features,
   a scaler and RidgeClassifierCV, as the paper);
 - hydra: aeon's MultiRocketHydraClassifier (needs torch);
+- hydra-alone: aeon's HydraClassifier, the competing kernels alone (needs
+  torch; not run unless named), beside hapticlab's `features = "hydra"`;
 - quant: aeon's QUANTClassifier (interval quantiles, extra trees);
 - tune: `hapticlab tune DIR -p PROFILE --json --out NEW` (its outer
   estimate, `outer_accuracy`), its CPU the child's (RUSAGE_CHILDREN);
@@ -72,11 +74,12 @@ import tempfile
 import time
 from pathlib import Path
 
-METHODS = ("minirocket", "hydra", "quant", "tune")
+METHODS = ("minirocket", "hydra", "quant", "tune", "hydra-alone")
 NAMES = {
     "minirocket": "aeon MiniRocket",
     "hydra": "aeon MultiRocket-Hydra",
     "quant": "aeon QUANT",
+    "hydra-alone": "aeon Hydra",
     "tune": "hapticlab tune (outer)",
     "evaluate": "hapticlab evaluate (profile as written)",
 }
@@ -104,7 +107,7 @@ def parse():
     p.add_argument("dir", type=Path, nargs="?", help="a folder of hapticlab recordings (format v1)")
     p.add_argument("-p", "--profile", type=Path, help="the hapticlab profile: its [analysis] and [evaluation]")
     p.add_argument("--hapticlab", default="hapticlab", help="the hapticlab binary (default: on PATH)")
-    p.add_argument("--methods", default=",".join(METHODS), help="comma list of " + ", ".join(METHODS))
+    p.add_argument("--methods", default="minirocket,hydra,quant,tune", help="comma list of " + ", ".join(METHODS))
     p.add_argument("--seed", type=int, default=0, help="aeon's random_state and tune's --seed (the split is the profile's)")
     p.add_argument("--threads", type=int, help="threads for aeon and cores for hapticlab (default: every usable core)")
     p.add_argument("--budget", type=int, help="tune's --budget (default: tune's)")
@@ -249,6 +252,10 @@ def classifier(name, seed, threads):
         from aeon.classification.convolution_based import MiniRocketClassifier
 
         return MiniRocketClassifier(n_jobs=threads, random_state=seed)
+    if name == "hydra-alone":
+        from aeon.classification.convolution_based import HydraClassifier
+
+        return HydraClassifier(n_jobs=threads, random_state=seed)
     if name == "hydra":
         from aeon.classification.convolution_based import MultiRocketHydraClassifier
 
@@ -266,7 +273,7 @@ def classifier(name, seed, threads):
 def run_aeon(name, parts, X, y, seed, threads, warm_up):
     import numpy as np
 
-    if name == "hydra":
+    if name in ("hydra", "hydra-alone"):
         try:
             import torch  # noqa: F401
         except ImportError:
