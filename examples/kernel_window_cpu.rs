@@ -25,30 +25,14 @@ use hapticlab::analysis::kernels::{DEFAULT_FEATURES, KernelTransform};
 #[path = "../benches/shared/noisy_sines.rs"]
 mod noisy_sines;
 use noisy_sines::windows;
-
-/// This thread's CPU time, in seconds.
-fn thread_cpu() -> f64 {
-    let mut t = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: `t` is a valid timespec for the call to fill.
-    let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut t) };
-    assert_eq!(rc, 0, "clock_gettime(CLOCK_THREAD_CPUTIME_ID) failed");
-    t.tv_sec as f64 + t.tv_nsec as f64 * 1e-9
-}
+#[path = "../benches/shared/thread_cpu.rs"]
+mod thread_cpu;
+use thread_cpu::{number_arg, thread_cpu};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let number = |i: usize, default: usize| -> usize {
-        match args.get(i) {
-            None => default,
-            Some(a) => a.parse().unwrap_or_else(|_| {
-                eprintln!("kernel_window_cpu: {a:?} is not a whole number (POINTS [R])");
-                std::process::exit(2)
-            }),
-        }
-    };
+    let number =
+        |i: usize, default: usize| number_arg(&args, i, default, "kernel_window_cpu", "POINTS [R]");
     let (points, repeats) = (number(0, 1000), number(1, 50).max(1));
     let train = windows(80, points, 1);
     let refs: Vec<&[f64]> = train.iter().map(Vec::as_slice).collect();

@@ -200,37 +200,50 @@ fn settings_the_families_cannot_use_are_refused_by_key() {
 #[test]
 fn check_names_the_family_and_the_classifier() {
     let dir = tempfile::tempdir().unwrap();
-    let kernels = tiny_with(
-        dir.path(),
-        "k.toml",
-        "features = \"kernels\"\nkernel_features = 200",
-        "method = \"ridge\"",
-    );
-    let r = run(&["check", &kernels]);
-    assert_eq!(r.code, Some(0), "{r:?}");
-    assert!(
-        r.stdout.contains("168 random-kernel features (200 asked") && r.stdout.contains(", ridge"),
-        "{r:?}"
-    );
-    assert!(!r.stdout.contains("k = "), "{r:?}");
-    let quantiles = tiny_with(
-        dir.path(),
-        "q.toml",
-        "features = \"quantiles\"",
-        "method = \"lda\"",
-    );
-    let r = run(&["check", &quantiles]);
-    assert_eq!(r.code, Some(0), "{r:?}");
-    assert!(
-        r.stdout.contains("interval-quantile features, LDA"),
-        "{r:?}"
-    );
+    for (i, (analysis, method, says)) in [
+        (
+            "features = \"kernels\"\nkernel_features = 200",
+            "ridge",
+            "168 random-kernel features (200 asked",
+        ),
+        (
+            "features = \"quantiles\"",
+            "lda",
+            "interval-quantile features, LDA",
+        ),
+        // 16 points: one dilation, 64 groups of 8 kernels, wins and losses.
+        (
+            "features = \"hydra\"",
+            "ridge",
+            "1024 competing-kernel features, ridge",
+        ),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let profile = tiny_with(
+            dir.path(),
+            &format!("{i}.toml"),
+            analysis,
+            &format!("method = \"{method}\""),
+        );
+        let r = run(&["check", &profile]);
+        assert_eq!(r.code, Some(0), "{r:?}");
+        assert!(r.stdout.contains(says), "{says}: {r:?}");
+        assert!(
+            r.stdout.contains(&format!(
+                ", {}",
+                if method == "lda" { "LDA" } else { method }
+            )),
+            "{r:?}"
+        );
+        assert!(!r.stdout.contains("k = "), "{r:?}");
+    }
 }
 
 /// Competing kernels (Hydra) go through the same commands: nothing fitted
-/// but the classifier, so the model file holds no kernels; `check` counts
-/// their features; a window shorter than a kernel's span of the first
-/// difference is refused by key.
+/// but the classifier, so the model file holds no kernels; a window
+/// shorter than a kernel's span of the first difference is refused by key.
 #[test]
 fn competing_kernels_train_classify_and_evaluate() {
     let dir = tempfile::tempdir().unwrap();
@@ -240,13 +253,6 @@ fn competing_kernels_train_classify_and_evaluate() {
         "h.toml",
         "features = \"hydra\"",
         "method = \"ridge\"",
-    );
-    let r = run(&["check", &profile]);
-    assert_eq!(r.code, Some(0), "{r:?}");
-    // 16 points: one dilation, 64 groups of 8 kernels, wins and losses.
-    assert!(
-        r.stdout.contains("1024 competing-kernel features, ridge"),
-        "{r:?}"
     );
     let model = dir.path().join("m.json");
     let r = run(&["train", "-p", &profile, "--out", p(&model), &data]);

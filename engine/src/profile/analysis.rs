@@ -575,21 +575,33 @@ fn check_family(s: &Analysis) -> Result<(), (String, String)> {
             format!("is only used with features = \"spectrum\", not \"{family}\""),
         );
     }
+    // The fewest points a family takes, said of the key that sets them.
     let n = s.points();
+    let least = match s.features {
+        FeatureFamily::Kernels => Some((
+            super::families::KERNEL_MIN_POINTS,
+            "random kernels",
+            "a kernel spans 9",
+        )),
+        FeatureFamily::Hydra => Some((
+            super::families::HYDRA_MIN_POINTS,
+            "competing kernels",
+            "a kernel spans 9 of the first difference",
+        )),
+        FeatureFamily::Spectrum | FeatureFamily::Quantiles => None,
+    };
+    if let Some((least, what, why)) = least.filter(|l| n < l.0) {
+        let key = if s.windows.is_some() {
+            "windows"
+        } else {
+            "window"
+        };
+        return bad(
+            key,
+            format!("holds {n} points; {what} need at least {least} ({why})"),
+        );
+    }
     if s.features == FeatureFamily::Kernels {
-        let least = super::families::KERNEL_MIN_POINTS;
-        if n < least {
-            return bad(
-                if s.windows.is_some() {
-                    "windows"
-                } else {
-                    "window"
-                },
-                format!(
-                    "holds {n} points; random kernels need at least {least} (a kernel spans 9)"
-                ),
-            );
-        }
         let asked = s.kernel_features_asked();
         let [lo, hi] = super::families::KERNEL_FEATURES_RANGE;
         if !(lo..=hi).contains(&asked) {
@@ -598,19 +610,6 @@ fn check_family(s: &Analysis) -> Result<(), (String, String)> {
                 format!("must be {lo} to {hi}, got {asked}"),
             );
         }
-    }
-    let least = super::families::HYDRA_MIN_POINTS;
-    if s.features == FeatureFamily::Hydra && n < least {
-        return bad(
-            if s.windows.is_some() {
-                "windows"
-            } else {
-                "window"
-            },
-            format!(
-                "holds {n} points; competing kernels need at least {least} (a kernel spans 9 of the first difference)"
-            ),
-        );
     }
     Ok(())
 }
