@@ -27,6 +27,8 @@
 //! registers. Never allocates per call beyond the scratch made once
 //! ([`Hydra::new`]).
 
+use std::sync::LazyLock;
+
 use rand::{RngCore, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -45,10 +47,16 @@ const LANES: usize = 4;
 pub type Taps = [f64; HYDRA_LENGTH];
 
 /// Every kernel's taps, group after group ([`HYDRA_GROUPS`] ×
-/// [`HYDRA_KERNELS`]): standard normal draws (Box–Muller over the fixed
+/// [`HYDRA_KERNELS`]), drawn once for the process ([`draw_taps`]).
+pub fn kernel_taps() -> &'static [Taps] {
+    static TAPS: LazyLock<Vec<Taps>> = LazyLock::new(draw_taps);
+    &TAPS
+}
+
+/// The kernels' taps: standard normal draws (Box–Muller over the fixed
 /// seed's ChaCha8 stream, so no library's sampler decides them), less
 /// their mean, over the sum of their magnitudes.
-pub fn kernel_taps() -> Vec<Taps> {
+fn draw_taps() -> Vec<Taps> {
     let mut rng = ChaCha8Rng::seed_from_u64(SEED);
     // A uniform in (0, 1]: 53 random bits.
     let mut uniform = move || ((rng.next_u64() >> 11) + 1) as f64 / (1u64 << 53) as f64;
@@ -74,7 +82,6 @@ pub fn kernel_taps() -> Vec<Taps> {
 pub struct Hydra {
     points: usize,
     dilations: Vec<usize>,
-    taps: Vec<Taps>,
     /// The series being convolved with zeros either side, as many as the
     /// largest dilation's padding, so a shifted series is a slice.
     padded: Vec<f64>,
@@ -91,7 +98,6 @@ impl Hydra {
         Hydra {
             points,
             dilations,
-            taps: kernel_taps(),
             // A run of points reads up to LANES − 1 beyond the last.
             padded: vec![0.0; points + 2 * margin + LANES],
             diff: vec![0.0; points.saturating_sub(1)],
@@ -118,34 +124,37 @@ impl Hydra {
             *d = w[1] - w[0];
         }
         let per_series = HYDRA_GROUPS / 2 * HYDRA_KERNELS * 2;
-        let dilations = std::mem::take(&mut self.dilations);
-        let diff = std::mem::take(&mut self.diff);
-        for (i, &d) in dilations.iter().enumerate() {
-            for (s, series) in [x, &diff[..]].into_iter().enumerate() {
+        for (i, &d) in self.dilations.iter().enumerate() {
+            for (s, series) in [x, &self.diff[..]].into_iter().enumerate() {
                 let at = (2 * i + s) * per_series;
-                self.series(series, d, s, &mut out[at..at + per_series]);
+                series_features(
+                    &mut self.padded,
+                    series,
+                    d,
+                    s,
+                    &mut out[at..at + per_series],
+                );
             }
         }
-        self.dilations = dilations;
-        self.diff = diff;
     }
+}
 
-    /// One series' features at dilation `d` with the groups of half `s`
-    /// (0 the signal's, 1 the difference's).
-    fn series(&mut self, series: &[f64], d: usize, s: usize, out: &mut [f64]) {
-        let m = series.len();
-        let pad = d * (HYDRA_LENGTH / 2);
-        self.padded[..pad].fill(0.0);
-        self.padded[pad..pad + m].copy_from_slice(series);
-        self.padded[pad + m..pad + m + pad + LANES].fill(0.0);
-        out.fill(0.0);
-        let half = HYDRA_GROUPS / 2 * HYDRA_KERNELS;
-        let taps = &self.taps[s * half..(s + 1) * half];
-        points_of(&self.padded, d, m, taps, out);
-        let per = m as f64;
-        for c in out.iter_mut() {
-            *c = (*c / per).max(0.0).sqrt();
-        }
+/// One series' features at dilation `d` with the groups of half `s` (0
+/// the signal's, 1 the difference's), `padded` the scratch it is laid in
+/// with zeros either side.
+fn series_features(padded: &mut [f64], series: &[f64], d: usize, s: usize, out: &mut [f64]) {
+    let m = series.len();
+    let pad = d * (HYDRA_LENGTH / 2);
+    padded[..pad].fill(0.0);
+    padded[pad..pad + m].copy_from_slice(series);
+    padded[pad + m..pad + m + pad + LANES].fill(0.0);
+    out.fill(0.0);
+    let half = HYDRA_GROUPS / 2 * HYDRA_KERNELS;
+    let taps = &kernel_taps()[s * half..(s + 1) * half];
+    points_of(padded, d, m, taps, out);
+    let per = m as f64;
+    for c in out.iter_mut() {
+        *c = (*c / per).max(0.0).sqrt();
     }
 }
 
@@ -283,7 +292,7 @@ mod tests {
     fn the_kernels_are_fixed_zero_mean_and_of_unit_magnitude() {
         let taps = kernel_taps();
         assert_eq!(taps.len(), HYDRA_GROUPS * HYDRA_KERNELS);
-        for w in &taps {
+        for w in taps {
             assert!(w.iter().sum::<f64>().abs() < 1e-12);
             assert!((w.iter().map(|v| v.abs()).sum::<f64>() - 1.0).abs() < 1e-12);
         }

@@ -99,22 +99,23 @@ pub struct LeftOut {
 pub fn setting_seconds(analysis: &Analysis, work: Work, recordings: usize) -> Option<f64> {
     let channels = (1 + analysis.channels.len()) as f64;
     let per_recording = analysis.sub_windows().len() as f64;
+    let points = analysis.points();
     match analysis.features {
-        FeatureFamily::Kernels => {}
+        FeatureFamily::Kernels => {
+            let layout = KernelLayout::new(points, analysis.kernel_features_asked()).ok()?;
+            let points = points as f64;
+            let window = channels * points * layout.feature_count() as f64 * TRANSFORM_SECONDS;
+            let fit =
+                channels * points * (KERNEL_COUNT * layout.dilations.len()) as f64 * FIT_SECONDS;
+            Some(work.transformed as f64 * per_recording * window + work.fits as f64 * fit)
+        }
         FeatureFamily::Hydra => {
-            let points = analysis.points();
             let dilations = crate::profile::families::hydra_dilations(points).len();
             let window = channels * (points * dilations) as f64 * HYDRA_SECONDS;
-            return Some(recordings as f64 * per_recording * window);
+            Some(recordings as f64 * per_recording * window)
         }
-        FeatureFamily::Spectrum | FeatureFamily::Quantiles => return None,
+        FeatureFamily::Spectrum | FeatureFamily::Quantiles => None,
     }
-    let points = analysis.points();
-    let layout = KernelLayout::new(points, analysis.kernel_features_asked()).ok()?;
-    let points = points as f64;
-    let window = channels * points * layout.feature_count() as f64 * TRANSFORM_SECONDS;
-    let fit = channels * points * (KERNEL_COUNT * layout.dilations.len()) as f64 * FIT_SECONDS;
-    Some(work.transformed as f64 * per_recording * window + work.fits as f64 * fit)
 }
 
 /// CPU time in the lab's words: minutes below two hours, else hours; a
@@ -195,7 +196,7 @@ fn left_out_because(
 /// The feature settings of one family left out for one reason: their
 /// keys, the settings they make, and the least and most figure.
 struct Tally {
-    family: String,
+    family: FeatureFamily,
     reason: Reason,
     keys: Vec<Vec<usize>>,
     settings: usize,
@@ -219,7 +220,7 @@ pub fn affordable(
             kept.push(s);
             continue;
         };
-        let family = crate::profile::options::plain_word(&s.analysis.features);
+        let family = s.analysis.features;
         let key = s.feature_key();
         match tallies
             .iter_mut()
@@ -259,7 +260,7 @@ pub fn affordable(
                 Reason::Seconds => format!(
                     "about {} each in this search ({}), over --max-minutes {max_minutes}; --max-minutes {} searches them",
                     cpu_time(t.least, t.most),
-                    if t.family == "hydra" {
+                    if t.family == FeatureFamily::Hydra {
                         format!("the features of {} recordings, made once", counted(fits.recordings))
                     } else {
                         format!(
@@ -271,7 +272,7 @@ pub fn affordable(
                     (t.most / 60.0).ceil()
                 ),
             },
-            family: t.family,
+            family: crate::profile::options::plain_word(&t.family),
             feature_settings: t.keys.len(),
             settings: t.settings,
         })
