@@ -24,7 +24,9 @@
 //!
 //! Per dilation, [`LANES`] points at a time: their nine shifted inputs are
 //! loaded once, then every group's kernels respond and compete in
-//! registers. Never allocates per call beyond the scratch made once
+//! registers. The responses are in single precision (`f32`, eight points a
+//! register; the taps and the series rounded to it once), the wins summed
+//! in double. Never allocates per call beyond the scratch made once
 //! ([`Hydra::new`]).
 
 use std::sync::LazyLock;
@@ -39,9 +41,9 @@ use crate::profile::families::{
 /// The draws of every kernel's taps.
 const SEED: u64 = 0x0068_7964_7261_0001;
 
-/// Points made at once: one AVX2 register of `f64`s. The nine shifted
+/// Points made at once: one AVX2 register of `f32`s. The nine shifted
 /// inputs of a run of points are loaded once and serve every group.
-const LANES: usize = 4;
+const LANES: usize = 8;
 
 /// One kernel's taps.
 pub type Taps = [f64; HYDRA_LENGTH];
@@ -50,6 +52,13 @@ pub type Taps = [f64; HYDRA_LENGTH];
 /// [`HYDRA_KERNELS`]), drawn once for the process ([`draw_taps`]).
 pub fn kernel_taps() -> &'static [Taps] {
     static TAPS: LazyLock<Vec<Taps>> = LazyLock::new(draw_taps);
+    &TAPS
+}
+
+/// [`kernel_taps`] in single precision, as the transform computes.
+fn single_taps() -> &'static [[f32; HYDRA_LENGTH]] {
+    static TAPS: LazyLock<Vec<[f32; HYDRA_LENGTH]>> =
+        LazyLock::new(|| kernel_taps().iter().map(|w| w.map(|v| v as f32)).collect());
     &TAPS
 }
 
@@ -84,7 +93,7 @@ pub struct Hydra {
     dilations: Vec<usize>,
     /// The series being convolved with zeros either side, as many as the
     /// largest dilation's padding, so a shifted series is a slice.
-    padded: Vec<f64>,
+    padded: Vec<f32>,
     /// The window's first difference.
     diff: Vec<f64>,
 }
@@ -142,15 +151,17 @@ impl Hydra {
 /// One series' features at dilation `d` with the groups of half `s` (0
 /// the signal's, 1 the difference's), `padded` the scratch it is laid in
 /// with zeros either side.
-fn series_features(padded: &mut [f64], series: &[f64], d: usize, s: usize, out: &mut [f64]) {
+fn series_features(padded: &mut [f32], series: &[f64], d: usize, s: usize, out: &mut [f64]) {
     let m = series.len();
     let pad = d * (HYDRA_LENGTH / 2);
     padded[..pad].fill(0.0);
-    padded[pad..pad + m].copy_from_slice(series);
+    for (p, &v) in padded[pad..pad + m].iter_mut().zip(series) {
+        *p = v as f32;
+    }
     padded[pad + m..pad + m + pad + LANES].fill(0.0);
     out.fill(0.0);
     let half = HYDRA_GROUPS / 2 * HYDRA_KERNELS;
-    let taps = &kernel_taps()[s * half..(s + 1) * half];
+    let taps = &single_taps()[s * half..(s + 1) * half];
     points_of(padded, d, m, taps, out);
     let per = m as f64;
     for c in out.iter_mut() {
@@ -164,7 +175,7 @@ fn series_features(padded: &mut [f64], series: &[f64], d: usize, s: usize, out: 
 /// compiled a second time for AVX2 and that copy taken when the processor
 /// has it: the same operations in the same order, the same results to
 /// the bit.
-fn points_of(padded: &[f64], d: usize, m: usize, taps: &[Taps], counts: &mut [f64]) {
+fn points_of(padded: &[f32], d: usize, m: usize, taps: &[[f32; HYDRA_LENGTH]], counts: &mut [f64]) {
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx2") {
@@ -178,7 +189,13 @@ fn points_of(padded: &[f64], d: usize, m: usize, taps: &[Taps], counts: &mut [f6
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn points_avx2(padded: &[f64], d: usize, m: usize, taps: &[Taps], counts: &mut [f64]) {
+unsafe fn points_avx2(
+    padded: &[f32],
+    d: usize,
+    m: usize,
+    taps: &[[f32; HYDRA_LENGTH]],
+    counts: &mut [f64],
+) {
     points_portable(padded, d, m, taps, counts);
 }
 
@@ -187,18 +204,24 @@ unsafe fn points_avx2(padded: &[f64], d: usize, m: usize, taps: &[Taps], counts:
 /// by tap in order), the best and worst kernel at each point, and the
 /// counts. Between equal responses the first kernel counts.
 #[inline(always)]
-fn points_portable(padded: &[f64], d: usize, m: usize, taps: &[Taps], counts: &mut [f64]) {
+fn points_portable(
+    padded: &[f32],
+    d: usize,
+    m: usize,
+    taps: &[[f32; HYDRA_LENGTH]],
+    counts: &mut [f64],
+) {
     let groups = taps.chunks_exact(HYDRA_KERNELS);
     let counts = &mut counts[..groups.len() * 2 * HYDRA_KERNELS];
     for t in (0..m).step_by(LANES) {
         let used = LANES.min(m - t);
-        let x: [[f64; LANES]; HYDRA_LENGTH] =
+        let x: [[f32; LANES]; HYDRA_LENGTH] =
             std::array::from_fn(|j| std::array::from_fn(|l| padded[t + j * d + l]));
         for (group, counts) in taps
             .chunks_exact(HYDRA_KERNELS)
             .zip(counts.chunks_exact_mut(2 * HYDRA_KERNELS))
         {
-            let mut y = [[0.0f64; LANES]; HYDRA_KERNELS];
+            let mut y = [[0.0f32; LANES]; HYDRA_KERNELS];
             for (y, w) in y.iter_mut().zip(group) {
                 for (x, &wj) in x.iter().zip(w) {
                     for l in 0..LANES {
@@ -207,9 +230,9 @@ fn points_portable(padded: &[f64], d: usize, m: usize, taps: &[Taps], counts: &m
                 }
             }
             let (mut best, mut worst) = (y[0], y[0]);
-            let (mut best_k, mut worst_k) = ([0.0f64; LANES], [0.0f64; LANES]);
+            let (mut best_k, mut worst_k) = ([0.0f32; LANES], [0.0f32; LANES]);
             for (k, y) in y.iter().enumerate().skip(1) {
-                let kf = k as f64;
+                let kf = k as f32;
                 for l in 0..LANES {
                     let above = y[l] > best[l];
                     best[l] = if above { y[l] } else { best[l] };
@@ -220,7 +243,7 @@ fn points_portable(padded: &[f64], d: usize, m: usize, taps: &[Taps], counts: &m
                 }
             }
             for l in 0..used {
-                counts[2 * best_k[l] as usize] += best[l];
+                counts[2 * best_k[l] as usize] += f64::from(best[l]);
                 counts[2 * worst_k[l] as usize + 1] += 1.0;
             }
         }
@@ -232,9 +255,10 @@ mod tests {
     use super::*;
     use crate::profile::families::HYDRA_MIN_POINTS;
 
-    /// The transform one point at a time, as the paper states it.
+    /// The transform one point at a time, as the paper states it (the
+    /// responses in single precision, as the transform's).
     fn direct(x: &[f64]) -> Vec<f64> {
-        let taps = kernel_taps();
+        let taps = single_taps();
         let diff: Vec<f64> = x.windows(2).map(|w| w[1] - w[0]).collect();
         let mut out = Vec::new();
         for d in hydra_dilations(x.len()) {
@@ -242,7 +266,7 @@ mod tests {
                 let m = series.len() as i64;
                 let at = |t: i64| {
                     if (0..m).contains(&t) {
-                        series[t as usize]
+                        series[t as usize] as f32
                     } else {
                         0.0
                     }
@@ -252,10 +276,10 @@ mod tests {
                         &taps[(s * HYDRA_GROUPS / 2 + g) * HYDRA_KERNELS..][..HYDRA_KERNELS];
                     let mut counts = [0.0; 2 * HYDRA_KERNELS];
                     for t in 0..m {
-                        let outputs: Vec<f64> = group
+                        let outputs: Vec<f32> = group
                             .iter()
                             .map(|w| {
-                                let mut sum = 0.0;
+                                let mut sum = 0.0f32;
                                 for (j, wj) in w.iter().enumerate() {
                                     sum += wj * at(t + (j as i64 - 4) * d as i64);
                                 }
@@ -271,7 +295,7 @@ mod tests {
                                 lo = k;
                             }
                         }
-                        counts[2 * hi] += outputs[hi];
+                        counts[2 * hi] += f64::from(outputs[hi]);
                         counts[2 * lo + 1] += 1.0;
                     }
                     out.extend(counts.iter().map(|c| (c / m as f64).max(0.0).sqrt()));

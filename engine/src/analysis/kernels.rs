@@ -39,9 +39,21 @@
 //! dilation while it is in a register (four biases a pass, vectorised;
 //! AVX2 when the processor has it). The PPV counting is most of the work:
 //! about 9 million comparisons for 9996 features of a 1000-point window.
-//! Every output is summed in the same order as the fit sums it, so the
-//! features are the same to the bit as one kernel at a time would give.
-//! Never allocates per call beyond the scratch made once ([`Convolution`]).
+//!
+//! The convolution and the counting are in single precision (`f32`, as
+//! aeon's MiniRocket computes them): eight points a register where double
+//! precision holds four, which halves the counting. The window (detrended
+//! by the analysis first, unless the profile says `detrend = "none"`) is
+//! rounded to `f32` once; the fit rounds each bias to `f32`, so the fit
+//! and the transform compare the same numbers, and a model file's biases
+//! are those numbers exactly (a model written before, with biases in
+//! double precision, loads and has them rounded). A feature differs from
+//! a double-precision one only where an output lies within rounding
+//! (about 10⁻⁷ of the window's largest values) of its bias: on the
+//! generated sets no search's choice or outer estimate changed. Every
+//! output is summed in the same order as the fit sums it, so the features
+//! are the same to the bit as one kernel at a time would give. Never
+//! allocates per call beyond the scratch made once ([`Convolution`]).
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -198,14 +210,16 @@ const BLOCK_ROWS: usize = KERNEL_LENGTH + 3;
 pub struct Convolution {
     points: usize,
     /// `−Σ_j x[t + (j − 4)·d]`: every kernel's −1 part (the fit's).
-    base: Vec<f64>,
+    base: Vec<f32>,
     /// One kernel's output (the fit's).
-    output: Vec<f64>,
+    output: Vec<f32>,
     /// The channel being transformed with zeros either side, as many as
     /// the largest dilation's padding, so a shifted window is a slice.
-    padded: Vec<f64>,
+    padded: Vec<f32>,
     /// One block of points: [`BLOCK_ROWS`] rows of [`BLOCK`] values.
-    block: Vec<f64>,
+    block: Vec<f32>,
+    /// The biases of the channel being transformed, in single precision.
+    biases: Vec<f32>,
 }
 
 impl Convolution {
@@ -217,6 +231,7 @@ impl Convolution {
             output: vec![0.0; points],
             padded: vec![0.0; points + 2 * margin],
             block: vec![0.0; BLOCK_ROWS * BLOCK],
+            biases: Vec::new(),
         }
     }
 
@@ -228,7 +243,7 @@ impl Convolution {
 
     /// `x[t + (j − 4)·d]` for every `t` of the window last loaded (zero
     /// beyond it): the nine shifted windows of dilation `d` are slices.
-    fn shifted(&self, j: usize, d: usize) -> &[f64] {
+    fn shifted(&self, j: usize, d: usize) -> &[f32] {
         let from = Convolution::margin(self.points) - KernelLayout::padding(d) + j * d;
         &self.padded[from..from + self.points]
     }
@@ -236,7 +251,7 @@ impl Convolution {
     /// Takes `x` as the window the fit convolves next.
     fn load(&mut self, x: &[f64]) {
         let margin = Convolution::margin(self.points);
-        self.padded[margin..margin + self.points].copy_from_slice(x);
+        single(x, &mut self.padded[margin..margin + self.points]);
     }
 
     /// The −1 part of every kernel at dilation `d` for the window loaded:
@@ -254,7 +269,7 @@ impl Convolution {
 
     /// The output of `kernel` at the dilation last dilated, all `points`
     /// of it (padded): `((base + 3x_a) + 3x_b) + 3x_c`.
-    fn convolve(&mut self, kernel: [usize; 3], d: usize) -> &mut [f64] {
+    fn convolve(&mut self, kernel: [usize; 3], d: usize) -> &mut [f32] {
         let mut output = std::mem::take(&mut self.output);
         let [a, b, c] = kernel.map(|p| self.shifted(p, d));
         for ((((o, &u), &a), &b), &c) in output.iter_mut().zip(&self.base).zip(a).zip(b).zip(c) {
@@ -268,7 +283,7 @@ impl Convolution {
     /// features. On x86-64 compiled a second time for AVX2 and that copy
     /// taken when the processor has it (the same operations in the same
     /// order: the same results to the bit).
-    fn channel(&mut self, layout: &KernelLayout, x: &[f64], biases: &[f64], out: &mut [f64]) {
+    fn channel(&mut self, layout: &KernelLayout, x: &[f64], biases: &[f32], out: &mut [f64]) {
         #[cfg(target_arch = "x86_64")]
         {
             if std::arch::is_x86_feature_detected!("avx2") {
@@ -286,7 +301,7 @@ impl Convolution {
         &mut self,
         layout: &KernelLayout,
         x: &[f64],
-        biases: &[f64],
+        biases: &[f32],
         out: &mut [f64],
     ) {
         self.channel_portable(layout, x, biases, out);
@@ -305,12 +320,12 @@ impl Convolution {
         &mut self,
         layout: &KernelLayout,
         x: &[f64],
-        biases: &[f64],
+        biases: &[f32],
         out: &mut [f64],
     ) {
         let n = self.points;
         let margin = Convolution::margin(n);
-        self.padded[margin..margin + n].copy_from_slice(x);
+        single(x, &mut self.padded[margin..margin + n]);
         let padded_x = &self.padded[..];
         let (rows, work) = self.block.split_at_mut(KERNEL_LENGTH * BLOCK);
         let (base, work) = work.split_at_mut(BLOCK);
@@ -387,7 +402,7 @@ impl Convolution {
 /// each output is made once per pass and compared with every bias of the
 /// pass while in a register; the loops over `t` are vectorised.
 #[inline(always)]
-fn count_above(u: &[f64], v: &[f64], biases: &[f64], sums: &mut [f64]) {
+fn count_above(u: &[f32], v: &[f32], biases: &[f32], sums: &mut [f64]) {
     let mut bs = biases.chunks_exact(4);
     let mut ss = sums.chunks_exact_mut(4);
     for (b, s) in (&mut bs).zip(&mut ss) {
@@ -404,17 +419,24 @@ fn count_above(u: &[f64], v: &[f64], biases: &[f64], sums: &mut [f64]) {
 
 /// One pass of [`count_above`] over `N` biases.
 #[inline(always)]
-fn count_pass<const N: usize>(u: &[f64], v: &[f64], biases: &[f64], sums: &mut [f64]) {
-    let b: [f64; N] = std::array::from_fn(|j| biases[j]);
-    let mut n = [0u64; N];
+fn count_pass<const N: usize>(u: &[f32], v: &[f32], biases: &[f32], sums: &mut [f64]) {
+    let b: [f32; N] = std::array::from_fn(|j| biases[j]);
+    let mut n = [0u32; N];
     for (&p, &q) in u.iter().zip(&v[..u.len()]) {
         let y = p + q;
         for j in 0..N {
-            n[j] += u64::from(y > b[j]);
+            n[j] += u32::from(y > b[j]);
         }
     }
     for j in 0..N {
-        sums[j] += n[j] as f64;
+        sums[j] += f64::from(n[j]);
+    }
+}
+
+/// `x` in single precision, into `to` (as long).
+fn single(x: &[f64], to: &mut [f32]) {
+    for (t, &v) in to.iter_mut().zip(x) {
+        *t = v as f32;
     }
 }
 
@@ -449,7 +471,7 @@ impl KernelTransform {
         let kernels = kernels();
         let mut rng = ChaCha8Rng::seed_from_u64(SEED);
         let mut conv = Convolution::new(points);
-        let (mut qs, mut got) = (Vec::new(), Vec::new());
+        let (mut qs, mut got, mut output) = (Vec::new(), Vec::new(), Vec::new());
         let mut biases = Vec::with_capacity(channels);
         for c in 0..channels {
             let mut own = vec![0.0; layout.feature_count()];
@@ -475,8 +497,13 @@ impl KernelTransform {
                     qs.clear();
                     qs.extend((first..first + count).map(bias_quantile));
                     got.clear();
-                    quantiles_unsorted(conv.convolve(kernels[k], d), &qs, &mut got);
-                    own[first..first + count].copy_from_slice(&got);
+                    output.clear();
+                    output.extend(conv.convolve(kernels[k], d).iter().map(|&v| f64::from(v)));
+                    quantiles_unsorted(&mut output, &qs, &mut got);
+                    // Single precision, as the outputs it is compared with.
+                    for (b, &q) in own[first..first + count].iter_mut().zip(&got) {
+                        *b = f64::from(q as f32);
+                    }
                 }
                 f0 += KERNEL_COUNT * count;
             }
@@ -528,19 +555,25 @@ impl KernelTransform {
         let n = self.layout.points;
         let per = self.layout.feature_count();
         debug_assert_eq!(conv.points, n, "a convolution made for other windows");
+        let mut single_biases = std::mem::take(&mut conv.biases);
         for (c, biases) in self.biases.iter().enumerate() {
+            single_biases.clear();
+            single_biases.extend(biases.iter().map(|&b| b as f32));
             conv.channel(
                 &self.layout,
                 &window[c * n..(c + 1) * n],
-                biases,
+                &single_biases,
                 &mut out[c * per..(c + 1) * per],
             );
         }
+        conv.biases = single_biases;
     }
 
     /// A scratch [`Convolution`] for this transform's windows.
     pub fn convolution(&self) -> Convolution {
-        Convolution::new(self.layout.points)
+        let mut conv = Convolution::new(self.layout.points);
+        conv.biases.reserve(self.layout.feature_count());
+        conv
     }
 }
 
@@ -652,8 +685,9 @@ mod tests {
             for kernel in kernels() {
                 let fast = conv.convolve(kernel, d).to_vec();
                 let naive = naive_convolution(&x, kernel, d);
-                for (a, b) in fast.iter().zip(&naive) {
-                    assert!((a - b).abs() < 1e-12, "d {d} {kernel:?}: {a} {b}");
+                for (&a, b) in fast.iter().zip(&naive) {
+                    // Single precision: 27 terms of at most 3 each.
+                    assert!((f64::from(a) - b).abs() < 1e-5, "d {d} {kernel:?}: {a} {b}");
                 }
             }
         }
@@ -682,29 +716,29 @@ mod tests {
     }
 
     /// Kernel `kernel` at dilation `d` over `x`, written directly but
-    /// summed in the order the module sums: the −1 part over the nine taps
-    /// (zeros beyond the window) from the first tap on, then 3 times each
-    /// tap of weight 2, the first first.
+    /// summed as the module sums: in single precision, the −1 part over
+    /// the nine taps (zeros beyond the window) from the first tap on, then
+    /// 3 times each tap of weight 2, the first first.
     fn direct_in_order(x: &[f64], kernel: [usize; 3], d: usize) -> Vec<f64> {
         let n = x.len() as isize;
         let tap = |t: isize, j: usize| {
             let at = t + (j as isize - 4) * d as isize;
             if (0..n).contains(&at) {
-                x[at as usize]
+                x[at as usize] as f32
             } else {
                 0.0
             }
         };
         (0..n)
             .map(|t| {
-                let mut y = 0.0;
+                let mut y = 0.0f32;
                 for j in 0..KERNEL_LENGTH {
                     y -= tap(t, j);
                 }
                 for p in kernel {
                     y += 3.0 * tap(t, p);
                 }
-                y
+                f64::from(y)
             })
             .collect()
     }
@@ -803,15 +837,19 @@ mod tests {
                         .all(|(a, b)| a.to_bits() == b.to_bits()),
                     "{points} points, {channels} channel(s)"
                 );
-                // Summed term by term (Σ w_j x_j, another order) the outputs
-                // differ by rounding, so a count could differ only where an
-                // output lies within rounding of a bias; on these test
-                // windows none does and every feature is the same.
+                // Summed term by term in double precision (Σ w_j x_j) the
+                // outputs differ by single precision's rounding, so a count
+                // differs only where an output lies within rounding of a
+                // bias: a few features, by a point or two.
                 if !trained {
-                    assert_eq!(
-                        out,
-                        reference_features(&t, w, naive_convolution),
-                        "{points} points, {channels} channel(s), term by term"
+                    let exact = reference_features(&t, w, naive_convolution);
+                    let apart: Vec<f64> =
+                        out.iter().zip(&exact).map(|(a, b)| (a - b).abs()).collect();
+                    let differ = apart.iter().filter(|&&e| e > 0.0).count();
+                    assert!(
+                        differ * 100 <= out.len()
+                            && apart.iter().all(|&e| e * points as f64 <= 2.5),
+                        "{points} points, {channels} channel(s), term by term: {differ} differ"
                     );
                 }
             }
@@ -834,7 +872,10 @@ mod tests {
                 let mut c = fit_conv.clone();
                 c.load(x);
                 c.dilate(d);
-                c.convolve(kernel, d).to_vec()
+                c.convolve(kernel, d)
+                    .iter()
+                    .map(|&v| f64::from(v))
+                    .collect()
             };
             let special = [
                 0.0,
@@ -862,7 +903,13 @@ mod tests {
             let per = t.layout.feature_count();
             for (c, biases) in t.biases.iter().enumerate() {
                 let mut portable = vec![f64::NAN; per];
-                fit_conv.channel_portable(&t.layout, &w[c * n..(c + 1) * n], biases, &mut portable);
+                let single: Vec<f32> = biases.iter().map(|&b| b as f32).collect();
+                fit_conv.channel_portable(
+                    &t.layout,
+                    &w[c * n..(c + 1) * n],
+                    &single,
+                    &mut portable,
+                );
                 assert!(
                     portable
                         .iter()
@@ -893,26 +940,27 @@ mod tests {
                     let x = &w[c * points..(c + 1) * points];
                     let at = |j: usize, t: usize| {
                         let i = t as isize + (j as isize - 4) * d as isize;
-                        (0..points as isize).contains(&i).then(|| x[i as usize])
+                        (0..points as isize)
+                            .contains(&i)
+                            .then(|| x[i as usize] as f32)
                     };
                     let mut y: Vec<f64> = (0..points)
                         .map(|t| {
-                            let mut base = 0.0;
+                            let mut base = 0.0f32;
                             for j in 0..KERNEL_LENGTH {
                                 if let Some(v) = at(j, t) {
                                     base -= v;
                                 }
                             }
                             let row = |j| at(j, t).map_or(0.0, |v| 3.0 * v);
-                            base + row(kernel[0]) + row(kernel[1]) + row(kernel[2])
+                            f64::from(base + row(kernel[0]) + row(kernel[1]) + row(kernel[2]))
                         })
                         .collect();
                     y.sort_by(f64::total_cmp);
                     for _ in 0..count {
-                        own.push(super::super::quantiles::quantile_sorted(
-                            &y,
-                            bias_quantile(own.len()),
-                        ));
+                        let q =
+                            super::super::quantiles::quantile_sorted(&y, bias_quantile(own.len()));
+                        own.push(f64::from(q as f32));
                     }
                 }
             }
@@ -978,7 +1026,12 @@ mod tests {
                     let lo = pos.floor() as usize;
                     let hi = (lo + 1).min(y.len() - 1);
                     let want = y[lo] + (pos - lo as f64) * (y[hi] - y[lo]);
-                    assert!((t.biases[0][f] - want).abs() < 1e-9, "feature {f}");
+                    // Rounded to single precision, as the outputs are.
+                    assert!(
+                        (t.biases[0][f] - want).abs() <= 1e-7 * want.abs(),
+                        "feature {f}"
+                    );
+                    assert_eq!(t.biases[0][f], f64::from(t.biases[0][f] as f32));
                     f += 1;
                 }
             }
