@@ -47,12 +47,12 @@ pub enum Command {
         after_help = "Example:\n  hapticlab scan --label S2 --count 3 --out recordings/session1"
     )]
     Scan(scan::ScanArgs),
-    /// Compute the feature vector (spectrum bins) of each recording.
+    /// Compute the feature vector of each recording (the profile's features: spectrum bins, interval quantiles, kernels).
     #[command(
         after_help = "Example:\n  hapticlab features recordings/thesis-sim --out features.csv"
     )]
     Features(features::FeaturesArgs),
-    /// Train a k-NN model on recordings and save it.
+    /// Train the profile's classifier (k-NN, ridge or LDA) on recordings and save the model.
     #[command(
         after_help = "Example:\n  hapticlab train recordings/thesis-sim --out thesis.model.json"
     )]

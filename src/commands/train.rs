@@ -1,4 +1,5 @@
-//! `hapticlab train`: a k-NN model trained on recordings and saved
+//! `hapticlab train`: the profile's classifier (k-NN, ridge or LDA)
+//! trained on recordings and saved
 //! ([`crate::classify::Model`]).
 
 use std::path::{Path, PathBuf};
