@@ -280,31 +280,28 @@ impl Convolution {
     }
 
     /// One channel's features: `x` its points, `biases` and `out` its
-    /// features. On x86-64 compiled a second time for AVX2 and that copy
-    /// taken when the processor has it (the same operations in the same
-    /// order: the same results to the bit).
-    fn channel(&mut self, layout: &KernelLayout, x: &[f64], biases: &[f32], out: &mut [f64]) {
+    /// features (the biases rounded to single precision into
+    /// [`Convolution::biases`] first). On x86-64 compiled a second time for
+    /// AVX2 and that copy taken when the processor has it (the same
+    /// operations in the same order: the same results to the bit).
+    fn channel(&mut self, layout: &KernelLayout, x: &[f64], biases: &[f64], out: &mut [f64]) {
+        self.biases.clear();
+        self.biases.extend(biases.iter().map(|&b| b as f32));
         #[cfg(target_arch = "x86_64")]
         {
             if std::arch::is_x86_feature_detected!("avx2") {
                 // SAFETY: the processor has AVX2, just checked.
-                unsafe { self.channel_avx2(layout, x, biases, out) };
+                unsafe { self.channel_avx2(layout, x, out) };
                 return;
             }
         }
-        self.channel_portable(layout, x, biases, out);
+        self.channel_portable(layout, x, out);
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    unsafe fn channel_avx2(
-        &mut self,
-        layout: &KernelLayout,
-        x: &[f64],
-        biases: &[f32],
-        out: &mut [f64],
-    ) {
-        self.channel_portable(layout, x, biases, out);
+    unsafe fn channel_avx2(&mut self, layout: &KernelLayout, x: &[f64], out: &mut [f64]) {
+        self.channel_portable(layout, x, out);
     }
 
     /// [`Convolution::channel`], block by block: per dilation and block of
@@ -316,17 +313,12 @@ impl Convolution {
     /// Each value is summed in the order [`Convolution::convolve`] sums it,
     /// so the outputs, and the counts, are the same to the bit.
     #[inline(always)]
-    fn channel_portable(
-        &mut self,
-        layout: &KernelLayout,
-        x: &[f64],
-        biases: &[f32],
-        out: &mut [f64],
-    ) {
+    fn channel_portable(&mut self, layout: &KernelLayout, x: &[f64], out: &mut [f64]) {
         let n = self.points;
         let margin = Convolution::margin(n);
         single(x, &mut self.padded[margin..margin + n]);
         let padded_x = &self.padded[..];
+        let biases = &self.biases[..];
         let (rows, work) = self.block.split_at_mut(KERNEL_LENGTH * BLOCK);
         let (base, work) = work.split_at_mut(BLOCK);
         let (first, second) = work.split_at_mut(BLOCK);
@@ -555,18 +547,14 @@ impl KernelTransform {
         let n = self.layout.points;
         let per = self.layout.feature_count();
         debug_assert_eq!(conv.points, n, "a convolution made for other windows");
-        let mut single_biases = std::mem::take(&mut conv.biases);
         for (c, biases) in self.biases.iter().enumerate() {
-            single_biases.clear();
-            single_biases.extend(biases.iter().map(|&b| b as f32));
             conv.channel(
                 &self.layout,
                 &window[c * n..(c + 1) * n],
-                &single_biases,
+                biases,
                 &mut out[c * per..(c + 1) * per],
             );
         }
-        conv.biases = single_biases;
     }
 
     /// A scratch [`Convolution`] for this transform's windows.
@@ -903,13 +891,8 @@ mod tests {
             let per = t.layout.feature_count();
             for (c, biases) in t.biases.iter().enumerate() {
                 let mut portable = vec![f64::NAN; per];
-                let single: Vec<f32> = biases.iter().map(|&b| b as f32).collect();
-                fit_conv.channel_portable(
-                    &t.layout,
-                    &w[c * n..(c + 1) * n],
-                    &single,
-                    &mut portable,
-                );
+                fit_conv.biases = biases.iter().map(|&b| b as f32).collect();
+                fit_conv.channel_portable(&t.layout, &w[c * n..(c + 1) * n], &mut portable);
                 assert!(
                     portable
                         .iter()
