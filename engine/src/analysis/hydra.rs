@@ -32,6 +32,8 @@
 use std::sync::LazyLock;
 
 use rand::{RngCore, SeedableRng};
+
+use super::kernels::single;
 use rand_chacha::ChaCha8Rng;
 
 use crate::profile::families::{
@@ -48,6 +50,9 @@ const LANES: usize = 8;
 /// One kernel's taps.
 pub type Taps = [f64; HYDRA_LENGTH];
 
+/// One kernel's taps in single precision, as the transform computes.
+type SingleTaps = [f32; HYDRA_LENGTH];
+
 /// Every kernel's taps, group after group ([`HYDRA_GROUPS`] ×
 /// [`HYDRA_KERNELS`]), drawn once for the process ([`draw_taps`]).
 pub fn kernel_taps() -> &'static [Taps] {
@@ -56,8 +61,8 @@ pub fn kernel_taps() -> &'static [Taps] {
 }
 
 /// [`kernel_taps`] in single precision, as the transform computes.
-fn single_taps() -> &'static [[f32; HYDRA_LENGTH]] {
-    static TAPS: LazyLock<Vec<[f32; HYDRA_LENGTH]>> =
+fn single_taps() -> &'static [SingleTaps] {
+    static TAPS: LazyLock<Vec<SingleTaps>> =
         LazyLock::new(|| kernel_taps().iter().map(|w| w.map(|v| v as f32)).collect());
     &TAPS
 }
@@ -155,9 +160,7 @@ fn series_features(padded: &mut [f32], series: &[f64], d: usize, s: usize, out: 
     let m = series.len();
     let pad = d * (HYDRA_LENGTH / 2);
     padded[..pad].fill(0.0);
-    for (p, &v) in padded[pad..pad + m].iter_mut().zip(series) {
-        *p = v as f32;
-    }
+    single(series, &mut padded[pad..pad + m]);
     padded[pad + m..pad + m + pad + LANES].fill(0.0);
     out.fill(0.0);
     let half = HYDRA_GROUPS / 2 * HYDRA_KERNELS;
@@ -175,7 +178,7 @@ fn series_features(padded: &mut [f32], series: &[f64], d: usize, s: usize, out: 
 /// compiled a second time for AVX2 and that copy taken when the processor
 /// has it: the same operations in the same order, the same results to
 /// the bit.
-fn points_of(padded: &[f32], d: usize, m: usize, taps: &[[f32; HYDRA_LENGTH]], counts: &mut [f64]) {
+fn points_of(padded: &[f32], d: usize, m: usize, taps: &[SingleTaps], counts: &mut [f64]) {
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx2") {
@@ -189,13 +192,7 @@ fn points_of(padded: &[f32], d: usize, m: usize, taps: &[[f32; HYDRA_LENGTH]], c
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn points_avx2(
-    padded: &[f32],
-    d: usize,
-    m: usize,
-    taps: &[[f32; HYDRA_LENGTH]],
-    counts: &mut [f64],
-) {
+unsafe fn points_avx2(padded: &[f32], d: usize, m: usize, taps: &[SingleTaps], counts: &mut [f64]) {
     points_portable(padded, d, m, taps, counts);
 }
 
@@ -204,13 +201,7 @@ unsafe fn points_avx2(
 /// by tap in order), the best and worst kernel at each point, and the
 /// counts. Between equal responses the first kernel counts.
 #[inline(always)]
-fn points_portable(
-    padded: &[f32],
-    d: usize,
-    m: usize,
-    taps: &[[f32; HYDRA_LENGTH]],
-    counts: &mut [f64],
-) {
+fn points_portable(padded: &[f32], d: usize, m: usize, taps: &[SingleTaps], counts: &mut [f64]) {
     let groups = taps.chunks_exact(HYDRA_KERNELS);
     let counts = &mut counts[..groups.len() * 2 * HYDRA_KERNELS];
     for t in (0..m).step_by(LANES) {

@@ -426,7 +426,7 @@ fn count_pass<const N: usize>(u: &[f32], v: &[f32], biases: &[f32], sums: &mut [
 }
 
 /// `x` in single precision, into `to` (as long).
-fn single(x: &[f64], to: &mut [f32]) {
+pub(super) fn single(x: &[f64], to: &mut [f32]) {
     for (t, &v) in to.iter_mut().zip(x) {
         *t = v as f32;
     }
